@@ -1,0 +1,199 @@
+use crate::TopologyError;
+use std::collections::VecDeque;
+
+/// Upper bound on team size; it keeps `n × n × m` agent state from exhausting memory
+/// before any work starts.
+pub const MAX_ROBOTS: usize = 100_000;
+
+/// An undirected simple graph on robots `0..n`, stored as sorted neighbour lists.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Graph {
+    neighbours: Vec<Vec<usize>>,
+    name: String,
+}
+
+impl Graph {
+    /// Builds a graph from an edge list, rejecting self-loops, duplicates and out-of-range
+    /// robots. Connectivity is *not* required here (see [`Graph::require_connected`]).
+    pub fn from_edges(
+        robots: usize,
+        edges: &[(usize, usize)],
+        name: impl Into<String>,
+    ) -> Result<Self, TopologyError> {
+        if robots == 0 {
+            return Err(TopologyError::NoRobots);
+        }
+        if robots > MAX_ROBOTS {
+            return Err(TopologyError::TooManyRobots(robots));
+        }
+        let mut neighbours = vec![Vec::new(); robots];
+        for &(a, b) in edges {
+            for v in [a, b] {
+                if v >= robots {
+                    return Err(TopologyError::OutOfRange(a, b, v, robots));
+                }
+            }
+            if a == b {
+                return Err(TopologyError::SelfLoop(a));
+            }
+            neighbours[a].push(b);
+            neighbours[b].push(a);
+        }
+        for (a, list) in neighbours.iter_mut().enumerate() {
+            list.sort_unstable();
+            if let Some(w) = list.windows(2).find(|w| w[0] == w[1]) {
+                return Err(TopologyError::DuplicateEdge(a.min(w[0]), a.max(w[0])));
+            }
+        }
+        Ok(Self {
+            neighbours,
+            name: name.into(),
+        })
+    }
+
+    /// Number of robots (vertices).
+    pub fn robots(&self) -> usize {
+        self.neighbours.len()
+    }
+
+    /// Sorted neighbours of robot `i` (the paper's `N(i)`).
+    pub fn neighbours(&self, i: usize) -> &[usize] {
+        &self.neighbours[i]
+    }
+
+    /// `|N(i)|`.
+    pub fn degree(&self, i: usize) -> usize {
+        self.neighbours[i].len()
+    }
+
+    /// Mean degree `2|E| / n`.
+    pub fn mean_degree(&self) -> f64 {
+        self.neighbours.iter().map(Vec::len).sum::<usize>() as f64 / self.robots() as f64
+    }
+
+    /// Number of undirected edges.
+    pub fn edge_count(&self) -> usize {
+        self.neighbours.iter().map(Vec::len).sum::<usize>() / 2
+    }
+
+    /// Edges `(a, b)` with `a < b`, in lexicographic order.
+    pub fn edges(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.neighbours
+            .iter()
+            .enumerate()
+            .flat_map(|(a, list)| list.iter().filter(move |&&b| b > a).map(move |&b| (a, b)))
+    }
+
+    /// A short description such as `ring` or `random:0.3 (seed 7)`.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Connected components, each sorted, ordered by their smallest robot.
+    pub fn components(&self) -> Vec<Vec<usize>> {
+        let n = self.robots();
+        let mut seen = vec![false; n];
+        let mut components = Vec::new();
+        for start in 0..n {
+            if seen[start] {
+                continue;
+            }
+            let mut component = self.bfs_distances(start, &mut seen).0;
+            component.sort_unstable();
+            components.push(component);
+        }
+        components
+    }
+
+    /// Whether every robot can reach every other one.
+    pub fn is_connected(&self) -> bool {
+        let mut seen = vec![false; self.robots()];
+        self.bfs_distances(0, &mut seen).0.len() == self.robots()
+    }
+
+    /// Assumption 1 of the paper: fails with the list of components when disconnected.
+    pub fn require_connected(&self) -> Result<(), TopologyError> {
+        if self.is_connected() {
+            Ok(())
+        } else {
+            Err(TopologyError::Disconnected(self.components()))
+        }
+    }
+
+    /// Longest shortest path (hop count) between two robots; `None` when disconnected.
+    pub fn diameter(&self) -> Option<usize> {
+        let n = self.robots();
+        let mut diameter = 0;
+        let mut seen = vec![false; n];
+        for start in 0..n {
+            seen.iter_mut().for_each(|s| *s = false);
+            let (reached, eccentricity) = self.bfs_distances(start, &mut seen);
+            if reached.len() != n {
+                return None;
+            }
+            diameter = diameter.max(eccentricity);
+        }
+        Some(diameter)
+    }
+
+    /// Breadth-first search from `start`: the reached robots and the largest hop distance.
+    fn bfs_distances(&self, start: usize, seen: &mut [bool]) -> (Vec<usize>, usize) {
+        let mut reached = vec![start];
+        let mut queue = VecDeque::from([(start, 0usize)]);
+        seen[start] = true;
+        let mut farthest = 0;
+        while let Some((v, d)) = queue.pop_front() {
+            farthest = farthest.max(d);
+            for &w in &self.neighbours[v] {
+                if !seen[w] {
+                    seen[w] = true;
+                    reached.push(w);
+                    queue.push_back((w, d + 1));
+                }
+            }
+        }
+        (reached, farthest)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_self_loops_duplicates_and_out_of_range() {
+        assert_eq!(
+            Graph::from_edges(3, &[(1, 1)], "x"),
+            Err(TopologyError::SelfLoop(1))
+        );
+        assert_eq!(
+            Graph::from_edges(3, &[(0, 1), (1, 0)], "x"),
+            Err(TopologyError::DuplicateEdge(0, 1))
+        );
+        assert_eq!(
+            Graph::from_edges(3, &[(0, 3)], "x"),
+            Err(TopologyError::OutOfRange(0, 3, 3, 3))
+        );
+        assert_eq!(Graph::from_edges(0, &[], "x"), Err(TopologyError::NoRobots));
+    }
+
+    #[test]
+    fn disconnected_graph_names_its_components() {
+        let g = Graph::from_edges(5, &[(0, 1), (2, 3)], "x").unwrap();
+        assert_eq!(g.components(), vec![vec![0, 1], vec![2, 3], vec![4]]);
+        let err = g.require_connected().unwrap_err().to_string();
+        assert!(err.contains("3 components: [0, 1], [2, 3], [4]"), "{err}");
+        assert_eq!(g.diameter(), None);
+    }
+
+    #[test]
+    fn degree_diameter_and_edges() {
+        let g = Graph::from_edges(4, &[(0, 1), (1, 2), (2, 3)], "chain").unwrap();
+        assert_eq!(g.diameter(), Some(3));
+        assert_eq!(g.mean_degree(), 1.5);
+        assert_eq!(g.edges().collect::<Vec<_>>(), vec![(0, 1), (1, 2), (2, 3)]);
+        let single = Graph::from_edges(1, &[], "single").unwrap();
+        assert!(single.is_connected());
+        assert_eq!(single.diameter(), Some(0));
+    }
+}
