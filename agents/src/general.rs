@@ -32,7 +32,17 @@ impl GeneralProblem {
 
     /// The relaxation of a task assignment problem, by mapping (3) or (4).
     pub fn from_task_assignment(problem: &TaskAssignmentProblem) -> Self {
-        let (n, m) = (problem.robots(), problem.tasks());
+        let mut general =
+            Self::assignment_constraints(problem.robots(), problem.tasks(), problem.case());
+        general.alpha = (0..problem.robots())
+            .map(|i| problem.costs().row(i).to_vec())
+            .collect();
+        general
+    }
+
+    /// Mapping (3) or (4) for `n` robots and `m` tasks, with zero costs: the constraint set
+    /// every robot knows without knowing the others' costs.
+    pub fn assignment_constraints(n: usize, m: usize, case: AssignmentCase) -> Self {
         let robot_row = |i: usize| {
             // M_i: ones in row i.
             let mut rows = vec![0.0; n * m];
@@ -46,8 +56,8 @@ impl GeneralProblem {
             }
             rows
         };
-        let alpha = (0..n).map(|i| problem.costs().row(i).to_vec()).collect();
-        match problem.case() {
+        let alpha = vec![vec![0.0; m]; n];
+        match case {
             AssignmentCase::One => Self {
                 dim: m,
                 a: (0..n)

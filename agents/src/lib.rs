@@ -1,10 +1,16 @@
 //! Pure algorithms of admm-ta: the task assignment model, one agent's consensus ADMM step
 //! over preallocated buffers, the projections it needs, rounding, stopping rules and the
 //! centralized oracle. No I/O, no threads, no transport: runners in `admm-ta-runtime`
-//! drive the agents.
+//! drive the agents through [`agent::ConsensusAgent`].
 
+pub mod agent;
 pub mod general;
 pub mod lsap;
 pub mod oracle;
+pub mod primal;
 pub mod problem;
 pub mod projection;
+pub mod rho;
+pub mod rounding;
+pub mod stopping;
+pub mod ties;

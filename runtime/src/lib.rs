@@ -1,1 +1,20 @@
-//! placeholder
+//! Runners that drive admm-ta agents and the reports they produce.
+//!
+//! * [`sim`]: the lockstep simulation — every agent in one thread, round by round, each
+//!   reading only its neighbours' previous-round payloads. It is the deterministic reference
+//!   that the threaded and multi-process transports must reproduce.
+//! * [`solve`]: one end-to-end solve (costs + graph + settings → rounded, checked
+//!   assignment with its report).
+//!
+//! ```
+//! use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+//! use admm_ta_runtime::solve::{SolveConfig, solve};
+//! use admm_ta_topologies::generate;
+//! let problem = TaskAssignmentProblem::new(CostMatrix::uniform(6, 6, 1).unwrap(), CaseChoice::Auto).unwrap();
+//! let graph = generate::complete(6).unwrap();
+//! let report = solve(&problem, &graph, &SolveConfig::default()).unwrap();
+//! assert!(problem.is_feasible(&report.assignment));
+//! ```
+
+pub mod sim;
+pub mod solve;

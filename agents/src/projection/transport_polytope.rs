@@ -34,6 +34,9 @@ use faer::linalg::cholesky::llt;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Mat, MatMut, MatRef, Par};
 
+/// Smallest Newton regularisation μ.
+const MIN_REGULARISATION: f64 = 1e-8;
+
 /// Knobs of the Newton projection.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ProjectionSettings {
@@ -125,6 +128,9 @@ impl DualPoint {
         }
         for g in &self.grad_v {
             residual = residual.max(g.abs());
+        }
+        if !value.is_finite() || self.grad_u.iter().chain(&self.grad_v).any(|g| g.is_nan()) {
+            residual = f64::INFINITY;
         }
         self.value = value;
         self.residual = residual;
@@ -261,7 +267,7 @@ impl TransportPolytopeProjector {
             let vc = self.current.v[c];
             let mut oc = out.rb_mut().col_mut(c);
             for (r, &zr) in zc.iter().enumerate() {
-                oc[r] = (zr - self.current.u[r] - vc).clamp(0.0, 1.0);
+                oc[r] = (zr - (self.current.u[r] + vc)).clamp(0.0, 1.0);
             }
         }
         stats
@@ -280,7 +286,9 @@ impl TransportPolytopeProjector {
     fn newton_direction(&mut self, z: MatRef<'_, f64>) {
         let (m, n) = (self.tasks, self.robots);
         let p = &self.current;
-        let mu = p.residual.min(1.0);
+        // μ tracks the residual (fast local convergence) but stays well above the rounding
+        // error of the Schur complement, whose diagonal is a difference of O(m) terms.
+        let mu = p.residual.clamp(MIN_REGULARISATION, 1.0);
         for r in 0..m {
             let pinned = self.case == AssignmentCase::Two && p.u[r] >= 0.0 && p.grad_u[r] > 0.0;
             self.in_newton_block[r] = !pinned && p.row_free[r] > 0;
@@ -291,7 +299,8 @@ impl TransportPolytopeProjector {
             self.free_start[c] = next;
             let zc = column(z, c);
             for (r, &zr) in zc.iter().enumerate() {
-                let w = zr - p.u[r] - p.v[c];
+                // Exactly the expression of `evaluate`, so both agree on which entries are free.
+                let w = zr - (p.u[r] + p.v[c]);
                 if self.in_newton_block[r] && w > 0.0 && w < 1.0 {
                     self.free_rows[next] = r;
                     next += 1;
@@ -328,19 +337,22 @@ impl TransportPolytopeProjector {
         let mut stack = MemStack::new(&mut self.cholesky_scratch);
         let factored = llt::factor::cholesky_in_place(
             schur.rb_mut(),
+            // Pivots below μ/1000 can only be rounding noise (S ⪰ μI): replace them by μ.
             llt::factor::LltRegularization {
-                dynamic_regularization_delta: 1e-10,
-                dynamic_regularization_epsilon: 1e-14,
+                dynamic_regularization_delta: mu,
+                dynamic_regularization_epsilon: 1e-3 * mu,
             },
             Par::Seq,
             &mut stack,
             Default::default(),
         );
         let rhs = MatMut::from_column_major_slice_mut(&mut self.du, m, 1);
-        match factored {
-            Ok(_) => llt::solve::solve_in_place(schur.rb(), rhs, Par::Seq, &mut stack),
+        if factored.is_ok() {
+            llt::solve::solve_in_place(schur.rb(), rhs, Par::Seq, &mut stack);
+        }
+        if factored.is_err() || self.du.iter().any(|d| !d.is_finite()) {
             // Cannot happen for an SPD Schur complement; fall back to a scaled gradient.
-            Err(_) => {
+            {
                 for r in 0..m {
                     if self.in_newton_block[r] {
                         self.du[r] = p.grad_u[r] / (p.row_free[r] as f64 + mu);
@@ -400,9 +412,12 @@ impl TransportPolytopeProjector {
             self.trial.evaluate(z, self.case);
             stats.evaluations += 1;
             let p = &self.current;
-            // Armijo, or (where rounding hides the increase of g) a clear drop of the residual.
+            // Armijo; or a clear drop of the residual; or, once the increase of g is below
+            // what rounding of its O(mn) terms can resolve, any drop of the residual.
+            let unresolvable = predicted.abs() <= 1e-12 * (1.0 + p.value.abs());
             if self.trial.value >= p.value + SUFFICIENT_INCREASE * predicted
                 || self.trial.residual <= 0.5 * p.residual
+                || (unresolvable && self.trial.residual < p.residual)
             {
                 return true;
             }

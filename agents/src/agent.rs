@@ -1,0 +1,58 @@
+//! The interface between an agent's algorithm and whatever carries its messages.
+//!
+//! An agent is a state machine with a pure [`ConsensusAgent::step`]: given the round-`k`
+//! payloads of its neighbours (an [`Inbox`]), it updates its own state and writes its
+//! round-`k+1` payload into `out`. Transports (lockstep simulation, threads, processes)
+//! differ only in how they fill the inbox and deliver `out`, so they all produce the same
+//! iterates.
+
+/// Read access to the neighbours' payloads of the current round, in neighbour-list order.
+pub trait Inbox {
+    /// Number of neighbours `|N(i)|`.
+    fn len(&self) -> usize;
+    /// Payload of the `k`-th neighbour.
+    fn payload(&self, k: usize) -> &[f64];
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+impl Inbox for Vec<&[f64]> {
+    fn len(&self) -> usize {
+        Vec::len(self)
+    }
+    fn payload(&self, k: usize) -> &[f64] {
+        self[k]
+    }
+}
+
+/// Local facts an agent learns in one step: what stopping rules and observers may use.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepReport {
+    /// `max_j ‖X_i^k − X_j^k‖∞` over the neighbours (consensus residual).
+    pub disagreement: f64,
+    /// `‖X_i^{k+1} − X_i^k‖∞`.
+    pub change: f64,
+    /// Inner iterations of the local solve (Newton steps of the projection).
+    pub inner_iterations: usize,
+    /// Whether the local inner solve met its tolerance.
+    pub inner_converged: bool,
+    /// The agent's rounded view of the team's assignment is feasible and its iterate lies
+    /// within the integrality tolerance of it.
+    pub near_integral: bool,
+    /// Hash of the agent's rounded view of the whole team's assignment.
+    pub assignment_digest: u64,
+}
+
+/// One robot's algorithm.
+pub trait ConsensusAgent {
+    /// Length of the payload exchanged every round.
+    fn payload_len(&self) -> usize;
+    /// The round-0 payload.
+    fn write_initial_payload(&self, out: &mut [f64]);
+    /// One iteration: read neighbours' round-`k` payloads, write the round-`k+1` payload.
+    fn step(&mut self, inbox: &dyn Inbox, out: &mut [f64]) -> StepReport;
+    /// The robot's own task, rounded from its current iterate so that robots holding the
+    /// same iterate make consistent choices.
+    fn decide(&self) -> usize;
+}

@@ -1,0 +1,120 @@
+//! From relaxed iterates to assignments that are always feasible.
+//!
+//! * [`local_assignment`]: robot `i` rounds its *own* matrix `X_i` to the feasible
+//!   assignment closest to it (an assignment problem maximising `Σ X_i[t, j]`; in Case 2
+//!   with the free-column expansion of [`crate::oracle`]) and keeps its own task. Robots
+//!   holding the same matrix make the same, consistent choice; at convergence to a unique
+//!   optimum it is the optimum.
+//! * [`argmax_assignment`]: the cheap per-column argmax, used every round by stop rules.
+//! * [`repair`]: when the robots' choices conflict (not converged, or ties), the team's
+//!   assignment is repaired deterministically: the feasible assignment changing the fewest
+//!   robots, then cheapest among those.
+
+use crate::oracle;
+use crate::problem::{AssignmentCase, CostMatrix, TaskAssignmentProblem};
+
+/// The feasible assignment closest to `x` (column-major `tasks × robots`).
+pub fn local_assignment(
+    x: &[f64],
+    tasks: usize,
+    robots: usize,
+    case: AssignmentCase,
+) -> Vec<usize> {
+    let negated: Vec<f64> = (0..robots)
+        .flat_map(|j| x[j * tasks..(j + 1) * tasks].iter().map(|v| -v))
+        .collect();
+    let costs = CostMatrix::new(robots, tasks, negated).expect("iterates are finite");
+    oracle::solve_costs(&costs, case).expect("finite costs always have an assignment")
+}
+
+/// Per-column argmax of `x` (first on ties) into `out` (one task per robot).
+pub fn argmax_assignment(x: &[f64], tasks: usize, out: &mut [usize]) {
+    for (j, slot) in out.iter_mut().enumerate() {
+        let column = &x[j * tasks..(j + 1) * tasks];
+        let mut best = 0;
+        for (t, v) in column.iter().enumerate() {
+            if *v > column[best] {
+                best = t;
+            }
+        }
+        *slot = best;
+    }
+}
+
+/// Whether `assignment` covers the tasks as `case` requires; `load` is scratch of length
+/// `tasks`.
+pub fn covers(assignment: &[usize], case: AssignmentCase, load: &mut [u32]) -> bool {
+    load.fill(0);
+    for &t in assignment {
+        load[t] += 1;
+    }
+    match case {
+        AssignmentCase::One => load.iter().all(|&l| l == 1),
+        AssignmentCase::Two => load.iter().all(|&l| l >= 1),
+    }
+}
+
+/// Makes the robots' choices a feasible assignment. Returns it and whether anything had
+/// to change.
+pub fn repair(problem: &TaskAssignmentProblem, decisions: &[usize]) -> (Vec<usize>, bool) {
+    if problem.is_feasible(decisions) {
+        return (decisions.to_vec(), false);
+    }
+    let costs = problem.costs();
+    let (lo, hi) = costs
+        .values()
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &c| {
+            (lo.min(c), hi.max(c))
+        });
+    // Moving one robot more must cost more than any difference in assignment cost.
+    let penalty = (hi - lo) * problem.robots() as f64 + 1.0;
+    let values = (0..problem.robots())
+        .flat_map(|i| {
+            (0..problem.tasks()).map(move |t| {
+                let keep = decisions.get(i) == Some(&t);
+                costs.get(i, t) - lo + if keep { 0.0 } else { penalty }
+            })
+        })
+        .collect();
+    let shifted = CostMatrix::new(problem.robots(), problem.tasks(), values).expect("finite");
+    let assignment = oracle::solve_costs(&shifted, problem.case()).expect("finite costs");
+    (assignment, true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::CaseChoice;
+
+    #[test]
+    fn repair_changes_fewest_robots() {
+        let costs = CostMatrix::uniform(4, 4, 2).unwrap();
+        let p = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
+        let (same, repaired) = repair(&p, &[3, 2, 1, 0]);
+        assert_eq!((same, repaired), (vec![3, 2, 1, 0], false));
+        // Robots 0 and 1 both chose task 0; task 1 is free: one robot moves.
+        let (fixed, repaired) = repair(&p, &[0, 0, 2, 3]);
+        assert!(repaired && p.is_feasible(&fixed));
+        assert_eq!(
+            fixed
+                .iter()
+                .zip([0, 0, 2, 3])
+                .filter(|(a, b)| **a != *b)
+                .count(),
+            1
+        );
+    }
+
+    #[test]
+    fn local_assignment_is_feasible_for_fractional_iterates() {
+        // Case 2, 3 robots, 2 tasks; every column prefers task 0.
+        let x = [0.9, 0.1, 0.8, 0.2, 0.6, 0.4];
+        let a = local_assignment(&x, 2, 3, AssignmentCase::Two);
+        assert_eq!(a, vec![0, 0, 1]);
+        let mut out = [0; 3];
+        argmax_assignment(&x, 2, &mut out);
+        assert_eq!(out, [0, 0, 0]);
+        assert!(!covers(&out, AssignmentCase::Two, &mut [0; 2]));
+    }
+}

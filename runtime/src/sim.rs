@@ -1,0 +1,133 @@
+//! Lockstep simulation of a team of agents in one thread.
+
+use admm_ta_agents::agent::{ConsensusAgent, Inbox, StepReport};
+use admm_ta_agents::stopping::TeamStopRule;
+use admm_ta_topologies::Graph;
+
+/// The neighbours' round-`k` payloads of one agent, read in place from the round buffer.
+struct SimInbox<'a> {
+    payloads: &'a [f64],
+    len: usize,
+    neighbours: &'a [usize],
+}
+
+impl Inbox for SimInbox<'_> {
+    fn len(&self) -> usize {
+        self.neighbours.len()
+    }
+    fn payload(&self, k: usize) -> &[f64] {
+        let j = self.neighbours[k];
+        &self.payloads[j * self.len..(j + 1) * self.len]
+    }
+}
+
+/// What an observer sees after each round.
+pub struct RoundView<'a> {
+    /// Rounds completed (1 after the first step).
+    pub round: usize,
+    pub reports: &'a [StepReport],
+    /// Every agent's payload, concatenated (`payload_len` each).
+    pub payloads: &'a [f64],
+    pub payload_len: usize,
+}
+
+/// How a simulation ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SimOutcome {
+    pub rounds: usize,
+    /// The stop rule fired (as opposed to the round limit).
+    pub stopped: bool,
+}
+
+/// All agents, double-buffered payloads, one thread.
+pub struct LockstepSim<A> {
+    agents: Vec<A>,
+    neighbours: Vec<Vec<usize>>,
+    len: usize,
+    current: Vec<f64>,
+    next: Vec<f64>,
+    reports: Vec<StepReport>,
+    round: usize,
+}
+
+impl<A: ConsensusAgent> LockstepSim<A> {
+    /// `agents[i]` is robot `i` of `graph`; all payloads must have the same length.
+    pub fn new(agents: Vec<A>, graph: &Graph) -> Self {
+        assert_eq!(agents.len(), graph.robots(), "one agent per robot");
+        let len = agents.first().map_or(0, |a| a.payload_len());
+        assert!(agents.iter().all(|a| a.payload_len() == len));
+        let mut current = vec![0.0; len * agents.len()];
+        for (i, agent) in agents.iter().enumerate() {
+            agent.write_initial_payload(&mut current[i * len..(i + 1) * len]);
+        }
+        Self {
+            neighbours: (0..graph.robots())
+                .map(|i| graph.neighbours(i).to_vec())
+                .collect(),
+            next: vec![0.0; current.len()],
+            reports: vec![StepReport::default(); agents.len()],
+            agents,
+            len,
+            current,
+            round: 0,
+        }
+    }
+
+    /// Runs one round: every agent steps on its neighbours' current payloads.
+    pub fn step_round(&mut self) -> &[StepReport] {
+        for (i, agent) in self.agents.iter_mut().enumerate() {
+            let inbox = SimInbox {
+                payloads: &self.current,
+                len: self.len,
+                neighbours: &self.neighbours[i],
+            };
+            let out = &mut self.next[i * self.len..(i + 1) * self.len];
+            self.reports[i] = agent.step(&inbox, out);
+        }
+        std::mem::swap(&mut self.current, &mut self.next);
+        self.round += 1;
+        &self.reports
+    }
+
+    /// Steps until `stop` fires or `max_rounds` rounds have run, showing each round to
+    /// `observer`.
+    pub fn run(
+        &mut self,
+        max_rounds: usize,
+        stop: &mut dyn TeamStopRule,
+        observer: &mut dyn FnMut(&RoundView<'_>),
+    ) -> SimOutcome {
+        while self.round < max_rounds {
+            self.step_round();
+            observer(&RoundView {
+                round: self.round,
+                reports: &self.reports,
+                payloads: &self.current,
+                payload_len: self.len,
+            });
+            if stop.should_stop(&self.reports) {
+                return SimOutcome {
+                    rounds: self.round,
+                    stopped: true,
+                };
+            }
+        }
+        SimOutcome {
+            rounds: self.round,
+            stopped: false,
+        }
+    }
+
+    pub fn agents(&self) -> &[A] {
+        &self.agents
+    }
+
+    /// Agent `i`'s latest payload.
+    pub fn payload(&self, i: usize) -> &[f64] {
+        &self.current[i * self.len..(i + 1) * self.len]
+    }
+
+    pub fn round(&self) -> usize {
+        self.round
+    }
+}

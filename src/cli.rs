@@ -1,0 +1,204 @@
+//! Command-line interface: argument parsing and dispatch to the crates.
+
+use crate::output;
+use admm_ta_agents::primal::ProjectionPath;
+use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_agents::ties::Perturbation;
+use admm_ta_runtime::solve::{self, Method, SolveConfig, StopRule, Transport};
+use admm_ta_topologies::{TopologySpec, file as topology_file};
+use anyhow::{Context, Result, bail};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "admm-ta",
+    version,
+    about = "Consensus ADMM task assignment for multi-robot teams"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Solve a task assignment problem with a consensus method.
+    Solve(SolveArgs),
+    /// Solve a built-in default problem (20 robots, 20 tasks, complete graph) end to end.
+    Demo {
+        /// Print one JSON object instead of the human summary.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Print a generated topology in the topology file format (TOML).
+    Topology {
+        /// complete | chain | ring | star | grid | random:P | geometric:R
+        #[arg(long, default_value = "complete")]
+        kind: String,
+        #[arg(long)]
+        robots: usize,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
+}
+
+#[derive(Args, Debug)]
+struct SolveArgs {
+    /// Cost CSV: one row per robot, one column per task, no header.
+    #[arg(long, conflicts_with_all = ["robots", "tasks"])]
+    costs: Option<PathBuf>,
+    /// Number of robots for random uniform [0,1) costs.
+    #[arg(long, requires = "tasks")]
+    robots: Option<usize>,
+    /// Number of tasks for random uniform [0,1) costs.
+    #[arg(long, requires = "robots")]
+    tasks: Option<usize>,
+    /// Seed of the random costs, random topologies and tie-breaking.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Coverage case: auto (from the shape), 1 (n = m, one robot per task) or 2 (n ≥ m, at
+    /// least one robot per task).
+    #[arg(long, default_value = "auto")]
+    case: CaseArg,
+    /// complete | chain | ring | star | grid | random:P | geometric:R | FILE.toml
+    #[arg(long, default_value = "complete")]
+    topology: String,
+    #[arg(long, value_enum, default_value = "primal")]
+    method: MethodArg,
+    #[arg(long, value_enum, default_value = "sim")]
+    transport: TransportArg,
+    /// ADMM penalty ρ (default: scale-free rule 0.75·spread/(2·mean degree·n)).
+    #[arg(long, allow_negative_numbers = true)]
+    rho: Option<f64>,
+    #[arg(long, default_value_t = 5000)]
+    max_iters: usize,
+    /// agreement: stop once all robots agree on one near-integral assignment for
+    /// --stop-rounds rounds; max-iters: always run --max-iters rounds.
+    #[arg(long, value_enum, default_value = "agreement")]
+    stop: StopArg,
+    #[arg(long, default_value_t = 10)]
+    stop_rounds: usize,
+    /// x-update solver: fast (Newton projection) or qp (clarabel; slow cross-check).
+    #[arg(long, value_enum, default_value = "fast")]
+    projection: ProjectionArg,
+    /// Tie-breaking cost perturbation: auto (only for lattice costs such as integers), off,
+    /// or a number ε.
+    #[arg(long, default_value = "auto")]
+    perturb: String,
+    /// Compare with the centralized optimum (adds optimal_cost and gap).
+    #[arg(long)]
+    check: bool,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum CaseArg {
+    Auto,
+    #[value(name = "1")]
+    One,
+    #[value(name = "2")]
+    Two,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum MethodArg {
+    Primal,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum TransportArg {
+    Sim,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum StopArg {
+    Agreement,
+    MaxIters,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum ProjectionArg {
+    Fast,
+    Qp,
+}
+
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Solve(args) => run_solve(args),
+        Command::Demo { json } => run_demo(json),
+        Command::Topology { kind, robots, seed } => {
+            let spec: TopologySpec = kind.parse()?;
+            print!("{}", topology_file::to_toml(&spec.build(robots, seed)?));
+            Ok(())
+        }
+    }
+}
+
+fn run_solve(args: SolveArgs) -> Result<()> {
+    let costs = match (&args.costs, args.robots, args.tasks) {
+        (Some(path), _, _) => CostMatrix::read_csv(path)?,
+        (None, Some(robots), Some(tasks)) => CostMatrix::uniform(robots, tasks, args.seed)?,
+        _ => {
+            bail!("give the costs with --costs FILE.csv, or --robots N --tasks M for random costs")
+        }
+    };
+    let case = match args.case {
+        CaseArg::Auto => CaseChoice::Auto,
+        CaseArg::One => CaseChoice::Forced(AssignmentCase::One),
+        CaseArg::Two => CaseChoice::Forced(AssignmentCase::Two),
+    };
+    let problem = TaskAssignmentProblem::new(costs, case)?;
+    let spec: TopologySpec = args.topology.parse()?;
+    let graph = spec
+        .build(problem.robots(), args.seed)
+        .with_context(|| format!("topology '{}'", args.topology))?;
+    let perturbation = match args.perturb.as_str() {
+        "auto" => Perturbation::Auto,
+        "off" | "0" => Perturbation::Off,
+        value => match value.parse::<f64>() {
+            Ok(eps) if eps > 0.0 && eps.is_finite() => Perturbation::Fixed(eps),
+            _ => bail!("--perturb must be auto, off or a positive number, got '{value}'"),
+        },
+    };
+    let config = SolveConfig {
+        method: match args.method {
+            MethodArg::Primal => Method::Primal,
+        },
+        transport: match args.transport {
+            TransportArg::Sim => Transport::Sim,
+        },
+        rho: args.rho,
+        max_iters: args.max_iters,
+        stop: match args.stop {
+            StopArg::Agreement => StopRule::Agreement,
+            StopArg::MaxIters => StopRule::MaxIters,
+        },
+        stop_rounds: args.stop_rounds,
+        seed: args.seed,
+        perturbation,
+        projection: match args.projection {
+            ProjectionArg::Fast => ProjectionPath::Fast,
+            ProjectionArg::Qp => ProjectionPath::Qp,
+        },
+        check: args.check,
+    };
+    let report = solve::solve(&problem, &graph, &config)?;
+    output::print_report(&report, args.json)
+}
+
+fn run_demo(json: bool) -> Result<()> {
+    let problem = TaskAssignmentProblem::new(CostMatrix::uniform(20, 20, 2019)?, CaseChoice::Auto)?;
+    let graph = TopologySpec::Complete.build(20, 0)?;
+    let config = SolveConfig {
+        check: true,
+        ..SolveConfig::default()
+    };
+    let report = solve::solve(&problem, &graph, &config)?;
+    if !json {
+        println!("demo: 20 robots, 20 tasks, uniform [0,1) costs (seed 2019), complete graph\n");
+    }
+    output::print_report(&report, json)
+}

@@ -1,0 +1,66 @@
+//! Human and JSON renderings of a solve report.
+
+use admm_ta_runtime::solve::SolveReport;
+use anyhow::Result;
+
+pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
+    if json {
+        println!("{}", serde_json::to_string(report)?);
+        return Ok(());
+    }
+    println!(
+        "method {:?}, transport {:?}: {} robots × {} tasks (Case {}), topology {}",
+        report.method, report.transport, report.robots, report.tasks, report.case, report.topology
+    );
+    println!(
+        "ρ = {:.4e}; {} after {} iterations ({:.1} ms, {:.2} Newton steps per projection)",
+        report.rho,
+        if report.converged {
+            "converged"
+        } else {
+            "iteration limit reached"
+        },
+        report.iterations,
+        report.wall_time_ms,
+        report.mean_projection_steps
+    );
+    if let Some(eps) = report.perturbation {
+        println!("tie-breaking perturbation ε = {eps:.3e} per robot");
+    }
+    let pairs: Vec<String> = report
+        .assignment
+        .iter()
+        .enumerate()
+        .map(|(robot, task)| format!("{robot}→{task}"))
+        .collect();
+    println!("assignment (robot→task): {}", pairs.join(" "));
+    println!(
+        "cost {:.6}{}",
+        report.cost,
+        if report.repaired {
+            " (robots' choices conflicted and were repaired)"
+        } else {
+            ""
+        }
+    );
+    if let Some(check) = &report.check {
+        let round = |r: Option<usize>| r.map_or("never".to_string(), |r| r.to_string());
+        println!(
+            "optimal cost {:.6} (centralized), gap {:.4}%: {}",
+            check.optimal_cost,
+            100.0 * check.gap,
+            if check.optimal {
+                "optimal"
+            } else {
+                "NOT optimal"
+            }
+        );
+        println!(
+            "rounds: within 0.1% first at {}, settled at {}; optimal assignment from {}",
+            round(check.rounds_within_0_1pct),
+            round(check.rounds_settled_0_1pct),
+            round(check.rounds_to_optimal_assignment)
+        );
+    }
+    Ok(())
+}

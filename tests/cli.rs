@@ -1,0 +1,286 @@
+//! The `admm-ta` binary end to end: the demo, JSON output, and bad input that must give
+//! one clear line and a non-zero exit, never a panic.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn admm_ta(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_admm-ta"))
+        .args(args)
+        .output()
+        .expect("the admm-ta binary runs")
+}
+
+fn json(output: &Output) -> serde_json::Value {
+    assert!(
+        output.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).expect("stdout is one JSON object")
+}
+
+/// Exit code ≠ 0 and exactly one line on stderr that mentions `needle`.
+fn assert_clear_error(output: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "expected failure, got success");
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    assert_eq!(
+        stderr.trim_end().lines().count(),
+        1,
+        "not one line: {stderr}"
+    );
+    assert!(
+        stderr.to_lowercase().contains(&needle.to_lowercase()),
+        "'{needle}' not in: {stderr}"
+    );
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+#[test]
+fn demo_solves_its_default_problem_optimally() {
+    let report = json(&admm_ta(&["demo", "--json"]));
+    assert_eq!(report["robots"], 20);
+    assert_eq!(report["tasks"], 20);
+    assert_eq!(report["check"]["optimal"], true);
+    assert_eq!(report["converged"], true);
+    let human = admm_ta(&["demo"]);
+    assert!(human.status.success());
+    assert!(String::from_utf8_lossy(&human.stdout).contains("optimal cost"));
+}
+
+#[test]
+fn solve_json_has_the_documented_fields() {
+    let report = json(&admm_ta(&[
+        "solve",
+        "--robots",
+        "8",
+        "--tasks",
+        "5",
+        "--seed",
+        "3",
+        "--topology",
+        "ring",
+        "--json",
+        "--check",
+    ]));
+    for key in [
+        "assignment",
+        "cost",
+        "iterations",
+        "converged",
+        "repaired",
+        "method",
+        "transport",
+    ] {
+        assert!(report.get(key).is_some(), "missing {key}");
+    }
+    assert_eq!(report["method"], "primal");
+    assert_eq!(report["transport"], "sim");
+    assert_eq!(report["case"], 2);
+    assert_eq!(report["assignment"].as_array().unwrap().len(), 8);
+    assert!(report["check"]["gap"].as_f64().unwrap().abs() < 1e-9);
+    assert!(report["check"]["optimal_cost"].as_f64().is_some());
+}
+
+#[test]
+fn every_topology_kind_and_a_topology_file_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(
+        dir.path(),
+        "net.toml",
+        "robots = 4\nedges = [[0, 1], [1, 2], [2, 3]]\n",
+    );
+    for topology in [
+        "complete",
+        "chain",
+        "ring",
+        "star",
+        "grid",
+        "random:0.5",
+        "geometric:0.8",
+        &file,
+    ] {
+        let report = json(&admm_ta(&[
+            "solve",
+            "--robots",
+            "4",
+            "--tasks",
+            "4",
+            "--topology",
+            topology,
+            "--json",
+            "--check",
+        ]));
+        assert_eq!(report["check"]["optimal"], true, "{topology}");
+    }
+    let printed = admm_ta(&["topology", "--kind", "grid", "--robots", "6"]);
+    assert!(String::from_utf8_lossy(&printed.stdout).contains("robots = 6"));
+}
+
+#[test]
+fn costs_in_metres_or_in_unit_interval_give_the_same_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let unit = admm_ta_agents::problem::CostMatrix::uniform(10, 10, 5).unwrap();
+    let metres = admm_ta_agents::problem::CostMatrix::new(
+        10,
+        10,
+        unit.values().iter().map(|c| 350.0 * c + 20.0).collect(),
+    )
+    .unwrap();
+    let a = json(&admm_ta(&[
+        "solve",
+        "--costs",
+        &write(dir.path(), "unit.csv", &unit.to_csv()),
+        "--json",
+    ]));
+    let b = json(&admm_ta(&[
+        "solve",
+        "--costs",
+        &write(dir.path(), "m.csv", &metres.to_csv()),
+        "--json",
+    ]));
+    assert_eq!(a["assignment"], b["assignment"]);
+    assert_eq!(a["iterations"], b["iterations"]);
+}
+
+#[test]
+fn bad_input_gives_one_clear_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec!["--costs".into(), write(d, "nan.csv", "1,2\nNaN,3\n")],
+            "NaN",
+        ),
+        (
+            vec!["--costs".into(), write(d, "inf.csv", "1,inf\n2,3\n")],
+            "inf",
+        ),
+        (vec!["--costs".into(), write(d, "empty.csv", "")], "empty"),
+        (
+            vec!["--costs".into(), write(d, "ragged.csv", "1,2\n3\n")],
+            "ragged",
+        ),
+        (
+            vec!["--costs".into(), write(d, "text.csv", "1,x\n2,3\n")],
+            "not a number",
+        ),
+        (
+            vec!["--costs".into(), write(d, "header.csv", "a,b\n1,2\n3,4\n")],
+            "no header",
+        ),
+        (
+            vec!["--costs".into(), write(d, "wide.csv", "1,2,3\n4,5,6\n")],
+            "n ≥ m",
+        ),
+        (
+            vec![
+                "--costs".into(),
+                d.join("missing.csv").to_string_lossy().into_owned(),
+            ],
+            "cannot read",
+        ),
+        (
+            vec![
+                "--robots".into(),
+                "4".into(),
+                "--tasks".into(),
+                "4".into(),
+                "--topology".into(),
+                write(d, "split.toml", "robots = 4\nedges = [[0, 1], [2, 3]]\n"),
+            ],
+            "disconnected",
+        ),
+        (
+            vec![
+                "--robots".into(),
+                "5".into(),
+                "--tasks".into(),
+                "4".into(),
+                "--topology".into(),
+                write(
+                    d,
+                    "small.toml",
+                    "robots = 4\nedges = [[0, 1], [1, 2], [2, 3]]\n",
+                ),
+            ],
+            "4 robots",
+        ),
+        (
+            vec![
+                "--robots".into(),
+                "3".into(),
+                "--tasks".into(),
+                "3".into(),
+                "--topology".into(),
+                write(d, "loop.toml", "robots = 3\nedges = [[0, 0]]\n"),
+            ],
+            "self-loop",
+        ),
+        (
+            vec![
+                "--robots".into(),
+                "3".into(),
+                "--tasks".into(),
+                "3".into(),
+                "--topology".into(),
+                "hypercube".into(),
+            ],
+            "unknown topology",
+        ),
+        (
+            vec!["--robots".into(), "0".into(), "--tasks".into(), "0".into()],
+            "zero",
+        ),
+        (
+            vec![
+                "--robots".into(),
+                "5000".into(),
+                "--tasks".into(),
+                "5000".into(),
+            ],
+            "GiB",
+        ),
+        (
+            vec![
+                "--robots".into(),
+                "3".into(),
+                "--tasks".into(),
+                "3".into(),
+                "--rho".into(),
+                "-1".into(),
+            ],
+            "ρ",
+        ),
+        (
+            vec![
+                "--robots".into(),
+                "3".into(),
+                "--tasks".into(),
+                "3".into(),
+                "--perturb".into(),
+                "x".into(),
+            ],
+            "perturb",
+        ),
+        (vec![], "--costs"),
+    ];
+    for (args, needle) in cases {
+        let mut all = vec!["solve".to_string()];
+        all.extend(args);
+        let refs: Vec<&str> = all.iter().map(String::as_str).collect();
+        let output = admm_ta(&refs);
+        assert_clear_error(&output, needle);
+    }
+    // Forcing Case 1 on a non-square problem.
+    assert_clear_error(
+        &admm_ta(&["solve", "--robots", "5", "--tasks", "3", "--case", "1"]),
+        "Case 1",
+    );
+}

@@ -1,0 +1,53 @@
+//! Shared helpers of the end-to-end tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// The shared oracle folder beside the project (`../shared/oracle`).
+pub fn oracle_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/oracle")
+}
+
+/// One oracle instance with its expected optimum.
+pub struct OracleInstance {
+    pub name: String,
+    pub csv: PathBuf,
+    pub case: u8,
+    pub optimal_cost: f64,
+    pub lp_optimal_cost: f64,
+    pub optimal_assignment: Vec<usize>,
+    pub unique: Option<bool>,
+}
+
+pub fn oracle_instances() -> Vec<OracleInstance> {
+    let dir = oracle_dir();
+    let text = std::fs::read_to_string(dir.join("expected.json"))
+        .expect("../shared/oracle/expected.json must exist beside the project");
+    let expected: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let mut instances: Vec<OracleInstance> = expected
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(name, v)| OracleInstance {
+            name: name.clone(),
+            csv: dir.join(format!("{name}.csv")),
+            case: v["case"].as_u64().unwrap() as u8,
+            optimal_cost: v["optimal_cost"].as_f64().unwrap(),
+            lp_optimal_cost: v["lp_optimal_cost"].as_f64().unwrap(),
+            optimal_assignment: v["optimal_assignment"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|t| t.as_u64().unwrap() as usize)
+                .collect(),
+            unique: v.get("unique").and_then(|u| u.as_bool()),
+        })
+        .collect();
+    instances.sort_by(|a, b| a.name.cmp(&b.name));
+    assert!(instances.len() >= 5, "expected the shared oracle instances");
+    instances
+}
+
+pub fn relative_gap(cost: f64, optimum: f64) -> f64 {
+    (cost - optimum).abs() / optimum.abs().max(1e-12)
+}

@@ -1,0 +1,88 @@
+//! Every shared oracle instance: the centralized solver and primal consensus ADMM (sim
+//! transport) both reach the known optimum.
+
+mod common;
+
+use admm_ta_agents::oracle;
+use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_runtime::solve::{SolveConfig, solve};
+use admm_ta_topologies::generate;
+use common::{oracle_instances, relative_gap};
+
+fn load(instance: &common::OracleInstance) -> TaskAssignmentProblem {
+    let costs = CostMatrix::read_csv(&instance.csv).unwrap();
+    let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
+    assert_eq!(problem.case().number(), instance.case, "{}", instance.name);
+    problem
+}
+
+#[test]
+fn centralized_oracle_matches_every_instance() {
+    for instance in oracle_instances() {
+        let problem = load(&instance);
+        let optimum = oracle::solve(&problem).unwrap();
+        assert!(problem.is_feasible(&optimum.assignment));
+        assert!(
+            relative_gap(optimum.cost, instance.optimal_cost) < 1e-9,
+            "{}: {} vs {}",
+            instance.name,
+            optimum.cost,
+            instance.optimal_cost
+        );
+        // The LP relaxation is integral (total unimodularity): same optimum.
+        assert!(relative_gap(instance.lp_optimal_cost, instance.optimal_cost) < 1e-9);
+        if instance.unique == Some(true) {
+            assert_eq!(
+                optimum.assignment, instance.optimal_assignment,
+                "{}",
+                instance.name
+            );
+        }
+        let given = problem.cost_of(&instance.optimal_assignment).unwrap();
+        assert!(relative_gap(given, instance.optimal_cost) < 1e-9);
+    }
+}
+
+#[test]
+fn primal_admm_reaches_every_optimum_on_the_complete_graph() {
+    for instance in oracle_instances() {
+        let problem = load(&instance);
+        // The 100×100 instance costs minutes per thousand rounds on one thread of the
+        // lockstep sim over a complete graph; it is checked on a random graph below.
+        if problem.robots() >= 100 {
+            continue;
+        }
+        let graph = generate::complete(problem.robots()).unwrap();
+        let config = SolveConfig {
+            check: true,
+            ..SolveConfig::default()
+        };
+        let report = solve(&problem, &graph, &config).unwrap();
+        assert!(problem.is_feasible(&report.assignment), "{}", instance.name);
+        assert!(
+            relative_gap(report.cost, instance.optimal_cost) <= 1e-6,
+            "{}: cost {} vs optimum {} after {} rounds",
+            instance.name,
+            report.cost,
+            instance.optimal_cost,
+            report.iterations
+        );
+        assert!(
+            report.converged,
+            "{}: hit the iteration limit",
+            instance.name
+        );
+        assert!(
+            !report.repaired,
+            "{}: robots disagreed at the stop",
+            instance.name
+        );
+        eprintln!(
+            "{}: {} rounds (optimal assignment from round {:?}), ρ = {:.3e}",
+            instance.name,
+            report.iterations,
+            report.check.as_ref().unwrap().rounds_to_optimal_assignment,
+            report.rho
+        );
+    }
+}
