@@ -37,9 +37,11 @@ pub struct StepReport {
     pub inner_iterations: usize,
     /// Whether the local inner solve met its tolerance.
     pub inner_converged: bool,
-    /// The agent's rounded view of the team's assignment is feasible and its iterate lies
-    /// within the integrality tolerance of it.
-    pub near_integral: bool,
+    /// Max-norm distance of the agent's whole iterate from its rounded view of the team's
+    /// assignment (`∞` when that view is not a feasible assignment).
+    pub integrality_gap: f64,
+    /// The same distance over the agent's own column only.
+    pub own_integrality_gap: f64,
     /// Hash of the agent's rounded view of the whole team's assignment.
     pub assignment_digest: u64,
 }

@@ -43,9 +43,6 @@ pub enum ProjectionPath {
 pub struct PrimalSettings {
     pub rho: f64,
     pub projection: ProjectionPath,
-    /// An iterate within this max-norm distance of its rounded assignment counts as
-    /// near-integral (stop rules use it; NOTES.md note 12 motivates 0.05).
-    pub integrality_tolerance: f64,
 }
 
 impl PrimalSettings {
@@ -53,7 +50,6 @@ impl PrimalSettings {
         Self {
             rho,
             projection: ProjectionPath::Fast,
-            integrality_tolerance: 0.05,
         }
     }
 }
@@ -170,24 +166,30 @@ impl PrimalAgent {
         disagreement
     }
 
-    /// Rounds the current iterate column by column; returns (near-integral, digest).
-    fn inspect_rounding(&mut self) -> (bool, u64) {
+    /// Rounds the current iterate column by column; returns the distance of the iterate
+    /// (whole, own column) from that rounding and a digest of it.
+    fn inspect_rounding(&mut self) -> (f64, f64, u64) {
         rounding::argmax_assignment(&self.x, self.tasks, &mut self.rounded);
         let feasible = rounding::covers(&self.rounded, self.case, &mut self.load);
-        let tolerance = self.settings.integrality_tolerance;
-        let mut near = feasible;
         let mut digest: u64 = 0xcbf2_9ce4_8422_2325;
+        let (mut gap, mut own_gap) = (0.0f64, 0.0f64);
         for (j, &task) in self.rounded.iter().enumerate() {
             digest = (digest ^ task as u64).wrapping_mul(0x0100_0000_01b3);
-            if near {
-                let column = &self.x[j * self.tasks..(j + 1) * self.tasks];
-                near = column
-                    .iter()
-                    .enumerate()
-                    .all(|(t, v)| (v - if t == task { 1.0 } else { 0.0 }).abs() <= tolerance);
+            let column = &self.x[j * self.tasks..(j + 1) * self.tasks];
+            let distance = column
+                .iter()
+                .enumerate()
+                .map(|(t, v)| (v - if t == task { 1.0 } else { 0.0 }).abs())
+                .fold(0.0, f64::max);
+            gap = gap.max(distance);
+            if j == self.index {
+                own_gap = distance;
             }
         }
-        (near, digest)
+        if !feasible {
+            gap = f64::INFINITY;
+        }
+        (gap, own_gap, digest)
     }
 }
 
@@ -253,13 +255,14 @@ impl ConsensusAgent for PrimalAgent {
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
         self.x.copy_from_slice(out);
-        let (near_integral, assignment_digest) = self.inspect_rounding();
+        let (integrality_gap, own_integrality_gap, assignment_digest) = self.inspect_rounding();
         StepReport {
             disagreement,
             change,
             inner_iterations: stats.newton_steps,
             inner_converged: stats.converged,
-            near_integral,
+            integrality_gap,
+            own_integrality_gap,
             assignment_digest,
         }
     }

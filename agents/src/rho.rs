@@ -5,12 +5,13 @@
 //! spread of the costs makes the whole iteration scale- and shift-free: costs in metres or
 //! in [0, 1) give the same iterates. The rest of the rule follows the measured optimum for
 //! uniform costs (`../shared/reference/NOTES.md`, note 10): best fixed ρ ≈ (0.5 … 1) /
-//! (2 · mean degree · n) for a unit spread. We take the middle, 0.75.
+//! (2 · mean degree · n) for a unit spread. We take 0.5: over 50 seeded 20×20 instances it
+//! reached the optimal assignment as fast as 0.75 and 1.0 and settled markedly sooner.
 
 use crate::problem::CostMatrix;
 
 /// `ρ = RHO_FACTOR · spread / (2 · mean degree · n)`.
-pub const RHO_FACTOR: f64 = 0.75;
+pub const RHO_FACTOR: f64 = 0.5;
 
 /// The default ρ for these costs on a graph with this mean degree.
 pub fn default_rho(costs: &CostMatrix, mean_degree: f64) -> f64 {

@@ -39,7 +39,9 @@ pub struct SimOutcome {
     pub stopped: bool,
 }
 
-/// All agents, double-buffered payloads, one thread.
+/// All agents with double-buffered payloads, stepped in lockstep. Within a round the
+/// agents are independent, so large teams are stepped by a few scoped worker threads; each
+/// agent's arithmetic is the same whatever the split, so results are bit-identical.
 pub struct LockstepSim<A> {
     agents: Vec<A>,
     neighbours: Vec<Vec<usize>>,
@@ -48,14 +50,27 @@ pub struct LockstepSim<A> {
     next: Vec<f64>,
     reports: Vec<StepReport>,
     round: usize,
+    workers: usize,
 }
 
-impl<A: ConsensusAgent> LockstepSim<A> {
+/// Below this much neighbour data per round (f64 values read), one thread is faster than
+/// spawning workers every round.
+const PARALLEL_THRESHOLD: usize = 1 << 18;
+
+impl<A: ConsensusAgent + Send> LockstepSim<A> {
     /// `agents[i]` is robot `i` of `graph`; all payloads must have the same length.
     pub fn new(agents: Vec<A>, graph: &Graph) -> Self {
         assert_eq!(agents.len(), graph.robots(), "one agent per robot");
         let len = agents.first().map_or(0, |a| a.payload_len());
         assert!(agents.iter().all(|a| a.payload_len() == len));
+        let traffic = len * 2 * graph.edge_count();
+        let workers = if traffic >= PARALLEL_THRESHOLD {
+            std::thread::available_parallelism()
+                .map_or(1, |p| p.get())
+                .min(agents.len())
+        } else {
+            1
+        };
         let mut current = vec![0.0; len * agents.len()];
         for (i, agent) in agents.iter().enumerate() {
             agent.write_initial_payload(&mut current[i * len..(i + 1) * len]);
@@ -70,19 +85,46 @@ impl<A: ConsensusAgent> LockstepSim<A> {
             len,
             current,
             round: 0,
+            workers,
         }
+    }
+
+    /// Steps with exactly this many worker threads (1: all in the caller's thread).
+    pub fn with_workers(mut self, workers: usize) -> Self {
+        self.workers = workers.clamp(1, self.agents.len().max(1));
+        self
     }
 
     /// Runs one round: every agent steps on its neighbours' current payloads.
     pub fn step_round(&mut self) -> &[StepReport] {
-        for (i, agent) in self.agents.iter_mut().enumerate() {
-            let inbox = SimInbox {
-                payloads: &self.current,
-                len: self.len,
-                neighbours: &self.neighbours[i],
+        let (len, current, neighbours) = (self.len, &self.current[..], &self.neighbours[..]);
+        let step_range =
+            |first: usize, agents: &mut [A], next: &mut [f64], reports: &mut [StepReport]| {
+                for (k, agent) in agents.iter_mut().enumerate() {
+                    let inbox = SimInbox {
+                        payloads: current,
+                        len,
+                        neighbours: &neighbours[first + k],
+                    };
+                    reports[k] = agent.step(&inbox, &mut next[k * len..(k + 1) * len]);
+                }
             };
-            let out = &mut self.next[i * self.len..(i + 1) * self.len];
-            self.reports[i] = agent.step(&inbox, out);
+        if self.workers <= 1 {
+            step_range(0, &mut self.agents, &mut self.next, &mut self.reports);
+        } else {
+            let chunk = self.agents.len().div_ceil(self.workers);
+            std::thread::scope(|scope| {
+                let parts = self
+                    .agents
+                    .chunks_mut(chunk)
+                    .zip(self.next.chunks_mut(chunk * len))
+                    .zip(self.reports.chunks_mut(chunk))
+                    .enumerate();
+                for (part, ((agents, next), reports)) in parts {
+                    let step_range = &step_range;
+                    scope.spawn(move || step_range(part * chunk, agents, next, reports));
+                }
+            });
         }
         std::mem::swap(&mut self.current, &mut self.next);
         self.round += 1;

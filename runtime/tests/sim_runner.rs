@@ -1,0 +1,120 @@
+//! The lockstep simulation: deterministic, worker-count independent, and its stop rule
+//! does not stop at wrong assignments.
+
+use admm_ta_agents::oracle;
+use admm_ta_agents::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
+use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_agents::rho::default_rho;
+use admm_ta_agents::stopping::NeverStop;
+use admm_ta_runtime::sim::LockstepSim;
+use admm_ta_runtime::solve::{SolveConfig, solve};
+use admm_ta_topologies::{Graph, TopologySpec, generate};
+
+fn agents(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    path: ProjectionPath,
+) -> Vec<PrimalAgent> {
+    let rho = default_rho(problem.costs(), graph.mean_degree());
+    let settings = PrimalSettings {
+        projection: path,
+        ..PrimalSettings::new(rho)
+    };
+    (0..problem.robots())
+        .map(|i| {
+            PrimalAgent::new(
+                i,
+                problem.costs().row(i).to_vec(),
+                problem.robots(),
+                problem.case(),
+                graph.degree(i),
+                settings,
+            )
+        })
+        .collect()
+}
+
+fn payloads<A: admm_ta_agents::agent::ConsensusAgent + Send>(
+    sim: &LockstepSim<A>,
+    n: usize,
+) -> Vec<f64> {
+    (0..n).flat_map(|i| sim.payload(i).to_vec()).collect()
+}
+
+#[test]
+fn worker_threads_do_not_change_a_single_bit() {
+    let problem =
+        TaskAssignmentProblem::new(CostMatrix::uniform(12, 7, 4).unwrap(), CaseChoice::Auto)
+            .unwrap();
+    let graph = generate::random_connected(12, 0.3, 4).unwrap();
+    let mut one =
+        LockstepSim::new(agents(&problem, &graph, ProjectionPath::Fast), &graph).with_workers(1);
+    let mut three =
+        LockstepSim::new(agents(&problem, &graph, ProjectionPath::Fast), &graph).with_workers(3);
+    for _ in 0..60 {
+        let a = one.step_round().to_vec();
+        let b = three.step_round().to_vec();
+        assert_eq!(a, b);
+        assert_eq!(payloads(&one, 12), payloads(&three, 12));
+    }
+}
+
+#[test]
+fn qp_path_gives_the_same_iterates_as_the_fast_path() {
+    let problem =
+        TaskAssignmentProblem::new(CostMatrix::uniform(5, 4, 8).unwrap(), CaseChoice::Auto)
+            .unwrap();
+    let graph = generate::ring(5).unwrap();
+    let mut fast = LockstepSim::new(agents(&problem, &graph, ProjectionPath::Fast), &graph);
+    let mut qp = LockstepSim::new(agents(&problem, &graph, ProjectionPath::Qp), &graph);
+    let mut never = NeverStop;
+    fast.run(40, &mut never, &mut |_| {});
+    qp.run(40, &mut never, &mut |_| {});
+    let diff = payloads(&fast, 5)
+        .iter()
+        .zip(payloads(&qp, 5))
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    // Interior-point accuracy (~1e-8 per round) accumulates over the rounds.
+    assert!(diff < 1e-5, "fast and QP iterates differ by {diff:e}");
+}
+
+#[test]
+fn agreement_stop_never_stops_at_a_wrong_assignment() {
+    let mut rounds = Vec::new();
+    for (robots, tasks, topology) in [
+        (8, 8, "complete"),
+        (10, 5, "ring"),
+        (9, 9, "random:0.4"),
+        (7, 3, "chain"),
+    ] {
+        let spec: TopologySpec = topology.parse().unwrap();
+        for seed in 0..25 {
+            let costs = CostMatrix::uniform(robots, tasks, 1000 + seed).unwrap();
+            let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
+            let graph = spec.build(robots, seed).unwrap();
+            let report = solve(&problem, &graph, &SolveConfig::default()).unwrap();
+            let optimum = oracle::solve(&problem).unwrap();
+            assert!(problem.is_feasible(&report.assignment));
+            if report.converged {
+                assert!(
+                    !report.repaired,
+                    "{robots}x{tasks} {topology} seed {seed}: stopped in disagreement"
+                );
+                assert!(
+                    (report.cost - optimum.cost).abs() <= 1e-9 * optimum.cost.abs().max(1.0),
+                    "{robots}x{tasks} {topology} seed {seed}: stopped at cost {} > {}",
+                    report.cost,
+                    optimum.cost
+                );
+                rounds.push(report.iterations);
+            }
+        }
+    }
+    // Almost every run must stop by itself well before the 5000-round limit.
+    assert!(
+        rounds.len() >= 95,
+        "only {} of 100 runs stopped",
+        rounds.len()
+    );
+}
