@@ -9,8 +9,13 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         return Ok(());
     }
     println!(
-        "method {:?}, transport {:?}: {} robots × {} tasks (Case {}), topology {}",
-        report.method, report.transport, report.robots, report.tasks, report.case, report.topology
+        "method {}, transport {}: {} robots × {} tasks (Case {}), topology {}",
+        report.method.name(),
+        report.transport.name(),
+        report.robots,
+        report.tasks,
+        report.case,
+        report.topology
     );
     println!(
         "ρ = {:.4e}; {} after {} iterations ({:.1} ms, {:.2} Newton steps per projection)",

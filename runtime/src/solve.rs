@@ -23,6 +23,15 @@ pub enum Method {
     Primal,
 }
 
+impl Method {
+    /// The name used on the command line and in JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Primal => "primal",
+        }
+    }
+}
+
 /// What carries the messages.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
 #[serde(rename_all = "kebab-case")]
@@ -30,6 +39,15 @@ pub enum Transport {
     /// Lockstep simulation in one thread.
     #[default]
     Sim,
+}
+
+impl Transport {
+    /// The name used on the command line and in JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Sim => "sim",
+        }
+    }
 }
 
 /// When the run ends.

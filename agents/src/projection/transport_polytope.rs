@@ -32,7 +32,7 @@ use crate::problem::AssignmentCase;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt;
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::{Mat, MatMut, MatRef, Par};
+use faer::{MatMut, MatRef, Par};
 
 /// Smallest Newton regularisation μ.
 const MIN_REGULARISATION: f64 = 1e-8;
@@ -173,7 +173,8 @@ pub struct TransportPolytopeProjector {
     /// Free rows (of the Newton block) per column, CSR-style.
     free_start: Vec<usize>,
     free_rows: Vec<usize>,
-    schur: Mat<f64>,
+    /// Column-major `m × m` Schur complement (lower triangle used).
+    schur: Vec<f64>,
     gathered: Vec<f64>,
     breakpoints: Vec<f64>,
     cholesky_scratch: MemBuffer,
@@ -205,7 +206,7 @@ impl TransportPolytopeProjector {
             in_newton_block: vec![false; tasks],
             free_start: vec![0; robots + 1],
             free_rows: vec![0; tasks * robots],
-            schur: Mat::zeros(tasks, tasks),
+            schur: vec![0.0; tasks * tasks],
             gathered: Vec::with_capacity(longest),
             breakpoints: Vec::with_capacity(2 * longest),
             cholesky_scratch: MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(
@@ -309,14 +310,14 @@ impl TransportPolytopeProjector {
         }
         self.free_start[n] = next;
         // Schur complement S = diag(r) + μ − F diag(1/(c + μ)) Fᵀ, rhs = g_u − F (g_v/(c + μ)).
-        let mut schur = self.schur.as_mut();
+        let schur = &mut self.schur;
         schur.fill(0.0);
         for r in 0..m {
             if self.in_newton_block[r] {
-                schur[(r, r)] = p.row_free[r] as f64 + mu;
+                schur[r * m + r] = p.row_free[r] as f64 + mu;
                 self.du[r] = p.grad_u[r];
             } else {
-                schur[(r, r)] = 1.0;
+                schur[r * m + r] = 1.0;
                 self.du[r] = 0.0;
             }
         }
@@ -326,15 +327,17 @@ impl TransportPolytopeProjector {
                 continue;
             }
             let inv = 1.0 / (p.col_free[c] as f64 + mu);
-            for (k, &a) in rows.iter().enumerate() {
-                self.du[a] -= inv * p.grad_v[c];
-                for &b in &rows[..=k] {
-                    // rows are increasing, so (a, b) is in the lower triangle.
-                    schur[(a, b)] -= inv;
+            for (k, &b) in rows.iter().enumerate() {
+                self.du[b] -= inv * p.grad_v[c];
+                // Rows are increasing, so (a, b) with a ≥ b lies in the lower triangle.
+                let column = &mut schur[b * m..(b + 1) * m];
+                for &a in &rows[k..] {
+                    column[a] -= inv;
                 }
             }
         }
-        let mut stack = MemStack::new(&mut self.cholesky_scratch);
+        let mut schur = MatMut::from_column_major_slice_mut(schur, m, m);
+        let stack = MemStack::new(&mut self.cholesky_scratch);
         let factored = llt::factor::cholesky_in_place(
             schur.rb_mut(),
             // Pivots below μ/1000 can only be rounding noise (S ⪰ μI): replace them by μ.
@@ -343,12 +346,12 @@ impl TransportPolytopeProjector {
                 dynamic_regularization_epsilon: 1e-3 * mu,
             },
             Par::Seq,
-            &mut stack,
+            stack,
             Default::default(),
         );
         let rhs = MatMut::from_column_major_slice_mut(&mut self.du, m, 1);
         if factored.is_ok() {
-            llt::solve::solve_in_place(schur.rb(), rhs, Par::Seq, &mut stack);
+            llt::solve::solve_in_place(schur.rb(), rhs, Par::Seq, stack);
         }
         if factored.is_err() || self.du.iter().any(|d| !d.is_finite()) {
             // Cannot happen for an SPD Schur complement; fall back to a scaled gradient.
