@@ -1,5 +1,5 @@
 //! Measures candidate stop rules against the oracle on many seeded instances:
-//! `cargo run --release -p admm-ta-runtime --example stop_rules -- ROBOTS TASKS TOPOLOGY SEEDS`.
+//! `cargo run --release -p admm-ta-runtime --example stop_rules -- ROBOTS TASKS TOPOLOGY SEEDS [RHO_FACTOR] [MAX_ROUNDS]`.
 use admm_ta_agents::oracle;
 use admm_ta_agents::primal::{PrimalAgent, PrimalSettings};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
@@ -15,7 +15,7 @@ fn main() {
     let spec: TopologySpec = args[3].parse().unwrap();
     let seeds: u64 = args[4].parse().unwrap();
     let factor: f64 = args.get(5).map_or(0.75, |f| f.parse().unwrap());
-    let max_rounds = 3000;
+    let max_rounds: usize = args.get(6).map_or(3000, |r| r.parse().unwrap());
     let taus = [0.05, 0.1, 0.2, 0.3];
     let k = 10;
     let mut rows = Vec::new();

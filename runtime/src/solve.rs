@@ -288,13 +288,7 @@ impl<'p> Tracer<'p> {
                 .zip(self.problem.costs().row(i))
                 .map(|(x, a)| x * a)
                 .sum::<f64>();
-            let mut best = 0;
-            for (t, v) in own.iter().enumerate() {
-                if *v > own[best] {
-                    best = t;
-                }
-            }
-            self.decisions[i] = best;
+            rounding::argmax_assignment(own, m, &mut self.decisions[i..i + 1]);
         }
         if self.relative_gap(relaxed).abs() <= 1e-3 {
             self.first_within.get_or_insert(view.round);
