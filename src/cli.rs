@@ -68,7 +68,7 @@ struct SolveArgs {
     method: MethodArg,
     #[arg(long, value_enum, default_value = "sim")]
     transport: TransportArg,
-    /// ADMM penalty ρ (default: scale-free rule 0.5·spread/(2·mean degree·n)).
+    /// ADMM penalty ρ (default: the scale-free rule 0.5·spread·√((n−1)/d̄)/(2·d̄·n), d̄ the mean degree).
     #[arg(long, allow_negative_numbers = true)]
     rho: Option<f64>,
     #[arg(long, default_value_t = 5000)]

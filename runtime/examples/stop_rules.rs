@@ -1,5 +1,6 @@
 //! Measures candidate stop rules against the oracle on many seeded instances:
-//! `cargo run --release -p admm-ta-runtime --example stop_rules -- ROBOTS TASKS TOPOLOGY SEEDS [RHO_FACTOR] [MAX_ROUNDS]`.
+//! `cargo run --release -p admm-ta-runtime --example stop_rules -- ROBOTS TASKS TOPOLOGY SEEDS [RHO_MULTIPLIER] [MAX_ROUNDS]
+//! (the multiplier scales the default ρ rule)`.
 use admm_ta_agents::oracle;
 use admm_ta_agents::primal::{PrimalAgent, PrimalSettings};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
@@ -14,7 +15,7 @@ fn main() {
     let m: usize = args[2].parse().unwrap();
     let spec: TopologySpec = args[3].parse().unwrap();
     let seeds: u64 = args[4].parse().unwrap();
-    let factor: f64 = args.get(5).map_or(0.75, |f| f.parse().unwrap());
+    let factor: f64 = args.get(5).map_or(1.0, |f| f.parse().unwrap());
     let max_rounds: usize = args.get(6).map_or(3000, |r| r.parse().unwrap());
     let taus = [0.05, 0.1, 0.2, 0.3];
     let k = 10;
@@ -104,7 +105,7 @@ fn main() {
     let opt: Vec<usize> = rows.iter().filter_map(|r| r.1).collect();
     let within: Vec<usize> = rows.iter().filter_map(|r| r.2).collect();
     println!(
-        "{n}x{m} {:?} ρ factor {factor}: optimal-assignment round mean {:.1} (reached {}/{}), within 0.1% mean {:.1}",
+        "{n}x{m} {:?} ρ × {factor}: optimal-assignment round mean {:.1} (reached {}/{}), within 0.1% mean {:.1}",
         spec,
         mean(opt.clone()),
         opt.len(),
