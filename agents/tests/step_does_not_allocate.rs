@@ -1,0 +1,76 @@
+//! The per-round step works in buffers allocated at construction: after the first rounds,
+//! a primal step (fused update + Newton projection + rounding inspection) allocates nothing.
+
+use admm_ta_agents::agent::ConsensusAgent;
+use admm_ta_agents::primal::{PrimalAgent, PrimalSettings};
+use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+/// Counts the allocations of the current thread only (the test harness allocates on its
+/// own threads meanwhile).
+struct CountingAllocator;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(Cell::get)
+}
+
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+fn team_rounds(robots: usize, tasks: usize, case: AssignmentCase, rounds: usize) -> usize {
+    let costs = CostMatrix::uniform(robots, tasks, 11).unwrap();
+    let rho = admm_ta_agents::rho::default_rho(&costs, (robots - 1) as f64);
+    let mut agents: Vec<PrimalAgent> = (0..robots)
+        .map(|i| {
+            PrimalAgent::new(
+                i,
+                costs.row(i).to_vec(),
+                robots,
+                case,
+                robots - 1,
+                PrimalSettings::new(rho),
+            )
+        })
+        .collect();
+    let len = robots * tasks;
+    let mut current = vec![0.0; len * robots];
+    let mut next = vec![0.0; len * robots];
+    let mut allocations_in_steps = 0;
+    for round in 0..rounds {
+        for (i, agent) in agents.iter_mut().enumerate() {
+            // The inbox is the runner's business: built outside the measured window.
+            let inbox: Vec<&[f64]> = (0..robots)
+                .filter(|&j| j != i)
+                .map(|j| &current[j * len..(j + 1) * len])
+                .collect();
+            let before = allocations();
+            agent.step(&inbox, &mut next[i * len..(i + 1) * len]);
+            if round >= 2 {
+                allocations_in_steps += allocations() - before;
+            }
+        }
+        std::mem::swap(&mut current, &mut next);
+    }
+    allocations_in_steps
+}
+
+#[test]
+fn primal_step_allocates_nothing_after_warm_up() {
+    assert_eq!(team_rounds(12, 12, AssignmentCase::One, 40), 0);
+    assert_eq!(team_rounds(14, 6, AssignmentCase::Two, 40), 0);
+}
