@@ -111,3 +111,42 @@ impl GeneralProblem {
         worst
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::{CaseChoice, CostMatrix};
+
+    /// Column-major `m × n` indicator matrix of an assignment.
+    fn indicator(assignment: &[usize], tasks: usize) -> Vec<f64> {
+        let mut x = vec![0.0; tasks * assignment.len()];
+        for (robot, &task) in assignment.iter().enumerate() {
+            x[robot * tasks + task] = 1.0;
+        }
+        x
+    }
+
+    #[test]
+    fn mappings_three_and_four_encode_the_assignment_constraints() {
+        // Case 1, mapping (3): a permutation satisfies Σ A_i x_i = b; a collision does not.
+        let square = CostMatrix::uniform(3, 3, 0).unwrap();
+        let p1 = TaskAssignmentProblem::new(square, CaseChoice::Auto).unwrap();
+        let g1 = GeneralProblem::from_task_assignment(&p1);
+        assert_eq!((g1.b.len(), g1.d.len()), (6, 0));
+        assert_eq!(g1.violation(&indicator(&[2, 0, 1], 3)), 0.0);
+        assert_eq!(g1.violation(&indicator(&[0, 0, 1], 3)), 1.0);
+        // Case 2, mapping (4) with b = 1_n: covering maps are feasible, uncovered tasks not.
+        let tall = CostMatrix::uniform(4, 2, 0).unwrap();
+        let p2 = TaskAssignmentProblem::new(tall, CaseChoice::Auto).unwrap();
+        let g2 = GeneralProblem::from_task_assignment(&p2);
+        assert_eq!((g2.b.len(), g2.d.len()), (4, 2));
+        assert_eq!(g2.violation(&indicator(&[0, 1, 1, 1], 2)), 0.0);
+        assert_eq!(g2.violation(&indicator(&[1, 1, 1, 1], 2)), 1.0);
+        // The box g_i: entries outside [0, 1].
+        let mut x = indicator(&[0, 1, 1, 1], 2);
+        x[0] = 1.5;
+        x[1] = -0.5;
+        assert_eq!(g2.violation(&x), 0.5);
+        assert_eq!(g2.alpha[3], p2.costs().row(3));
+    }
+}
