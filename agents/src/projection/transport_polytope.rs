@@ -279,7 +279,7 @@ impl TransportPolytopeProjector {
     fn cold_start(&mut self, z: MatRef<'_, f64>) {
         self.current.u.fill(0.0);
         for c in 0..self.robots {
-            self.current.v[c] = clipped_sum_root(column(z, c), 1.0, &mut self.breakpoints);
+            self.current.v[c] = clipped_sum_root(column(z, c), &mut self.breakpoints);
         }
     }
 
@@ -370,7 +370,7 @@ impl TransportPolytopeProjector {
             }
             self.gathered.clear();
             self.gathered.extend((0..n).map(|c| z[(r, c)] - p.v[c]));
-            let mut root = clipped_sum_root(&self.gathered, 1.0, &mut self.breakpoints);
+            let mut root = clipped_sum_root(&self.gathered, &mut self.breakpoints);
             if self.case == AssignmentCase::Two {
                 root = root.min(0.0);
             }
@@ -386,7 +386,7 @@ impl TransportPolytopeProjector {
                 self.gathered.clear();
                 self.gathered
                     .extend(column(z, c).iter().zip(&p.u).map(|(zr, u)| zr - u));
-                self.dv[c] = clipped_sum_root(&self.gathered, 1.0, &mut self.breakpoints) - p.v[c];
+                self.dv[c] = clipped_sum_root(&self.gathered, &mut self.breakpoints) - p.v[c];
             }
         }
     }
