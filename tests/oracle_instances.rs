@@ -99,7 +99,7 @@ fn primal_admm_reaches_the_100_by_100_optimum_on_a_random_graph() {
     // and judged by the robots' own rounded choices, which must be conflict-free and optimal.
     let graph = generate::random_connected(100, 0.1, 7).unwrap();
     let config = SolveConfig {
-        max_iters: 2500,
+        max_iters: 4000,
         check: true,
         ..SolveConfig::default()
     };
