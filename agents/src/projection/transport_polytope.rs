@@ -176,7 +176,7 @@ pub struct TransportPolytopeProjector {
     /// Column-major `m × m` Schur complement (lower triangle used).
     schur: Vec<f64>,
     gathered: Vec<f64>,
-    breakpoints: Vec<f64>,
+    simplex_scratch: Vec<f64>,
     cholesky_scratch: MemBuffer,
 }
 
@@ -208,7 +208,7 @@ impl TransportPolytopeProjector {
             free_rows: vec![0; tasks * robots],
             schur: vec![0.0; tasks * tasks],
             gathered: Vec::with_capacity(longest),
-            breakpoints: Vec::with_capacity(2 * longest),
+            simplex_scratch: Vec::with_capacity(longest),
             cholesky_scratch: MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(
                 tasks,
                 Par::Seq,
@@ -279,7 +279,7 @@ impl TransportPolytopeProjector {
     fn cold_start(&mut self, z: MatRef<'_, f64>) {
         self.current.u.fill(0.0);
         for c in 0..self.robots {
-            self.current.v[c] = clipped_sum_root(column(z, c), &mut self.breakpoints);
+            self.current.v[c] = clipped_sum_root(column(z, c), &mut self.simplex_scratch);
         }
     }
 
@@ -370,7 +370,7 @@ impl TransportPolytopeProjector {
             }
             self.gathered.clear();
             self.gathered.extend((0..n).map(|c| z[(r, c)] - p.v[c]));
-            let mut root = clipped_sum_root(&self.gathered, &mut self.breakpoints);
+            let mut root = clipped_sum_root(&self.gathered, &mut self.simplex_scratch);
             if self.case == AssignmentCase::Two {
                 root = root.min(0.0);
             }
@@ -386,7 +386,7 @@ impl TransportPolytopeProjector {
                 self.gathered.clear();
                 self.gathered
                     .extend(column(z, c).iter().zip(&p.u).map(|(zr, u)| zr - u));
-                self.dv[c] = clipped_sum_root(&self.gathered, &mut self.breakpoints) - p.v[c];
+                self.dv[c] = clipped_sum_root(&self.gathered, &mut self.simplex_scratch) - p.v[c];
             }
         }
     }
