@@ -124,6 +124,13 @@ impl PrimalAgent {
         MatRef::from_column_major_slice(&self.x, self.tasks, self.robots)
     }
 
+    /// Changes ρ from the next step on. `Q` is kept unscaled (`Q += ρ Σ (X_i − X_j)`), so it
+    /// needs no rescaling; every robot must change ρ at the same round.
+    pub fn set_rho(&mut self, rho: f64) {
+        assert!(rho > 0.0 && rho.is_finite(), "ρ must be positive");
+        self.settings.rho = rho;
+    }
+
     /// Statistics of the last projection.
     pub fn last_projection(&self) -> ProjectionStats {
         self.last_projection

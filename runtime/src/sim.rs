@@ -164,6 +164,11 @@ impl<A: ConsensusAgent + Send> LockstepSim<A> {
         &self.agents
     }
 
+    /// Mutable access to the agents between rounds (e.g. to change a parameter for all).
+    pub fn agents_mut(&mut self) -> &mut [A] {
+        &mut self.agents
+    }
+
     /// Agent `i`'s latest payload.
     pub fn payload(&self, i: usize) -> &[f64] {
         &self.current[i * self.len..(i + 1) * self.len]
