@@ -1,5 +1,6 @@
-//! Explores a growing-ρ schedule `ρ_k = ρ_0 · min(g^k, cap)` against the fixed default:
-//! `cargo run --release -p admm-ta-runtime --example rho_schedule -- ROBOTS TASKS TOPOLOGY SEEDS GROWTH CAP`.
+//! Explores ρ schedules `ρ_k = ρ_0 · g^k`, bounded by `limit` (a cap when g > 1, a floor
+//! when g < 1), against the fixed default:
+//! `cargo run --release -p admm-ta-runtime --example rho_schedule -- ROBOTS TASKS TOPOLOGY SEEDS GROWTH LIMIT`.
 use admm_ta_agents::oracle;
 use admm_ta_agents::primal::{PrimalAgent, PrimalSettings};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
@@ -14,7 +15,7 @@ fn main() {
     let spec: TopologySpec = args[3].parse().unwrap();
     let seeds: u64 = args[4].parse().unwrap();
     let growth: f64 = args[5].parse().unwrap();
-    let cap: f64 = args[6].parse().unwrap();
+    let limit: f64 = args[6].parse().unwrap();
     let max_rounds = 2000;
     let (mut total, mut reached, mut integral_total, mut integral_reached) = (0, 0, 0, 0);
     for seed in 0..seeds {
@@ -40,7 +41,13 @@ fn main() {
         let mut decisions = vec![0; n];
         let (mut optimal_since, mut integral_at) = (None, None);
         for round in 1..=max_rounds {
-            let rho = rho0 * growth.powi(round).min(cap);
+            let factor = growth.powi(round);
+            let rho = rho0
+                * if growth >= 1.0 {
+                    factor.min(limit)
+                } else {
+                    factor.max(limit)
+                };
             sim.agents_mut().iter_mut().for_each(|a| a.set_rho(rho));
             let gap = sim
                 .step_round()
@@ -78,7 +85,7 @@ fn main() {
         }
     }
     println!(
-        "{n}x{m} {spec:?} growth {growth} cap {cap}: optimal from {:.1} ({reached}/{seeds}), all within 0.2 of integral at {:.1} ({integral_reached}/{seeds})",
+        "{n}x{m} {spec:?} growth {growth} limit {limit}: optimal from {:.1} ({reached}/{seeds}), all within 0.2 of integral at {:.1} ({integral_reached}/{seeds})",
         total as f64 / reached.max(1) as f64,
         integral_total as f64 / integral_reached.max(1) as f64
     );
