@@ -73,9 +73,10 @@ struct SolveArgs {
     rho: Option<f64>,
     #[arg(long, default_value_t = 5000)]
     max_iters: usize,
-    /// agreement: stop once all robots agree on one near-integral assignment for
-    /// --stop-rounds rounds; max-iters: always run --max-iters rounds.
-    #[arg(long, value_enum, default_value = "agreement")]
+    /// certified: stop once all robots round to one assignment that their optimality
+    /// certificate proves optimal; agreement: once all robots agree on one near-integral
+    /// assignment for --stop-rounds rounds; max-iters: always run --max-iters rounds.
+    #[arg(long, value_enum, default_value = "certified")]
     stop: StopArg,
     #[arg(long, default_value_t = 10)]
     stop_rounds: usize,
@@ -116,6 +117,7 @@ enum TransportArg {
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum StopArg {
     Agreement,
+    Certified,
     MaxIters,
 }
 
@@ -174,6 +176,7 @@ fn run_solve(args: SolveArgs) -> Result<()> {
         max_iters: args.max_iters,
         stop: match args.stop {
             StopArg::Agreement => StopRule::Agreement,
+            StopArg::Certified => StopRule::Certified,
             StopArg::MaxIters => StopRule::MaxIters,
         },
         stop_rounds: args.stop_rounds,

@@ -131,6 +131,45 @@ impl PrimalAgent {
         self.settings.rho = rho;
     }
 
+    /// Optimality certificate of the assignment this robot currently rounds to (the
+    /// per-column argmax `π` of its iterate).
+    ///
+    /// With `G_i = Q_i + α_i e_iᵀ`, the robots' `Q_i` sum to zero (each edge adds
+    /// `ρ(X_i − X_j)` to one robot and its negative to the other), so `Σ_i G_i = C`, the whole
+    /// cost matrix. Hence for any assignment `π`,
+    /// `cost(π) − optimum ≤ Σ_i s_i` with `s_i = ⟨G_i, π⟩ − min_{X∈P} ⟨G_i, X⟩ ≥ 0`: if the
+    /// robots agree on `π` and their slacks sum to (almost) zero, `π` is optimal — a bound,
+    /// not a heuristic. This returns `s_i` (an `m × n` assignment problem, so call it when the
+    /// robots agree, not every round), or `∞` when `π` is not a feasible assignment.
+    pub fn certificate_slack(&self) -> f64 {
+        self.certificate_slack_for(&self.rounded)
+    }
+
+    /// `s_i` of [`PrimalAgent::certificate_slack`] for any assignment (task per robot);
+    /// `∞` when it is not feasible.
+    pub fn certificate_slack_for(&self, assignment: &[usize]) -> f64 {
+        let (m, n) = (self.tasks, self.robots);
+        let mut load = vec![0; m];
+        if assignment.len() != n
+            || assignment.iter().any(|&t| t >= m)
+            || !rounding::covers(assignment, self.case, &mut load)
+        {
+            return f64::INFINITY;
+        }
+        let g = |t: usize, j: usize| {
+            self.q[j * m + t] + if j == self.index { self.costs[t] } else { 0.0 }
+        };
+        let values = (0..n).flat_map(|j| (0..m).map(move |t| g(t, j))).collect();
+        let Ok(costs) = crate::problem::CostMatrix::new(n, m, values) else {
+            return f64::INFINITY;
+        };
+        let Ok(best) = crate::oracle::solve_costs(&costs, self.case) else {
+            return f64::INFINITY;
+        };
+        let value = |a: &[usize]| a.iter().enumerate().map(|(j, &t)| g(t, j)).sum::<f64>();
+        (value(assignment) - value(&best)).max(0.0)
+    }
+
     /// Statistics of the last projection.
     pub fn last_projection(&self) -> ProjectionStats {
         self.last_projection

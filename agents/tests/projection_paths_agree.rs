@@ -73,10 +73,10 @@ fn check_agree(m: usize, n: usize, case: AssignmentCase, z: Mat<f64>) {
         .zip(&reference)
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
-    // clarabel's interior-point answer is itself only ~1e-8 accurate (NOTES.md note 11),
+    // clarabel's interior-point answer is only ~1e-8 accurate, ~1e-6 on degenerate inputs (NOTES.md note 11),
     // so compare points loosely, objectives tightly, and certify the fast one by its KKT
     // conditions (`kkt_certificate`).
-    assert!(gap <= 1e-7, "{m}x{n} {case:?}: max |fast − qp| = {gap:e}");
+    assert!(gap <= 1e-5, "{m}x{n} {case:?}: max |fast − qp| = {gap:e}");
     let (fast_distance, qp_distance) = (distance(&x, &zv), distance(&reference, &zv));
     // (clarabel may undercut by its own ~1e-9 infeasibility.)
     assert!(
@@ -86,7 +86,7 @@ fn check_agree(m: usize, n: usize, case: AssignmentCase, z: Mat<f64>) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
+    #![proptest_config(ProptestConfig::with_cases(256))]
     #[test]
     fn fast_matches_clarabel(m in 1usize..9, extra in 0usize..5, seed in 0u64..1_000_000, scale in 0.1f64..20.0, case_two in any::<bool>()) {
         let n = m + extra;

@@ -141,12 +141,7 @@ impl<A: ConsensusAgent + Send> LockstepSim<A> {
     ) -> SimOutcome {
         while self.round < max_rounds {
             self.step_round();
-            observer(&RoundView {
-                round: self.round,
-                reports: &self.reports,
-                payloads: &self.current,
-                payload_len: self.len,
-            });
+            observer(&self.view());
             if stop.should_stop(&self.reports) {
                 return SimOutcome {
                     rounds: self.round,
@@ -157,6 +152,16 @@ impl<A: ConsensusAgent + Send> LockstepSim<A> {
         SimOutcome {
             rounds: self.round,
             stopped: false,
+        }
+    }
+
+    /// The latest round as observers see it.
+    pub fn view(&self) -> RoundView<'_> {
+        RoundView {
+            round: self.round,
+            reports: &self.reports,
+            payloads: &self.current,
+            payload_len: self.len,
         }
     }
 

@@ -1,11 +1,11 @@
 //! One end-to-end solve: build the agents, run them, round, repair, check.
 
-use crate::sim::{LockstepSim, RoundView};
+use crate::sim::{LockstepSim, RoundView, SimOutcome};
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::oracle::{self, OptimalAssignment};
 use admm_ta_agents::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
 use admm_ta_agents::problem::TaskAssignmentProblem;
-use admm_ta_agents::stopping::{AgreementStop, NeverStop, TeamStopRule};
+use admm_ta_agents::stopping::{AgreementStop, NeverStop};
 use admm_ta_agents::{rho, rounding, ties};
 use admm_ta_topologies::Graph;
 use serde::Serialize;
@@ -55,8 +55,12 @@ impl Transport {
 #[serde(rename_all = "kebab-case")]
 pub enum StopRule {
     /// All robots agree on one near-integral assignment for some rounds (default 10).
-    #[default]
     Agreement,
+    /// All robots round to the same assignment and their optimality-certificate slacks
+    /// ([`PrimalAgent::certificate_slack`]) sum to at most `1e-9 ·` its cost scale: the
+    /// assignment is then provably optimal to that tolerance (default).
+    #[default]
+    Certified,
     /// Run to the iteration limit.
     MaxIters,
 }
@@ -86,7 +90,7 @@ impl Default for SolveConfig {
             transport: Transport::Sim,
             rho: None,
             max_iters: 5000,
-            stop: StopRule::Agreement,
+            stop: StopRule::Certified,
             stop_rounds: 10,
             seed: 0,
             perturbation: ties::Perturbation::Auto,
@@ -218,11 +222,14 @@ pub fn solve(
         }
     };
     let mut agreement = AgreementStop::new(config.stop_rounds);
-    let stop: &mut dyn TeamStopRule = match config.stop {
-        StopRule::Agreement => &mut agreement,
-        StopRule::MaxIters => &mut NeverStop,
+    let outcome = match config.stop {
+        StopRule::Agreement => sim.run(config.max_iters, &mut agreement, &mut observer),
+        StopRule::MaxIters => sim.run(config.max_iters, &mut NeverStop, &mut observer),
+        StopRule::Certified => {
+            let tolerance = 1e-9 * problem.costs().spread() * n as f64;
+            run_until_certified(&mut sim, config.max_iters, tolerance, &mut observer)
+        }
     };
-    let outcome = sim.run(config.max_iters, stop, &mut observer);
     let decisions: Vec<usize> = sim.agents().iter().map(ConsensusAgent::decide).collect();
     let wall_time_ms = started.elapsed().as_secs_f64() * 1e3;
     let (assignment, repaired) = rounding::repair(problem, &decisions);
@@ -248,6 +255,54 @@ pub fn solve(
         wall_time_ms,
         check,
     })
+}
+
+/// Rounds after which an agreement is first certified, and the spacing of later checks
+/// (each check is one `m × n` assignment problem per robot).
+const CERTIFY_AFTER: usize = 3;
+const CERTIFY_EVERY: usize = 5;
+
+/// Steps until the robots agree on one assignment whose certificate slacks sum to at most
+/// `tolerance` (see [`PrimalAgent::certificate_slack`]), or `max_rounds`.
+fn run_until_certified(
+    sim: &mut LockstepSim<PrimalAgent>,
+    max_rounds: usize,
+    tolerance: f64,
+    observer: &mut dyn FnMut(&RoundView<'_>),
+) -> SimOutcome {
+    let (mut agreed_for, mut agreed_on) = (0usize, 0u64);
+    while sim.round() < max_rounds {
+        let reports = sim.step_round();
+        let digest = reports[0].assignment_digest;
+        let agreed = reports
+            .iter()
+            .all(|r| r.assignment_digest == digest && r.integrality_gap.is_finite());
+        agreed_for = match (agreed, agreed_for > 0 && digest == agreed_on) {
+            (false, _) => 0,
+            (true, true) => agreed_for + 1,
+            (true, false) => 1,
+        };
+        agreed_on = digest;
+        observer(&sim.view());
+        if agreed_for >= CERTIFY_AFTER && (agreed_for - CERTIFY_AFTER).is_multiple_of(CERTIFY_EVERY)
+        {
+            let slack: f64 = sim
+                .agents()
+                .iter()
+                .map(PrimalAgent::certificate_slack)
+                .sum();
+            if slack <= tolerance {
+                return SimOutcome {
+                    rounds: sim.round(),
+                    stopped: true,
+                };
+            }
+        }
+    }
+    SimOutcome {
+        rounds: sim.round(),
+        stopped: false,
+    }
 }
 
 /// Follows the run against the optimum (only when checking).

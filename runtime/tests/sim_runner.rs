@@ -7,7 +7,7 @@ use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rho::default_rho;
 use admm_ta_agents::stopping::NeverStop;
 use admm_ta_runtime::sim::LockstepSim;
-use admm_ta_runtime::solve::{SolveConfig, solve};
+use admm_ta_runtime::solve::{SolveConfig, StopRule, solve};
 use admm_ta_topologies::{Graph, TopologySpec, generate};
 
 fn agents(
@@ -80,7 +80,13 @@ fn qp_path_gives_the_same_iterates_as_the_fast_path() {
 }
 
 #[test]
-fn agreement_stop_never_stops_at_a_wrong_assignment() {
+fn agreement_and_certified_stops_never_stop_at_a_wrong_assignment() {
+    for stop in [StopRule::Agreement, StopRule::Certified] {
+        stop_rule_is_safe(stop);
+    }
+}
+
+fn stop_rule_is_safe(stop: StopRule) {
     let mut rounds = Vec::new();
     for (robots, tasks, topology) in [
         (8, 8, "complete"),
@@ -93,7 +99,11 @@ fn agreement_stop_never_stops_at_a_wrong_assignment() {
             let costs = CostMatrix::uniform(robots, tasks, 1000 + seed).unwrap();
             let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
             let graph = spec.build(robots, seed).unwrap();
-            let report = solve(&problem, &graph, &SolveConfig::default()).unwrap();
+            let config = SolveConfig {
+                stop,
+                ..SolveConfig::default()
+            };
+            let report = solve(&problem, &graph, &config).unwrap();
             let optimum = oracle::solve(&problem).unwrap();
             assert!(problem.is_feasible(&report.assignment));
             if report.converged {
@@ -103,7 +113,7 @@ fn agreement_stop_never_stops_at_a_wrong_assignment() {
                 );
                 assert!(
                     (report.cost - optimum.cost).abs() <= 1e-9 * optimum.cost.abs().max(1.0),
-                    "{robots}x{tasks} {topology} seed {seed}: stopped at cost {} > {}",
+                    "{stop:?} {robots}x{tasks} {topology} seed {seed}: stopped at cost {} > {}",
                     report.cost,
                     optimum.cost
                 );
@@ -140,11 +150,90 @@ fn early_stops_still_return_feasible_assignments() {
                     problem.is_feasible(&report.assignment),
                     "{robots}x{tasks} seed {seed} after {max_iters}"
                 );
-                assert!(!report.converged);
                 repaired += usize::from(report.repaired);
             }
         }
     }
     // Unconverged chains disagree: the repair path is exercised, not just the happy path.
     assert!(repaired > 0);
+}
+
+#[test]
+fn certified_stop_fires_soon_after_the_assignment_is_optimal() {
+    // The certificate needs the robots' duals to settle, not their iterates to become
+    // integral, so it stops far sooner than the agreement rule.
+    let (mut certified, mut agreement) = (0, 0);
+    for seed in 0..10 {
+        let problem = TaskAssignmentProblem::new(
+            CostMatrix::uniform(12, 12, 77 + seed).unwrap(),
+            CaseChoice::Auto,
+        )
+        .unwrap();
+        let graph = generate::complete(12).unwrap();
+        let run = |stop| {
+            solve(
+                &problem,
+                &graph,
+                &SolveConfig {
+                    stop,
+                    check: true,
+                    ..SolveConfig::default()
+                },
+            )
+            .unwrap()
+        };
+        let (c, a) = (run(StopRule::Certified), run(StopRule::Agreement));
+        assert!(c.converged && c.check.as_ref().unwrap().optimal);
+        certified += c.iterations;
+        agreement += a.iterations;
+    }
+    assert!(
+        certified < agreement,
+        "certified {certified} vs agreement {agreement} rounds"
+    );
+}
+
+#[test]
+fn certificate_slack_bounds_the_optimality_gap_in_every_round() {
+    // The theorem behind the certified stop: for any feasible assignment π, its cost exceeds
+    // the optimum by at most Σ_i s_i(π) — in every round, for optimal and suboptimal π.
+    let mut suboptimal_checks = 0;
+    for (robots, tasks, seed) in [(8, 8, 1), (10, 4, 2), (9, 9, 3)] {
+        let problem = TaskAssignmentProblem::new(
+            CostMatrix::uniform(robots, tasks, seed).unwrap(),
+            CaseChoice::Auto,
+        )
+        .unwrap();
+        let graph = generate::ring(robots).unwrap();
+        let optimum = oracle::solve(&problem).unwrap();
+        // Feasible candidates: the optimum and cyclic shifts of it (suboptimal).
+        let candidates: Vec<Vec<usize>> = (0..4)
+            .map(|shift| {
+                let mut a = optimum.assignment.clone();
+                a.rotate_left(shift);
+                a
+            })
+            .collect();
+        let mut sim = LockstepSim::new(agents(&problem, &graph, ProjectionPath::Fast), &graph);
+        for round in 0..200 {
+            sim.step_round();
+            if round % 7 != 0 {
+                continue;
+            }
+            for pi in &candidates {
+                let gap = problem.cost_of(pi).unwrap() - optimum.cost;
+                let slack: f64 = sim
+                    .agents()
+                    .iter()
+                    .map(|a| a.certificate_slack_for(pi))
+                    .sum();
+                assert!(
+                    gap <= slack + 1e-9,
+                    "round {round}: gap {gap} exceeds the certified bound {slack}"
+                );
+                suboptimal_checks += usize::from(gap > 1e-9);
+            }
+        }
+    }
+    assert!(suboptimal_checks > 100);
 }
