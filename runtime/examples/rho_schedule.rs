@@ -2,10 +2,11 @@
 //! when g < 1), against the fixed default:
 //! `cargo run --release -p admm-ta-runtime --example rho_schedule -- ROBOTS TASKS TOPOLOGY SEEDS GROWTH LIMIT`.
 use admm_ta_agents::oracle;
-use admm_ta_agents::primal::{PrimalAgent, PrimalSettings};
+use admm_ta_agents::primal::PrimalSettings;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rounding::argmax_assignment;
 use admm_ta_runtime::sim::LockstepSim;
+use admm_ta_runtime::solve::primal_team;
 use admm_ta_topologies::TopologySpec;
 
 fn main() {
@@ -25,18 +26,7 @@ fn main() {
         let graph = spec.build(n, seed).unwrap();
         let optimum = oracle::solve(&problem).unwrap();
         let rho0 = admm_ta_agents::rho::default_rho(problem.costs(), graph.mean_degree());
-        let agents: Vec<_> = (0..n)
-            .map(|i| {
-                PrimalAgent::new(
-                    i,
-                    problem.costs().row(i).to_vec(),
-                    n,
-                    problem.case(),
-                    graph.degree(i),
-                    PrimalSettings::new(rho0),
-                )
-            })
-            .collect();
+        let agents = primal_team(&problem, &graph, PrimalSettings::new(rho0), None, seed);
         let mut sim = LockstepSim::new(agents, &graph);
         let mut decisions = vec![0; n];
         let (mut optimal_since, mut integral_at) = (None, None);

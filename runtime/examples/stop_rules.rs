@@ -2,11 +2,12 @@
 //! `cargo run --release -p admm-ta-runtime --example stop_rules -- ROBOTS TASKS TOPOLOGY SEEDS [RHO_MULTIPLIER] [MAX_ROUNDS]
 //! (the multiplier scales the default ρ rule)`.
 use admm_ta_agents::oracle;
-use admm_ta_agents::primal::{PrimalAgent, PrimalSettings};
+use admm_ta_agents::primal::PrimalSettings;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rounding::argmax_assignment;
 use admm_ta_agents::stopping::NeverStop;
 use admm_ta_runtime::sim::LockstepSim;
+use admm_ta_runtime::solve::primal_team;
 use admm_ta_topologies::TopologySpec;
 
 fn main() {
@@ -28,18 +29,7 @@ fn main() {
         let optimum = oracle::solve(&problem).unwrap();
         let rho =
             factor * problem.costs().spread() / (2.0 * graph.mean_degree().max(1.0) * n as f64);
-        let agents: Vec<_> = (0..n)
-            .map(|i| {
-                PrimalAgent::new(
-                    i,
-                    problem.costs().row(i).to_vec(),
-                    n,
-                    problem.case(),
-                    graph.degree(i),
-                    PrimalSettings::new(rho),
-                )
-            })
-            .collect();
+        let agents = primal_team(&problem, &graph, PrimalSettings::new(rho), None, seed);
         let mut sim = LockstepSim::new(agents, &graph);
         // per rule (all-entries τ, own-column τ): streak, stop round, stop optimal
         let mut streak = vec![[0usize; 2]; taus.len()];

@@ -198,12 +198,7 @@ pub fn solve(
         projection: config.projection,
         ..PrimalSettings::new(rho)
     };
-    let agents: Vec<PrimalAgent> = (0..n)
-        .map(|i| {
-            let costs = ties::perturbed_row(problem.costs(), i, epsilon, config.seed);
-            PrimalAgent::new(i, costs, n, problem.case(), graph.degree(i), settings)
-        })
-        .collect();
+    let agents = primal_team(problem, graph, settings, epsilon, config.seed);
     let optimum = config
         .check
         .then(|| oracle::solve(problem).expect("validated costs have an optimum"));
@@ -255,6 +250,29 @@ pub fn solve(
         wall_time_ms,
         check,
     })
+}
+
+/// One primal agent per robot of `graph`, each with its own (optionally perturbed) costs.
+pub fn primal_team(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    settings: PrimalSettings,
+    epsilon: Option<f64>,
+    seed: u64,
+) -> Vec<PrimalAgent> {
+    (0..problem.robots())
+        .map(|i| {
+            let costs = ties::perturbed_row(problem.costs(), i, epsilon, seed);
+            PrimalAgent::new(
+                i,
+                costs,
+                problem.robots(),
+                problem.case(),
+                graph.degree(i),
+                settings,
+            )
+        })
+        .collect()
 }
 
 /// Rounds after which an agreement is first certified, and the spacing of later checks

@@ -7,7 +7,7 @@ use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rho::default_rho;
 use admm_ta_agents::stopping::NeverStop;
 use admm_ta_runtime::sim::LockstepSim;
-use admm_ta_runtime::solve::{SolveConfig, StopRule, solve};
+use admm_ta_runtime::solve::{SolveConfig, StopRule, primal_team, solve};
 use admm_ta_topologies::{Graph, TopologySpec, generate};
 
 fn agents(
@@ -20,18 +20,7 @@ fn agents(
         projection: path,
         ..PrimalSettings::new(rho)
     };
-    (0..problem.robots())
-        .map(|i| {
-            PrimalAgent::new(
-                i,
-                problem.costs().row(i).to_vec(),
-                problem.robots(),
-                problem.case(),
-                graph.degree(i),
-                settings,
-            )
-        })
-        .collect()
+    primal_team(problem, graph, settings, None, 0)
 }
 
 fn payloads<A: admm_ta_agents::agent::ConsensusAgent + Send>(
