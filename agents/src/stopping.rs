@@ -16,14 +16,41 @@ pub trait TeamStopRule {
     fn should_stop(&mut self, reports: &[StepReport]) -> bool;
 }
 
+/// Counts the consecutive rounds in which every robot rounded to the same assignment
+/// (with every robot's iterate within `tolerance` of it), the same one as the round before.
+#[derive(Debug, Clone, Default)]
+pub struct AgreementStreak {
+    rounds: usize,
+    digest: u64,
+}
+
+impl AgreementStreak {
+    /// Feeds one round's reports; returns the length of the current streak (0: no agreement).
+    pub fn observe(&mut self, reports: &[StepReport], tolerance: f64) -> usize {
+        let Some(first) = reports.first() else {
+            return 0;
+        };
+        let digest = first.assignment_digest;
+        let agreed = reports
+            .iter()
+            .all(|r| r.integrality_gap <= tolerance && r.assignment_digest == digest);
+        self.rounds = match (agreed, self.rounds > 0 && digest == self.digest) {
+            (false, _) => 0,
+            (true, true) => self.rounds + 1,
+            (true, false) => 1,
+        };
+        self.digest = digest;
+        self.rounds
+    }
+}
+
 /// Stop when all robots agree on one near-integral assignment for `rounds` rounds.
 #[derive(Debug, Clone)]
 pub struct AgreementStop {
     pub rounds: usize,
     /// Largest [`StepReport::integrality_gap`] accepted.
     pub tolerance: f64,
-    streak: usize,
-    digest: u64,
+    streak: AgreementStreak,
 }
 
 impl AgreementStop {
@@ -39,8 +66,7 @@ impl AgreementStop {
         Self {
             rounds: rounds.max(1),
             tolerance,
-            streak: 0,
-            digest: 0,
+            streak: AgreementStreak::default(),
         }
     }
 }
@@ -53,23 +79,7 @@ impl Default for AgreementStop {
 
 impl TeamStopRule for AgreementStop {
     fn should_stop(&mut self, reports: &[StepReport]) -> bool {
-        let Some(first) = reports.first() else {
-            return true;
-        };
-        let agreed = reports.iter().all(|r| {
-            r.integrality_gap <= self.tolerance && r.assignment_digest == first.assignment_digest
-        });
-        if !agreed {
-            self.streak = 0;
-            return false;
-        }
-        if self.streak > 0 && first.assignment_digest == self.digest {
-            self.streak += 1;
-        } else {
-            self.streak = 1;
-            self.digest = first.assignment_digest;
-        }
-        self.streak >= self.rounds
+        reports.is_empty() || self.streak.observe(reports, self.tolerance) >= self.rounds
     }
 }
 

@@ -5,7 +5,7 @@ use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::oracle::{self, OptimalAssignment};
 use admm_ta_agents::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
 use admm_ta_agents::problem::TaskAssignmentProblem;
-use admm_ta_agents::stopping::{AgreementStop, NeverStop};
+use admm_ta_agents::stopping::{AgreementStop, AgreementStreak, NeverStop};
 use admm_ta_agents::{rho, rounding, ties};
 use admm_ta_topologies::Graph;
 use serde::Serialize;
@@ -288,19 +288,10 @@ fn run_until_certified(
     tolerance: f64,
     observer: &mut dyn FnMut(&RoundView<'_>),
 ) -> SimOutcome {
-    let (mut agreed_for, mut agreed_on) = (0usize, 0u64);
+    // Agreement on one feasible assignment; near-integrality is not needed here.
+    let mut streak = AgreementStreak::default();
     while sim.round() < max_rounds {
-        let reports = sim.step_round();
-        let digest = reports[0].assignment_digest;
-        let agreed = reports
-            .iter()
-            .all(|r| r.assignment_digest == digest && r.integrality_gap.is_finite());
-        agreed_for = match (agreed, agreed_for > 0 && digest == agreed_on) {
-            (false, _) => 0,
-            (true, true) => agreed_for + 1,
-            (true, false) => 1,
-        };
-        agreed_on = digest;
+        let agreed_for = streak.observe(sim.step_round(), f64::MAX);
         observer(&sim.view());
         if agreed_for >= CERTIFY_AFTER && (agreed_for - CERTIFY_AFTER).is_multiple_of(CERTIFY_EVERY)
         {
