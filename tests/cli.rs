@@ -153,134 +153,75 @@ fn costs_in_metres_or_in_unit_interval_give_the_same_run() {
 fn bad_input_gives_one_clear_line() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let cases: Vec<(Vec<String>, &str)> = vec![
+    let file = |name: &str, text: &str| write(d, name, text);
+    let missing = d.join("missing.csv").to_string_lossy().into_owned();
+    let cases: Vec<(String, &str)> = vec![
         (
-            vec!["--costs".into(), write(d, "nan.csv", "1,2\nNaN,3\n")],
+            format!("--costs {}", file("nan.csv", "1,2\nNaN,3\n")),
             "NaN",
         ),
         (
-            vec!["--costs".into(), write(d, "inf.csv", "1,inf\n2,3\n")],
+            format!("--costs {}", file("inf.csv", "1,inf\n2,3\n")),
             "inf",
         ),
-        (vec!["--costs".into(), write(d, "empty.csv", "")], "empty"),
+        (format!("--costs {}", file("empty.csv", "")), "empty"),
         (
-            vec!["--costs".into(), write(d, "ragged.csv", "1,2\n3\n")],
+            format!("--costs {}", file("ragged.csv", "1,2\n3\n")),
             "ragged",
         ),
         (
-            vec!["--costs".into(), write(d, "text.csv", "1,x\n2,3\n")],
+            format!("--costs {}", file("text.csv", "1,x\n2,3\n")),
             "not a number",
         ),
         (
-            vec!["--costs".into(), write(d, "header.csv", "a,b\n1,2\n3,4\n")],
+            format!("--costs {}", file("header.csv", "a,b\n1,2\n3,4\n")),
             "no header",
         ),
         (
-            vec!["--costs".into(), write(d, "wide.csv", "1,2,3\n4,5,6\n")],
+            format!("--costs {}", file("wide.csv", "1,2,3\n4,5,6\n")),
             "n ≥ m",
         ),
+        (format!("--costs {missing}"), "cannot read"),
         (
-            vec![
-                "--costs".into(),
-                d.join("missing.csv").to_string_lossy().into_owned(),
-            ],
-            "cannot read",
-        ),
-        (
-            vec![
-                "--robots".into(),
-                "4".into(),
-                "--tasks".into(),
-                "4".into(),
-                "--topology".into(),
-                write(d, "split.toml", "robots = 4\nedges = [[0, 1], [2, 3]]\n"),
-            ],
+            format!(
+                "--robots 4 --tasks 4 --topology {}",
+                file("split.toml", "robots = 4\nedges = [[0, 1], [2, 3]]\n")
+            ),
             "disconnected",
         ),
         (
-            vec![
-                "--robots".into(),
-                "5".into(),
-                "--tasks".into(),
-                "4".into(),
-                "--topology".into(),
-                write(
-                    d,
+            format!(
+                "--robots 5 --tasks 4 --topology {}",
+                file(
                     "small.toml",
-                    "robots = 4\nedges = [[0, 1], [1, 2], [2, 3]]\n",
-                ),
-            ],
+                    "robots = 4\nedges = [[0, 1], [1, 2], [2, 3]]\n"
+                )
+            ),
             "4 robots",
         ),
         (
-            vec![
-                "--robots".into(),
-                "3".into(),
-                "--tasks".into(),
-                "3".into(),
-                "--topology".into(),
-                write(d, "loop.toml", "robots = 3\nedges = [[0, 0]]\n"),
-            ],
+            format!(
+                "--robots 3 --tasks 3 --topology {}",
+                file("loop.toml", "robots = 3\nedges = [[0, 0]]\n")
+            ),
             "self-loop",
         ),
         (
-            vec![
-                "--robots".into(),
-                "3".into(),
-                "--tasks".into(),
-                "3".into(),
-                "--topology".into(),
-                "hypercube".into(),
-            ],
+            "--robots 3 --tasks 3 --topology hypercube".into(),
             "unknown topology",
         ),
-        (
-            vec!["--robots".into(), "0".into(), "--tasks".into(), "0".into()],
-            "zero",
-        ),
-        (
-            vec![
-                "--robots".into(),
-                "5000".into(),
-                "--tasks".into(),
-                "5000".into(),
-            ],
-            "GiB",
-        ),
-        (
-            vec![
-                "--robots".into(),
-                "3".into(),
-                "--tasks".into(),
-                "3".into(),
-                "--rho".into(),
-                "-1".into(),
-            ],
-            "ρ",
-        ),
-        (
-            vec![
-                "--robots".into(),
-                "3".into(),
-                "--tasks".into(),
-                "3".into(),
-                "--perturb".into(),
-                "x".into(),
-            ],
-            "perturb",
-        ),
-        (vec![], "--costs"),
+        ("--robots 0 --tasks 0".into(), "zero"),
+        ("--robots 5000 --tasks 5000".into(), "GiB"),
+        ("--robots 3 --tasks 3 --rho -1".into(), "ρ"),
+        ("--robots 3 --tasks 3 --perturb x".into(), "perturb"),
+        ("--robots 5 --tasks 3 --case 1".into(), "Case 1"),
+        (String::new(), "--costs"),
     ];
-    for (args, needle) in cases {
-        let mut all = vec!["solve".to_string()];
-        all.extend(args);
-        let refs: Vec<&str> = all.iter().map(String::as_str).collect();
-        let output = admm_ta(&refs);
-        assert_clear_error(&output, needle);
+    for (args, needle) in &cases {
+        // Temporary paths contain no spaces, so splitting on whitespace is exact.
+        let all: Vec<&str> = std::iter::once("solve")
+            .chain(args.split_whitespace())
+            .collect();
+        assert_clear_error(&admm_ta(&all), needle);
     }
-    // Forcing Case 1 on a non-square problem.
-    assert_clear_error(
-        &admm_ta(&["solve", "--robots", "5", "--tasks", "3", "--case", "1"]),
-        "Case 1",
-    );
 }
