@@ -61,6 +61,14 @@ pub enum ProblemError {
         tasks: usize,
         limit: usize,
     },
+    #[error(
+        "cost file {path} is {bytes} bytes, more than any cost matrix within the limit of {limit} entries can take"
+    )]
+    FileTooLarge {
+        path: String,
+        bytes: u64,
+        limit: usize,
+    },
     #[error("assignment has {found} entries for {expected} robots")]
     WrongLength { expected: usize, found: usize },
     #[error("robot {robot} is assigned task {task}, but tasks are numbered 0..{tasks}")]
@@ -164,11 +172,12 @@ impl CostMatrix {
             reason: e.to_string(),
         };
         let meta = std::fs::metadata(path).map_err(io)?;
-        // A cost is at least two bytes ("0,"): refuse files that cannot fit the size limit.
-        if meta.len() > 2 * 32 * MAX_COST_ENTRIES as u64 {
-            return Err(ProblemError::TooLarge {
-                robots: 0,
-                tasks: 0,
+        // A full-precision cost with its separator fits in 32 bytes; allow twice that for
+        // padding, and refuse bigger files before reading them into memory.
+        if meta.len() > 64 * MAX_COST_ENTRIES as u64 {
+            return Err(ProblemError::FileTooLarge {
+                path: path.display().to_string(),
+                bytes: meta.len(),
                 limit: MAX_COST_ENTRIES,
             });
         }
