@@ -104,7 +104,7 @@ impl DualPoint {
             let (mut sum, mut free) = (0.0, 0);
             for (r, &zr) in column.iter().enumerate() {
                 let shift = self.u[r] + vc;
-                let w = zr - shift;
+                let w = shifted(zr, self.u[r], vc);
                 let x = w.clamp(0.0, 1.0);
                 value += 0.5 * (x - zr) * (x - zr) + shift * x;
                 self.grad_u[r] += x;
@@ -135,6 +135,14 @@ impl DualPoint {
         self.value = value;
         self.residual = residual;
     }
+}
+
+/// `w = z − (u + v)`, the unclipped entry. Every place that classifies entries as free or
+/// clipped must round it identically, or the Newton system stops matching the gradient
+/// (a non-PSD Schur complement and a stalled Newton method); hence this one definition.
+#[inline(always)]
+fn shifted(z: f64, u: f64, v: f64) -> f64 {
+    z - (u + v)
 }
 
 /// Column `c` of a column-major view as a slice.
@@ -268,7 +276,7 @@ impl TransportPolytopeProjector {
             let vc = self.current.v[c];
             let mut oc = out.rb_mut().col_mut(c);
             for (r, &zr) in zc.iter().enumerate() {
-                oc[r] = (zr - (self.current.u[r] + vc)).clamp(0.0, 1.0);
+                oc[r] = shifted(zr, self.current.u[r], vc).clamp(0.0, 1.0);
             }
         }
         stats
@@ -300,8 +308,7 @@ impl TransportPolytopeProjector {
             self.free_start[c] = next;
             let zc = column(z, c);
             for (r, &zr) in zc.iter().enumerate() {
-                // Exactly the expression of `evaluate`, so both agree on which entries are free.
-                let w = zr - (p.u[r] + p.v[c]);
+                let w = shifted(zr, p.u[r], p.v[c]);
                 if self.in_newton_block[r] && w > 0.0 && w < 1.0 {
                     self.free_rows[next] = r;
                     next += 1;
