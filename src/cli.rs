@@ -9,6 +9,7 @@ use admm_ta_topologies::{TopologySpec, file as topology_file};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
+use std::time::Duration;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -30,6 +31,21 @@ enum Command {
         /// Print one JSON object instead of the human summary.
         #[arg(long)]
         json: bool,
+        /// sim | threads | ipc (20 agent processes).
+        #[arg(long, value_enum, default_value = "ipc")]
+        transport: TransportArg,
+    },
+    /// Run one agent process of an ipc run (started by `solve --transport ipc`).
+    Agent {
+        /// The run's id (it must match the scenario's).
+        #[arg(long)]
+        run: String,
+        /// This agent's robot index.
+        #[arg(long)]
+        index: usize,
+        /// The scenario file the launcher wrote.
+        #[arg(long)]
+        scenario: PathBuf,
     },
     /// Print a generated topology in the topology file format (TOML).
     Topology {
@@ -73,10 +89,12 @@ struct SolveArgs {
     rho: Option<f64>,
     #[arg(long, default_value_t = 5000)]
     max_iters: usize,
-    /// certified: stop once all robots round to one assignment that their optimality
-    /// certificate proves optimal; agreement: once all robots agree on one near-integral
-    /// assignment for --stop-rounds rounds; max-iters: always run --max-iters rounds.
-    #[arg(long, value_enum, default_value = "certified")]
+    /// local: every robot checks its own optimality certificate and agreement with its
+    /// neighbours, and a header protocol stops all robots at the same round (any transport);
+    /// certified: the same certificate checked centrally (sim); agreement: all robots agree
+    /// on one near-integral assignment for --stop-rounds rounds (sim); max-iters: always run
+    /// --max-iters rounds.
+    #[arg(long, value_enum, default_value = "local")]
     stop: StopArg,
     #[arg(long, default_value_t = 10)]
     stop_rounds: usize,
@@ -93,6 +111,16 @@ struct SolveArgs {
     /// Print one JSON object on stdout.
     #[arg(long)]
     json: bool,
+    /// Add a global barrier (all agents reach round k) to every round: lockstep, for
+    /// latency benchmarks (threads and ipc).
+    #[arg(long)]
+    global_barrier: bool,
+    /// Seconds an agent waits for a neighbour's message or the barrier before failing.
+    #[arg(long, default_value_t = 30.0)]
+    round_timeout: f64,
+    /// Seconds all agent processes have to start and connect (ipc).
+    #[arg(long, default_value_t = 60.0)]
+    startup_timeout: f64,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -112,10 +140,13 @@ enum MethodArg {
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum TransportArg {
     Sim,
+    Threads,
+    Ipc,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum StopArg {
+    Local,
     Agreement,
     Certified,
     MaxIters,
@@ -130,7 +161,13 @@ enum ProjectionArg {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Solve(args) => run_solve(args),
-        Command::Demo { json } => run_demo(json),
+        Command::Demo { json, transport } => run_demo(json, transport),
+        Command::Agent {
+            run,
+            index,
+            scenario,
+        } => admm_ta_runtime::ipc::agent_process::run(&run, index, &scenario)
+            .map_err(|e| anyhow::anyhow!("agent {index}: {e}")),
         Command::Topology { kind, robots, seed } => {
             let spec: TopologySpec = kind.parse()?;
             print!("{}", topology_file::to_toml(&spec.build(robots, seed)?));
@@ -169,12 +206,11 @@ fn run_solve(args: SolveArgs) -> Result<()> {
         method: match args.method {
             MethodArg::Primal => Method::Primal,
         },
-        transport: match args.transport {
-            TransportArg::Sim => Transport::Sim,
-        },
+        transport: transport(args.transport),
         rho: args.rho,
         max_iters: args.max_iters,
         stop: match args.stop {
+            StopArg::Local => StopRule::Local,
             StopArg::Agreement => StopRule::Agreement,
             StopArg::Certified => StopRule::Certified,
             StopArg::MaxIters => StopRule::MaxIters,
@@ -187,21 +223,50 @@ fn run_solve(args: SolveArgs) -> Result<()> {
             ProjectionArg::Qp => ProjectionPath::Qp,
         },
         check: args.check,
+        global_barrier: args.global_barrier,
+        round_timeout: seconds("--round-timeout", args.round_timeout)?,
+        startup_timeout: seconds("--startup-timeout", args.startup_timeout)?,
+        agent_program: Some(agent_program()?),
     };
     let report = solve::solve(&problem, &graph, &config)?;
     output::print_report(&report, args.json)
 }
 
-fn run_demo(json: bool) -> Result<()> {
+fn transport(arg: TransportArg) -> Transport {
+    match arg {
+        TransportArg::Sim => Transport::Sim,
+        TransportArg::Threads => Transport::Threads,
+        TransportArg::Ipc => Transport::Ipc,
+    }
+}
+
+fn seconds(flag: &str, value: f64) -> Result<Duration> {
+    if !(value > 0.0 && value.is_finite() && value < 1e6) {
+        bail!("{flag} must be a positive number of seconds, got {value}");
+    }
+    Ok(Duration::from_secs_f64(value))
+}
+
+/// This binary: agent processes are started from it.
+fn agent_program() -> Result<PathBuf> {
+    std::env::current_exe().context("cannot locate the admm-ta binary to start agents from")
+}
+
+fn run_demo(json: bool, transport_arg: TransportArg) -> Result<()> {
     let problem = TaskAssignmentProblem::new(CostMatrix::uniform(20, 20, 2019)?, CaseChoice::Auto)?;
     let graph = TopologySpec::Complete.build(20, 0)?;
     let config = SolveConfig {
         check: true,
+        transport: transport(transport_arg),
+        agent_program: Some(agent_program()?),
         ..SolveConfig::default()
     };
-    let report = solve::solve(&problem, &graph, &config)?;
     if !json {
-        println!("demo: 20 robots, 20 tasks, uniform [0,1) costs (seed 2019), complete graph\n");
+        println!(
+            "demo: 20 robots, 20 tasks, uniform [0,1) costs (seed 2019), complete graph, transport {}\n",
+            config.transport.name()
+        );
     }
+    let report = solve::solve(&problem, &graph, &config)?;
     output::print_report(&report, json)
 }

@@ -29,6 +29,15 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         report.wall_time_ms,
         report.mean_projection_steps
     );
+    if let Some(r) = report.certified_round {
+        println!(
+            "stop: {} — all robots certified the assignment of round {r}",
+            match report.stop {
+                admm_ta_runtime::solve::StopRule::Local => "local (decentralized)",
+                _ => "certified",
+            }
+        );
+    }
     if let Some(eps) = report.perturbation {
         println!("tie-breaking perturbation ε = {eps:.3e} per robot");
     }
@@ -48,6 +57,29 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
             ""
         }
     );
+    if let Some(startup) = report.startup_ms {
+        println!(
+            "{} agent processes connected in {startup:.1} ms",
+            report.robots
+        );
+    }
+    if let Some(l) = &report.round_latency_us {
+        println!(
+            "round latency (µs): p50 {:.1}, p90 {:.1}, p99 {:.1}, max {:.1} — wait p50 {:.1}, compute p50 {:.1}, publish p50 {:.1}{}",
+            l.round.p50,
+            l.round.p90,
+            l.round.p99,
+            l.round.max,
+            l.wait.p50,
+            l.compute.p50,
+            l.publish.p50,
+            if report.global_barrier {
+                format!(", global barrier p50 {:.1}", l.barrier.p50)
+            } else {
+                String::new()
+            }
+        );
+    }
     if let Some(check) = &report.check {
         let round = |r: Option<usize>| r.map_or("never".to_string(), |r| r.to_string());
         println!(
@@ -60,6 +92,9 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
                 "NOT optimal"
             }
         );
+        if report.transport != admm_ta_runtime::solve::Transport::Sim {
+            return Ok(());
+        }
         println!(
             "rounds: within 0.1% first at {}, settled at {}; optimal assignment from {}",
             round(check.rounds_within_0_1pct),

@@ -57,4 +57,11 @@ pub trait ConsensusAgent {
     /// The robot's own task, rounded from its current iterate so that robots holding the
     /// same iterate make consistent choices.
     fn decide(&self) -> usize;
+    /// The robot's own task in the per-column rounding that
+    /// [`StepReport::assignment_digest`] describes.
+    fn rounded_task(&self) -> usize;
+    /// Optimality-certificate slack `s_i ≥ 0` of the assignment the robot rounds to: if all
+    /// robots round to the same assignment, its cost exceeds the optimum by at most `Σ_i s_i`
+    /// (`∞` when there is no such certificate). Costs one `m × n` assignment problem.
+    fn certificate_slack(&self) -> f64;
 }

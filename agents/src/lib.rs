@@ -5,6 +5,7 @@
 
 pub mod agent;
 pub mod general;
+pub mod local_stop;
 pub mod lsap;
 pub mod oracle;
 pub mod primal;

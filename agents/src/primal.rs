@@ -316,4 +316,12 @@ impl ConsensusAgent for PrimalAgent {
     fn decide(&self) -> usize {
         rounding::local_assignment(&self.x, self.tasks, self.robots, self.case)[self.index]
     }
+
+    fn rounded_task(&self) -> usize {
+        self.rounded[self.index]
+    }
+
+    fn certificate_slack(&self) -> f64 {
+        PrimalAgent::certificate_slack(self)
+    }
 }

@@ -16,5 +16,11 @@
 //! assert!(problem.is_feasible(&report.assignment));
 //! ```
 
+pub mod exchange;
+pub mod header;
+pub mod ipc;
+pub mod latency;
 pub mod sim;
 pub mod solve;
+pub mod threads;
+pub mod wait;

@@ -1,6 +1,7 @@
 //! Lockstep simulation of a team of agents in one thread.
 
 use admm_ta_agents::agent::{ConsensusAgent, Inbox, StepReport};
+use admm_ta_agents::local_stop::{LocalCertifiedStop, NeighbourState, Verdict};
 use admm_ta_agents::stopping::TeamStopRule;
 use admm_ta_topologies::Graph;
 
@@ -37,6 +38,14 @@ pub struct SimOutcome {
     pub rounds: usize,
     /// The stop rule fired (as opposed to the round limit).
     pub stopped: bool,
+}
+
+/// How a run under the decentralized stop protocol ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LocalStopOutcome {
+    pub rounds: usize,
+    /// Round whose assignment all robots certified, and each robot's task in it.
+    pub certified: Option<(usize, Vec<usize>)>,
 }
 
 /// All agents with double-buffered payloads, stepped in lockstep. Within a round the
@@ -152,6 +161,69 @@ impl<A: ConsensusAgent + Send> LockstepSim<A> {
         SimOutcome {
             rounds: self.round,
             stopped: false,
+        }
+    }
+
+    /// Steps under the decentralized certified stop ([`LocalCertifiedStop`], one per agent,
+    /// seeing only its neighbours' headers) until all agents certify or `max_rounds` rounds
+    /// have run. The threads and ipc transports run the same protocol, so they stop at the
+    /// same round with the same iterates.
+    pub fn run_local_stop(
+        &mut self,
+        stops: &mut [LocalCertifiedStop],
+        max_rounds: usize,
+        observer: &mut dyn FnMut(&RoundView<'_>),
+    ) -> LocalStopOutcome {
+        assert_eq!(
+            stops.len(),
+            self.agents.len(),
+            "one stop protocol per agent"
+        );
+        let mut states = vec![NeighbourState::default(); self.agents.len()];
+        loop {
+            let round = self.round as u64;
+            let mut verdicts = Vec::with_capacity(self.agents.len());
+            for (i, (agent, stop)) in self.agents.iter().zip(stops.iter_mut()).enumerate() {
+                let theirs = self.neighbours[i].iter().map(|&j| states[j]);
+                verdicts.push(
+                    stop.observe(round, states[i], theirs, agent.rounded_task(), || {
+                        agent.certificate_slack()
+                    }),
+                );
+            }
+            if let Some(Verdict::Certified {
+                certified_round, ..
+            }) = verdicts.first().copied()
+            {
+                let tasks = verdicts
+                    .iter()
+                    .map(|v| match v {
+                        Verdict::Certified {
+                            task,
+                            certified_round: r,
+                        } if *r == certified_round => *task,
+                        _ => unreachable!("the stop protocol gives every agent the same verdict"),
+                    })
+                    .collect();
+                return LocalStopOutcome {
+                    rounds: self.round,
+                    certified: Some((certified_round as usize, tasks)),
+                };
+            }
+            if self.round >= max_rounds {
+                return LocalStopOutcome {
+                    rounds: self.round,
+                    certified: None,
+                };
+            }
+            self.step_round();
+            for (i, state) in states.iter_mut().enumerate() {
+                *state = NeighbourState {
+                    digest: self.reports[i].assignment_digest,
+                    window: stops[i].next_window(),
+                };
+            }
+            observer(&self.view());
         }
     }
 

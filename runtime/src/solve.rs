@@ -1,7 +1,13 @@
 //! One end-to-end solve: build the agents, run them, round, repair, check.
 
+use crate::exchange::{AgentOutcome, AgentPlan, AgentStop, ExchangeError, payload_digest};
+use crate::ipc::launcher::{self, IpcOptions, LaunchError};
+use crate::ipc::scenario::{Scenario, ScenarioStop, Team};
+use crate::latency::LatencySummary;
 use crate::sim::{LockstepSim, RoundView, SimOutcome};
+use crate::threads;
 use admm_ta_agents::agent::ConsensusAgent;
+use admm_ta_agents::local_stop::{LocalCertifiedStop, LocalStopError};
 use admm_ta_agents::oracle::{self, OptimalAssignment};
 use admm_ta_agents::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
 use admm_ta_agents::problem::TaskAssignmentProblem;
@@ -9,7 +15,8 @@ use admm_ta_agents::stopping::{AgreementStop, AgreementStreak, NeverStop};
 use admm_ta_agents::{rho, rounding, ties};
 use admm_ta_topologies::Graph;
 use serde::Serialize;
-use std::time::Instant;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 /// Agent state plus round buffers above this many bytes is refused up front.
 pub const MEMORY_LIMIT_BYTES: f64 = 8.0 * (1u64 << 30) as f64;
@@ -39,6 +46,10 @@ pub enum Transport {
     /// Lockstep simulation in one thread.
     #[default]
     Sim,
+    /// One OS thread per agent, lock-free slots, crossbeam parkers.
+    Threads,
+    /// One OS process per agent, iceoryx2 zero-copy publish-subscribe.
+    Ipc,
 }
 
 impl Transport {
@@ -46,6 +57,8 @@ impl Transport {
     pub fn name(self) -> &'static str {
         match self {
             Self::Sim => "sim",
+            Self::Threads => "threads",
+            Self::Ipc => "ipc",
         }
     }
 }
@@ -58,9 +71,14 @@ pub enum StopRule {
     Agreement,
     /// All robots round to the same assignment and their optimality-certificate slacks
     /// ([`PrimalAgent::certificate_slack`]) sum to at most `1e-9 ·` its cost scale: the
-    /// assignment is then provably optimal to that tolerance (default).
-    #[default]
+    /// assignment is then provably optimal to that tolerance. Checked centrally (sim only).
     Certified,
+    /// The same certificate, decentralized: each robot checks its own slack and agreement
+    /// with its neighbours, and a header protocol makes all robots stop at the same round
+    /// (see [`admm_ta_agents::local_stop`]); costs about a graph diameter of extra rounds.
+    /// Works on every transport (default).
+    #[default]
+    Local,
     /// Run to the iteration limit.
     MaxIters,
 }
@@ -81,6 +99,14 @@ pub struct SolveConfig {
     pub projection: ProjectionPath,
     /// Compare with the centralized optimum and trace convergence.
     pub check: bool,
+    /// Add a global barrier to every round (threads and ipc; for lockstep benchmarks).
+    pub global_barrier: bool,
+    /// Deadline of every wait for a neighbour or barrier (threads and ipc).
+    pub round_timeout: Duration,
+    /// Deadline for all agent processes to connect (ipc).
+    pub startup_timeout: Duration,
+    /// The `admm-ta` binary that runs agent processes (ipc).
+    pub agent_program: Option<PathBuf>,
 }
 
 impl Default for SolveConfig {
@@ -90,19 +116,37 @@ impl Default for SolveConfig {
             transport: Transport::Sim,
             rho: None,
             max_iters: 5000,
-            stop: StopRule::Certified,
+            stop: StopRule::Local,
             stop_rounds: 10,
             seed: 0,
             perturbation: ties::Perturbation::Auto,
             projection: ProjectionPath::Fast,
             check: false,
+            global_barrier: false,
+            round_timeout: Duration::from_secs(30),
+            startup_timeout: Duration::from_secs(60),
+            agent_program: None,
         }
     }
 }
 
-/// Reasons a solve cannot start.
-#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+/// Reasons a solve cannot start or complete.
+#[derive(Debug, thiserror::Error)]
 pub enum SolveError {
+    #[error(
+        "--stop {stop} needs the whole team's state: it runs on the sim transport only (use --stop local or max-iters)"
+    )]
+    CentralStop { stop: &'static str },
+    #[error("--global-barrier needs the threads or ipc transport")]
+    BarrierNeedsAgents,
+    #[error("the ipc transport needs the admm-ta binary to start agents from")]
+    NoAgentProgram,
+    #[error(transparent)]
+    LocalStop(#[from] LocalStopError),
+    #[error(transparent)]
+    Exchange(#[from] ExchangeError),
+    #[error(transparent)]
+    Launch(#[from] LaunchError),
     #[error("the topology has {graph} robots but the costs have {problem}")]
     SizeMismatch { graph: usize, problem: usize },
     #[error("ρ must be a positive finite number, got {0}")]
@@ -159,6 +203,19 @@ pub struct SolveReport {
     /// Mean Newton steps of the projection per robot and round.
     pub mean_projection_steps: f64,
     pub wall_time_ms: f64,
+    pub stop: StopRule,
+    /// Round whose assignment the local stop certified (`iterations − diameter`).
+    pub certified_round: Option<usize>,
+    pub global_barrier: bool,
+    /// Per-round latency percentiles of the agents (threads and ipc), in microseconds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub round_latency_us: Option<LatencySummary>,
+    /// Time for all agent processes to start and connect (ipc).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub startup_ms: Option<f64>,
+    /// Hash of each agent's last published payload (to compare transports).
+    #[serde(skip)]
+    pub iterate_digests: Vec<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub check: Option<OracleCheck>,
 }
@@ -198,45 +255,174 @@ pub fn solve(
         projection: config.projection,
         ..PrimalSettings::new(rho)
     };
-    let agents = primal_team(problem, graph, settings, epsilon, config.seed);
+    let team = Team {
+        problem,
+        graph,
+        settings,
+        epsilon,
+        seed: config.seed,
+    };
     let optimum = config
         .check
         .then(|| oracle::solve(problem).expect("validated costs have an optimum"));
-    let mut tracer = optimum.as_ref().map(|o| Tracer::new(problem, o));
+    let tolerance = 1e-9 * problem.costs().spread() * n as f64;
+    let diameter = graph.diameter().unwrap_or(0);
+    let local_stop = || LocalCertifiedStop::new(diameter, n, tolerance);
+    if config.global_barrier && config.transport == Transport::Sim {
+        return Err(SolveError::BarrierNeedsAgents);
+    }
+    if config.transport != Transport::Sim
+        && matches!(config.stop, StopRule::Certified | StopRule::Agreement)
+    {
+        return Err(SolveError::CentralStop {
+            stop: if config.stop == StopRule::Certified {
+                "certified"
+            } else {
+                "agreement"
+            },
+        });
+    }
     let started = Instant::now();
-    let mut sim = LockstepSim::new(agents, graph);
-    let mut projection_steps = 0usize;
-    let mut observer = |view: &RoundView<'_>| {
-        projection_steps += view
-            .reports
-            .iter()
-            .map(|r| r.inner_iterations)
-            .sum::<usize>();
-        if let Some(t) = tracer.as_mut() {
-            t.observe(view);
+    let mut tracer = optimum.as_ref().map(|o| Tracer::new(problem, o));
+    let run = match config.transport {
+        Transport::Sim => {
+            let mut sim = LockstepSim::new(team.agents(), graph);
+            let mut projection_steps = 0usize;
+            let mut observer = |view: &RoundView<'_>| {
+                projection_steps += view
+                    .reports
+                    .iter()
+                    .map(|r| r.inner_iterations)
+                    .sum::<usize>();
+                if let Some(t) = tracer.as_mut() {
+                    t.observe(view);
+                }
+            };
+            let mut agreement = AgreementStop::new(config.stop_rounds);
+            let mut certified = None;
+            let outcome = match config.stop {
+                StopRule::Agreement => sim.run(config.max_iters, &mut agreement, &mut observer),
+                StopRule::MaxIters => sim.run(config.max_iters, &mut NeverStop, &mut observer),
+                StopRule::Certified => {
+                    run_until_certified(&mut sim, config.max_iters, tolerance, &mut observer)
+                }
+                StopRule::Local => {
+                    let mut stops = vec![local_stop()?; n];
+                    let local = sim.run_local_stop(&mut stops, config.max_iters, &mut observer);
+                    certified = local.certified;
+                    SimOutcome {
+                        rounds: local.rounds,
+                        stopped: certified.is_some(),
+                    }
+                }
+            };
+            let decisions = match certified {
+                Some((_, ref tasks)) => tasks.clone(),
+                None => sim.agents().iter().map(ConsensusAgent::decide).collect(),
+            };
+            RunResult {
+                decisions,
+                rounds: outcome.rounds,
+                converged: outcome.stopped,
+                certified_round: certified.map(|(r, _)| r),
+                projection_steps,
+                latency: None,
+                startup_ms: None,
+                iterate_digests: (0..n).map(|i| payload_digest(sim.payload(i))).collect(),
+            }
+        }
+        Transport::Threads => {
+            let stop = match config.stop {
+                StopRule::MaxIters => AgentStop::MaxIters,
+                _ => AgentStop::Local(local_stop()?),
+            };
+            let plans: Vec<AgentPlan> = (0..n)
+                .map(|index| AgentPlan {
+                    index,
+                    max_rounds: config.max_iters as u64,
+                    stop: stop.clone(),
+                    round_timeout: config.round_timeout,
+                    global_barrier: config.global_barrier,
+                })
+                .collect();
+            let mut agents = team.agents();
+            let outcomes = threads::run_threads(&mut agents, graph, &plans)?;
+            let mut latency = crate::latency::RoundLatency::new();
+            for o in &outcomes {
+                latency
+                    .merge(&o.latency)
+                    .expect("agents record every component");
+            }
+            RunResult::from_outcomes(&outcomes, Some(latency.summary()), None)
+        }
+        Transport::Ipc => {
+            local_stop()?;
+            let program = config
+                .agent_program
+                .clone()
+                .ok_or(SolveError::NoAgentProgram)?;
+            let scenario = Scenario {
+                run_id: String::new(),
+                iceoryx_prefix: String::new(),
+                iceoryx_root: PathBuf::new(),
+                robots: n,
+                tasks: m,
+                case: problem.case(),
+                cost_bits: problem
+                    .costs()
+                    .values()
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect(),
+                edges: graph.edges().collect(),
+                topology: graph.name().to_string(),
+                rho_bits: rho.to_bits(),
+                epsilon_bits: epsilon.map(f64::to_bits),
+                seed: config.seed,
+                qp_projection: config.projection == ProjectionPath::Qp,
+                stop: match config.stop {
+                    StopRule::MaxIters => ScenarioStop::MaxIters,
+                    _ => ScenarioStop::Local {
+                        tolerance_bits: tolerance.to_bits(),
+                    },
+                },
+                max_rounds: config.max_iters as u64,
+                diameter,
+                round_timeout_ms: 0,
+                startup_timeout_ms: 0,
+                barrier_shm: None,
+            };
+            let run = launcher::launch(
+                scenario,
+                &IpcOptions {
+                    agent_program: program,
+                    round_timeout: config.round_timeout,
+                    startup_timeout: config.startup_timeout,
+                    global_barrier: config.global_barrier,
+                },
+            )?;
+            RunResult::from_outcomes(
+                &run.outcomes,
+                Some(run.latency.summary()),
+                Some(run.startup.as_secs_f64() * 1e3),
+            )
         }
     };
-    let mut agreement = AgreementStop::new(config.stop_rounds);
-    let outcome = match config.stop {
-        StopRule::Agreement => sim.run(config.max_iters, &mut agreement, &mut observer),
-        StopRule::MaxIters => sim.run(config.max_iters, &mut NeverStop, &mut observer),
-        StopRule::Certified => {
-            let tolerance = 1e-9 * problem.costs().spread() * n as f64;
-            run_until_certified(&mut sim, config.max_iters, tolerance, &mut observer)
-        }
-    };
-    let decisions: Vec<usize> = sim.agents().iter().map(ConsensusAgent::decide).collect();
     let wall_time_ms = started.elapsed().as_secs_f64() * 1e3;
-    let (assignment, repaired) = rounding::repair(problem, &decisions);
+    let (assignment, repaired) = rounding::repair(problem, &run.decisions);
     let cost = problem
         .cost_of(&assignment)
         .expect("repaired assignment is in range");
-    let check = tracer.map(|t| t.finish(cost));
+    let check = match (tracer, optimum) {
+        (Some(t), _) => Some(t.finish(cost)),
+        (None, Some(o)) => Some(Tracer::new(problem, &o).finish(cost)),
+        (None, None) => None,
+    };
     Ok(SolveReport {
         assignment,
         cost,
-        iterations: outcome.rounds,
-        converged: outcome.stopped,
+        iterations: run.rounds,
+        converged: run.converged,
         repaired,
         method: config.method,
         transport: config.transport,
@@ -246,10 +432,48 @@ pub fn solve(
         case: problem.case().number(),
         topology: graph.name().to_string(),
         perturbation: epsilon,
-        mean_projection_steps: projection_steps as f64 / (n * outcome.rounds.max(1)) as f64,
+        mean_projection_steps: run.projection_steps as f64 / (n * run.rounds.max(1)) as f64,
         wall_time_ms,
+        stop: config.stop,
+        certified_round: run.certified_round,
+        global_barrier: config.global_barrier,
+        round_latency_us: run.latency,
+        startup_ms: run.startup_ms,
+        iterate_digests: run.iterate_digests,
         check,
     })
+}
+
+/// What any transport's run yields, before rounding and checking.
+struct RunResult {
+    decisions: Vec<usize>,
+    rounds: usize,
+    converged: bool,
+    certified_round: Option<usize>,
+    projection_steps: usize,
+    latency: Option<LatencySummary>,
+    startup_ms: Option<f64>,
+    iterate_digests: Vec<u64>,
+}
+
+impl RunResult {
+    fn from_outcomes(
+        outcomes: &[AgentOutcome],
+        latency: Option<LatencySummary>,
+        startup_ms: Option<f64>,
+    ) -> Self {
+        let first = &outcomes[0];
+        Self {
+            decisions: outcomes.iter().map(|o| o.task).collect(),
+            rounds: first.rounds as usize,
+            converged: first.converged,
+            certified_round: first.certified_round.map(|r| r as usize),
+            projection_steps: outcomes.iter().map(|o| o.projection_steps as usize).sum(),
+            latency,
+            startup_ms,
+            iterate_digests: outcomes.iter().map(|o| o.iterate_digest).collect(),
+        }
+    }
 }
 
 /// One primal agent per robot of `graph`, each with its own (optionally perturbed) costs.
@@ -260,19 +484,14 @@ pub fn primal_team(
     epsilon: Option<f64>,
     seed: u64,
 ) -> Vec<PrimalAgent> {
-    (0..problem.robots())
-        .map(|i| {
-            let costs = ties::perturbed_row(problem.costs(), i, epsilon, seed);
-            PrimalAgent::new(
-                i,
-                costs,
-                problem.robots(),
-                problem.case(),
-                graph.degree(i),
-                settings,
-            )
-        })
-        .collect()
+    Team {
+        problem,
+        graph,
+        settings,
+        epsilon,
+        seed,
+    }
+    .agents()
 }
 
 /// Rounds after which an agreement is first certified, and the spacing of later checks

@@ -1,0 +1,249 @@
+//! The `Exchange` abstraction: how one agent publishes its round payload and gathers its
+//! neighbours', and the per-agent round loop every distributed transport shares.
+//!
+//! A round `k` of agent `i` is:
+//! 1. **gather** (neighbour barrier): block until the round-`k` messages of all neighbours
+//!    are held, spinning briefly and then sleeping on the transport's wake-up mechanism,
+//!    with a deadline;
+//! 2. run the decentralized stop protocol on the headers (every agent reaches the same
+//!    verdict at the same round, so nobody waits for a neighbour that stopped);
+//! 3. **compute and publish**: the agent's `step` reads the neighbours' payloads in place
+//!    and writes its round-`k+1` payload straight into the transport's outgoing buffer
+//!    (a loaned shared-memory sample for iceoryx2), which is then published;
+//! 4. optionally a **global barrier** (all agents reached round `k+1`), for lockstep
+//!    latency benchmarks.
+//!
+//! Why this is safe with two buffers per agent: an agent publishes round `k+1` only after
+//! holding all neighbours' round `k`, so a neighbour is never more than one round ahead and
+//! the message of round `k−1` is no longer read by anybody when round `k+1` replaces it.
+
+use crate::header::RoundHeader;
+use crate::latency::{Component, LatencyBuckets, RoundLatency};
+use admm_ta_agents::agent::{ConsensusAgent, Inbox};
+use admm_ta_agents::local_stop::{LocalCertifiedStop, Verdict};
+use serde::{Deserialize, Serialize};
+use std::time::{Duration, Instant};
+
+/// Failures of an exchange operation.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ExchangeError {
+    #[error(
+        "agent {agent}: no round-{round} message from neighbour(s) {missing:?} within {waited:?}"
+    )]
+    Timeout {
+        agent: usize,
+        round: u64,
+        missing: Vec<usize>,
+        waited: Duration,
+    },
+    #[error(
+        "agent {agent}: global barrier of round {round} timed out after {waited:?} ({arrived} of {expected} agents arrived)"
+    )]
+    BarrierTimeout {
+        agent: usize,
+        round: u64,
+        arrived: usize,
+        expected: usize,
+        waited: Duration,
+    },
+    #[error("agent {agent}: expected round {expected} from neighbour {neighbour}, got round {got}")]
+    OutOfOrder {
+        agent: usize,
+        neighbour: usize,
+        expected: u64,
+        got: u64,
+    },
+    #[error(
+        "agent {agent}: neighbour {neighbour} sent a payload of {got} values, expected {expected}"
+    )]
+    WrongLength {
+        agent: usize,
+        neighbour: usize,
+        expected: usize,
+        got: usize,
+    },
+    #[error("agent {agent}: {what}")]
+    Transport { agent: usize, what: String },
+    /// Another agent of the run failed first.
+    #[error("agent {agent}: stopped because another agent failed")]
+    Aborted { agent: usize },
+}
+
+/// The error that ended a run: the first that is not a consequence of another.
+pub fn root_cause(errors: impl IntoIterator<Item = ExchangeError>) -> Option<ExchangeError> {
+    let mut fallback = None;
+    for e in errors {
+        if matches!(e, ExchangeError::Aborted { .. }) {
+            fallback.get_or_insert(e);
+        } else {
+            return Some(e);
+        }
+    }
+    fallback
+}
+
+/// One agent's end of a transport.
+pub trait Exchange {
+    /// Number of neighbours.
+    fn degree(&self) -> usize;
+    /// Publishes the round-0 message; `write` fills the payload in place.
+    fn publish_initial(
+        &mut self,
+        header: RoundHeader,
+        write: &mut dyn FnMut(&mut [f64]),
+    ) -> Result<(), ExchangeError>;
+    /// Neighbour barrier: returns once the round-`round` messages of all neighbours are held.
+    fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError>;
+    /// Header of the `k`-th neighbour's gathered message.
+    fn neighbour_header(&self, k: usize) -> &RoundHeader;
+    /// Runs `compute` on the gathered payloads and an outgoing buffer, then publishes that
+    /// buffer with the header `compute` returns.
+    fn compute_and_publish(
+        &mut self,
+        compute: &mut dyn FnMut(&dyn Inbox, &mut [f64]) -> RoundHeader,
+    ) -> Result<(), ExchangeError>;
+    /// Global barrier: returns once every agent of the team has called it for `round`.
+    fn global_barrier(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError>;
+}
+
+/// When an agent stops.
+#[derive(Debug, Clone)]
+pub enum AgentStop {
+    /// The decentralized certified stop (or the round limit).
+    Local(LocalCertifiedStop),
+    /// Always the round limit.
+    MaxIters,
+}
+
+/// What one agent's loop needs besides its algorithm and its exchange.
+#[derive(Debug, Clone)]
+pub struct AgentPlan {
+    pub index: usize,
+    pub max_rounds: u64,
+    pub stop: AgentStop,
+    /// Deadline of every wait (neighbour messages, global barrier).
+    pub round_timeout: Duration,
+    pub global_barrier: bool,
+}
+
+/// What one agent reports at the end of a run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AgentOutcome {
+    pub index: usize,
+    /// The robot's task: the certified one, or its own rounding at the round limit.
+    pub task: usize,
+    /// Rounds computed.
+    pub rounds: u64,
+    /// The stop protocol certified an assignment (as opposed to the round limit).
+    pub converged: bool,
+    /// The round whose assignment was certified.
+    pub certified_round: Option<u64>,
+    /// Hash of the bits of the last payload the agent published (to compare transports).
+    pub iterate_digest: u64,
+    pub projection_steps: u64,
+    pub latency: LatencyBuckets,
+}
+
+/// FNV-1a over the bits of a payload.
+pub fn payload_digest(payload: &[f64]) -> u64 {
+    payload.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, v| {
+        (h ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// Runs one agent to the end of the run over `exchange`.
+pub fn run_agent<A: ConsensusAgent + ?Sized>(
+    agent: &mut A,
+    exchange: &mut dyn Exchange,
+    plan: &AgentPlan,
+) -> Result<AgentOutcome, ExchangeError> {
+    let mut latency = RoundLatency::new();
+    let mut stop = plan.stop.clone();
+    let mut mine = RoundHeader::initial(plan.index);
+    let mut iterate_digest = 0;
+    exchange.publish_initial(mine, &mut |out| {
+        agent.write_initial_payload(out);
+        iterate_digest = payload_digest(out);
+    })?;
+    let mut round = 0u64;
+    let mut projection_steps = 0u64;
+    let degree = exchange.degree();
+    loop {
+        let started = Instant::now();
+        exchange.gather(round, started + plan.round_timeout)?;
+        let gathered = Instant::now();
+        let verdict = match &mut stop {
+            AgentStop::Local(rule) => {
+                let ex = &*exchange;
+                rule.observe(
+                    round,
+                    mine.stop_state(),
+                    (0..degree).map(|k| ex.neighbour_header(k).stop_state()),
+                    agent.rounded_task(),
+                    || agent.certificate_slack(),
+                )
+            }
+            AgentStop::MaxIters => Verdict::Continue,
+        };
+        if let Verdict::Certified {
+            certified_round,
+            task,
+        } = verdict
+        {
+            return Ok(AgentOutcome {
+                index: plan.index,
+                task,
+                rounds: round,
+                converged: true,
+                certified_round: Some(certified_round),
+                iterate_digest,
+                projection_steps,
+                latency: latency.to_buckets(),
+            });
+        }
+        if round >= plan.max_rounds {
+            return Ok(AgentOutcome {
+                index: plan.index,
+                task: agent.decide(),
+                rounds: round,
+                converged: false,
+                certified_round: None,
+                iterate_digest,
+                projection_steps,
+                latency: latency.to_buckets(),
+            });
+        }
+        let next_window = match &stop {
+            AgentStop::Local(rule) => rule.next_window(),
+            AgentStop::MaxIters => Default::default(),
+        };
+        let mut computed = gathered;
+        exchange.compute_and_publish(&mut |inbox, out| {
+            let report = agent.step(inbox, out);
+            projection_steps += report.inner_iterations as u64;
+            iterate_digest = payload_digest(out);
+            mine = RoundHeader {
+                round: round + 1,
+                sender: plan.index as u32,
+                flags: 0,
+                digest: report.assignment_digest,
+                window: next_window,
+            };
+            computed = Instant::now();
+            mine
+        })?;
+        let published = Instant::now();
+        if plan.global_barrier {
+            exchange.global_barrier(round + 1, published + plan.round_timeout)?;
+        }
+        let done = Instant::now();
+        latency.record(Component::Wait, gathered - started);
+        latency.record(Component::Compute, computed - gathered);
+        latency.record(Component::Publish, published - computed);
+        if plan.global_barrier {
+            latency.record(Component::Barrier, done - published);
+        }
+        latency.record(Component::Round, done - started);
+        round += 1;
+    }
+}

@@ -1,0 +1,112 @@
+//! A run's private namespace: an iceoryx2 prefix and a directory of its own, so that
+//! concurrent runs and parallel tests never collide, and a cleanup that leaves nothing of
+//! the run behind — not even when an agent was killed and could not clean up itself.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+/// Where POSIX shared memory lives on Linux.
+const SHM_DIR: &str = "/dev/shm";
+
+/// A run's identity and the places it may write to.
+#[derive(Debug, Clone)]
+pub struct RunNamespace {
+    pub id: String,
+    /// Prefix of every iceoryx2 file and shared-memory object of the run.
+    pub prefix: String,
+    /// The run directory: scenario, agent logs and results, and the iceoryx2 root.
+    pub dir: PathBuf,
+}
+
+impl RunNamespace {
+    /// A fresh namespace under the system's temporary directory.
+    pub fn create() -> std::io::Result<Self> {
+        static COUNTER: AtomicU32 = AtomicU32::new(0);
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.subsec_nanos());
+        let id = format!(
+            "{:x}{:05x}{:x}",
+            std::process::id(),
+            nanos >> 12,
+            COUNTER.fetch_add(1, Ordering::Relaxed)
+        );
+        let dir = std::env::temp_dir().join("admm-ta-runs").join(&id);
+        std::fs::create_dir_all(&dir)?;
+        Ok(Self {
+            prefix: format!("adta{id}_"),
+            id,
+            dir,
+        })
+    }
+
+    /// The iceoryx2 root directory of the run.
+    pub fn iceoryx_root(&self) -> PathBuf {
+        self.dir.join("iox2")
+    }
+
+    /// Name of the global barrier's shared memory.
+    pub fn barrier_shm(&self) -> String {
+        format!("{}barrier", self.prefix)
+    }
+
+    /// Files of the run that still exist: shared memory with its prefix, and the run directory.
+    pub fn leftovers(&self) -> Vec<PathBuf> {
+        let mut found = shm_objects(&self.prefix);
+        if self.dir.exists() {
+            found.push(self.dir.clone());
+        }
+        found
+    }
+
+    /// Removes everything of the run. Only call once no agent of the run is alive.
+    pub fn cleanup(&self) -> std::io::Result<()> {
+        for path in shm_objects(&self.prefix) {
+            remove_if_exists(&path)?;
+        }
+        match std::fs::remove_dir_all(&self.dir) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(e),
+            _ => Ok(()),
+        }
+    }
+}
+
+fn shm_objects(prefix: &str) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(SHM_DIR) else {
+        return Vec::new();
+    };
+    entries
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().starts_with(prefix))
+        .map(|e| e.path())
+        .collect()
+}
+
+fn remove_if_exists(path: &Path) -> std::io::Result<()> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(e),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn namespaces_are_unique_and_clean_up_after_themselves() {
+        let a = RunNamespace::create().unwrap();
+        let b = RunNamespace::create().unwrap();
+        assert_ne!(a.prefix, b.prefix);
+        let shm = PathBuf::from(SHM_DIR).join(format!("{}test", a.prefix));
+        if PathBuf::from(SHM_DIR).is_dir() {
+            std::fs::write(&shm, b"x").unwrap();
+        }
+        std::fs::write(a.dir.join("file"), b"x").unwrap();
+        assert!(!a.leftovers().is_empty());
+        a.cleanup().unwrap();
+        b.cleanup().unwrap();
+        assert!(a.leftovers().is_empty(), "{:?}", a.leftovers());
+        assert!(b.leftovers().is_empty());
+    }
+}

@@ -1,0 +1,203 @@
+//! The scenario file the launcher writes into the run directory: everything an agent
+//! process needs to rebuild its own agent, its plan and its iceoryx2 endpoint. Floating-point
+//! values travel as their bit patterns, so every process computes with exactly the same
+//! numbers as the lockstep simulation.
+
+use crate::exchange::{AgentPlan, AgentStop};
+use crate::ipc::transport::IpcEndpoint;
+use crate::wait::WaitPolicy;
+use admm_ta_agents::local_stop::LocalCertifiedStop;
+use admm_ta_agents::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
+use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_topologies::Graph;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// How agents stop, as written in the scenario.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ScenarioStop {
+    /// Decentralized certified stop with this total tolerance (bits of an f64).
+    Local {
+        tolerance_bits: u64,
+    },
+    MaxIters,
+}
+
+/// One run, as the agents see it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Scenario {
+    pub run_id: String,
+    pub iceoryx_prefix: String,
+    pub iceoryx_root: PathBuf,
+    pub robots: usize,
+    pub tasks: usize,
+    pub case: AssignmentCase,
+    /// Row-major `n × m` costs as f64 bits.
+    pub cost_bits: Vec<u64>,
+    pub edges: Vec<(usize, usize)>,
+    pub topology: String,
+    pub rho_bits: u64,
+    pub epsilon_bits: Option<u64>,
+    pub seed: u64,
+    pub qp_projection: bool,
+    pub stop: ScenarioStop,
+    pub max_rounds: u64,
+    pub diameter: usize,
+    pub round_timeout_ms: u64,
+    pub startup_timeout_ms: u64,
+    /// Shared memory of the global barrier, when the run uses one.
+    pub barrier_shm: Option<String>,
+}
+
+/// A scenario that cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    #[error("cannot read scenario {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("scenario {path} is malformed: {source}")]
+    Parse {
+        path: PathBuf,
+        source: serde_json::Error,
+    },
+    #[error("scenario {path} belongs to run {found}, not {expected}")]
+    WrongRun {
+        path: PathBuf,
+        found: String,
+        expected: String,
+    },
+    #[error("agent index {index} is out of range for {robots} robots")]
+    BadIndex { index: usize, robots: usize },
+    #[error("scenario is inconsistent: {0}")]
+    Inconsistent(String),
+}
+
+/// What the agents share: the problem, the graph and the algorithm's settings.
+pub struct Team<'a> {
+    pub problem: &'a TaskAssignmentProblem,
+    pub graph: &'a Graph,
+    pub settings: PrimalSettings,
+    pub epsilon: Option<f64>,
+    pub seed: u64,
+}
+
+impl Scenario {
+    pub fn read(path: &Path, run_id: &str) -> Result<Self, ScenarioError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let scenario: Self =
+            serde_json::from_str(&text).map_err(|source| ScenarioError::Parse {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        if scenario.run_id != run_id {
+            return Err(ScenarioError::WrongRun {
+                path: path.to_path_buf(),
+                found: scenario.run_id,
+                expected: run_id.to_string(),
+            });
+        }
+        Ok(scenario)
+    }
+
+    pub fn problem(&self) -> Result<TaskAssignmentProblem, ScenarioError> {
+        let values = self.cost_bits.iter().map(|&b| f64::from_bits(b)).collect();
+        let costs = CostMatrix::new(self.robots, self.tasks, values)
+            .map_err(|e| ScenarioError::Inconsistent(e.to_string()))?;
+        TaskAssignmentProblem::new(costs, CaseChoice::Forced(self.case))
+            .map_err(|e| ScenarioError::Inconsistent(e.to_string()))
+    }
+
+    pub fn graph(&self) -> Result<Graph, ScenarioError> {
+        Graph::from_edges(self.robots, &self.edges, self.topology.clone())
+            .map_err(|e| ScenarioError::Inconsistent(e.to_string()))
+    }
+
+    pub fn settings(&self) -> PrimalSettings {
+        PrimalSettings {
+            projection: if self.qp_projection {
+                ProjectionPath::Qp
+            } else {
+                ProjectionPath::Fast
+            },
+            ..PrimalSettings::new(f64::from_bits(self.rho_bits))
+        }
+    }
+
+    /// Agent `index`'s plan.
+    pub fn plan(&self, index: usize) -> Result<AgentPlan, ScenarioError> {
+        let stop = match self.stop {
+            ScenarioStop::MaxIters => AgentStop::MaxIters,
+            ScenarioStop::Local { tolerance_bits } => AgentStop::Local(
+                LocalCertifiedStop::new(self.diameter, self.robots, f64::from_bits(tolerance_bits))
+                    .map_err(|e| ScenarioError::Inconsistent(e.to_string()))?,
+            ),
+        };
+        Ok(AgentPlan {
+            index,
+            max_rounds: self.max_rounds,
+            stop,
+            round_timeout: Duration::from_millis(self.round_timeout_ms),
+            global_barrier: self.barrier_shm.is_some(),
+        })
+    }
+
+    /// Agent `index`'s iceoryx2 endpoint.
+    pub fn endpoint(&self, graph: &Graph, index: usize) -> IpcEndpoint {
+        IpcEndpoint {
+            index,
+            neighbours: graph.neighbours(index).to_vec(),
+            degrees: (0..graph.robots()).map(|j| graph.degree(j)).collect(),
+            payload_len: self.robots * self.tasks,
+            policy: WaitPolicy::for_team(self.robots),
+            barrier_shm: self.barrier_shm.clone(),
+        }
+    }
+
+    /// Builds agent `index` exactly as the other transports do.
+    pub fn agent(&self, index: usize) -> Result<PrimalAgent, ScenarioError> {
+        if index >= self.robots {
+            return Err(ScenarioError::BadIndex {
+                index,
+                robots: self.robots,
+            });
+        }
+        let problem = self.problem()?;
+        let graph = self.graph()?;
+        let team = Team {
+            problem: &problem,
+            graph: &graph,
+            settings: self.settings(),
+            epsilon: self.epsilon_bits.map(f64::from_bits),
+            seed: self.seed,
+        };
+        Ok(team.agent(index))
+    }
+}
+
+impl Team<'_> {
+    /// Robot `i`'s agent, with its own (optionally perturbed) costs.
+    pub fn agent(&self, i: usize) -> PrimalAgent {
+        let costs =
+            admm_ta_agents::ties::perturbed_row(self.problem.costs(), i, self.epsilon, self.seed);
+        PrimalAgent::new(
+            i,
+            costs,
+            self.problem.robots(),
+            self.problem.case(),
+            self.graph.degree(i),
+            self.settings,
+        )
+    }
+
+    /// Every robot's agent.
+    pub fn agents(&self) -> Vec<PrimalAgent> {
+        (0..self.problem.robots()).map(|i| self.agent(i)).collect()
+    }
+}

@@ -1,0 +1,484 @@
+//! The iceoryx2 end of one agent process: one publish-subscribe service per agent carrying
+//! its round messages (`[f64]` payload + [`RoundHeader`] user header), one event service per
+//! agent to wake it, and optionally a run-wide global barrier in shared memory.
+//!
+//! Agent `i` publishes on `admm-ta/i/round`; each neighbour subscribes to it, and after
+//! publishing, `i` notifies each neighbour's `admm-ta/j/wake` service. A waiting agent checks
+//! its subscribers, spins briefly (only when it has a core of its own) and then sleeps on its
+//! listener until the deadline. The payload is written in place into the loaned sample and
+//! read in place by the neighbours: no copy on either side.
+//!
+//! Buffers: a neighbour is at most one round ahead (neighbour barrier), so each subscriber
+//! holds at most two unread samples and borrows at most two; safe overflow is off, and a
+//! sample that does not reach every subscriber is an error, never a silently lost round.
+
+use crate::exchange::{Exchange, ExchangeError};
+use crate::header::RoundHeader;
+use crate::wait::{Arrival, CountingBarrier, WaitPolicy};
+use admm_ta_agents::agent::Inbox;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use iceoryx2::sample::Sample;
+use iceoryx2_bb_posix::shared_memory::{SharedMemory, SharedMemoryBuilder};
+use std::time::{Duration, Instant};
+
+type Svc = ipc::Service;
+type RoundSample = Sample<Svc, [f64], RoundHeader>;
+
+/// Samples a subscriber may hold unread and borrowed at once (see the module docs).
+const SUBSCRIBER_BUFFER: usize = 2;
+const SUBSCRIBER_BORROWED: usize = 2;
+
+/// Name of agent `i`'s round-message service.
+pub fn round_service(i: usize) -> String {
+    format!("admm-ta/{i}/round")
+}
+
+/// Name of agent `i`'s wake-up event service.
+pub fn wake_service(i: usize) -> String {
+    format!("admm-ta/{i}/wake")
+}
+
+const BARRIER_SERVICE: &str = "admm-ta/barrier";
+
+/// What an agent process needs to know to connect.
+#[derive(Debug, Clone)]
+pub struct IpcEndpoint {
+    pub index: usize,
+    pub neighbours: Vec<usize>,
+    /// Degree of every agent of the run (service limits are sized from them).
+    pub degrees: Vec<usize>,
+    pub payload_len: usize,
+    pub policy: WaitPolicy,
+    /// Name of the global barrier's shared memory, when the run uses one.
+    pub barrier_shm: Option<String>,
+}
+
+struct GlobalBarrier {
+    memory: SharedMemory,
+    listener: Listener<Svc>,
+    notifier: Notifier<Svc>,
+    parties: usize,
+}
+
+impl GlobalBarrier {
+    fn state(&self) -> &CountingBarrier {
+        // SAFETY: the launcher created the segment zeroed and at least this large; the
+        // mapping is page-aligned, and every process only touches it through atomics.
+        unsafe { &*(self.memory.base_address().as_ptr() as *const CountingBarrier) }
+    }
+}
+
+/// One agent's iceoryx2 ports.
+pub struct IpcExchange {
+    index: usize,
+    neighbours: Vec<usize>,
+    payload_len: usize,
+    policy: WaitPolicy,
+    publisher: Publisher<Svc, [f64], RoundHeader>,
+    listener: Listener<Svc>,
+    subscribers: Vec<Subscriber<Svc, [f64], RoundHeader>>,
+    notifiers: Vec<Notifier<Svc>>,
+    held: Vec<Option<RoundSample>>,
+    pending: Vec<Option<RoundSample>>,
+    gathered: u64,
+    barrier: Option<GlobalBarrier>,
+    // Ports first: they must drop before the node.
+    _node: Node<Svc>,
+}
+
+fn transport(agent: usize, what: impl std::fmt::Display) -> ExchangeError {
+    ExchangeError::Transport {
+        agent,
+        what: what.to_string(),
+    }
+}
+
+/// The iceoryx2 configuration of a run: its own prefix and root directory, and no dead-node
+/// scans (the launcher owns cleanup; the scans made start-up of a 50-agent complete graph
+/// several times slower).
+pub fn run_config(prefix: &str, root: &std::path::Path) -> Result<Config, String> {
+    let mut config = Config::default();
+    config.global.prefix = FileName::new(prefix.as_bytes())
+        .map_err(|e| format!("bad iceoryx2 prefix {prefix:?}: {e:?}"))?;
+    let root = format!("{}/", root.display());
+    config.global.set_root_path(
+        &Path::new(root.as_bytes()).map_err(|e| format!("bad iceoryx2 root {root:?}: {e:?}"))?,
+    );
+    config.global.node.cleanup_dead_nodes_on_creation = false;
+    config.global.node.cleanup_dead_nodes_on_destruction = false;
+    config.global.service.cleanup_dead_nodes_on_open = false;
+    Ok(config)
+}
+
+impl IpcExchange {
+    /// Creates this agent's node and ports, then waits (until `deadline`) for every
+    /// neighbour to subscribe, so that the round-0 message reaches everybody.
+    pub fn connect(
+        endpoint: &IpcEndpoint,
+        config: &Config,
+        deadline: Instant,
+    ) -> Result<Self, ExchangeError> {
+        let i = endpoint.index;
+        let err = |what: String| transport(i, what);
+        let node = NodeBuilder::new()
+            .config(config)
+            .create::<Svc>()
+            .map_err(|e| err(format!("cannot create the iceoryx2 node: {e:?}")))?;
+        let round_of = |j: usize| {
+            let name = ServiceName::new(&round_service(j))
+                .map_err(|e| err(format!("bad service name: {e:?}")))?;
+            node.service_builder(&name)
+                .publish_subscribe::<[f64]>()
+                .user_header::<RoundHeader>()
+                .max_publishers(1)
+                .max_subscribers(endpoint.degrees[j].max(1))
+                .max_nodes(endpoint.degrees[j] + 1)
+                .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
+                .subscriber_max_borrowed_samples(SUBSCRIBER_BORROWED)
+                .history_size(0)
+                .enable_safe_overflow(false)
+                .open_or_create()
+                .map_err(|e| err(format!("cannot open service {}: {e:?}", round_service(j))))
+        };
+        let wake_of = |j: usize| {
+            let name = ServiceName::new(&wake_service(j))
+                .map_err(|e| err(format!("bad service name: {e:?}")))?;
+            node.service_builder(&name)
+                .event()
+                .max_listeners(1)
+                .max_notifiers(endpoint.degrees[j].max(1))
+                .max_nodes(endpoint.degrees[j] + 1)
+                .open_or_create()
+                .map_err(|e| err(format!("cannot open service {}: {e:?}", wake_service(j))))
+        };
+        // Listener before subscribers: a neighbour that sees our subscriber can wake us.
+        let own_wake = wake_of(i)?;
+        let listener = own_wake
+            .listener_builder()
+            .create()
+            .map_err(|e| err(format!("cannot create the listener: {e:?}")))?;
+        let own_round = round_of(i)?;
+        let publisher = own_round
+            .publisher_builder()
+            .initial_max_slice_len(endpoint.payload_len)
+            .allocation_strategy(AllocationStrategy::Static)
+            .backpressure_strategy(BackpressureStrategy::DiscardData)
+            .create()
+            .map_err(|e| err(format!("cannot create the publisher: {e:?}")))?;
+        let mut subscribers = Vec::with_capacity(endpoint.neighbours.len());
+        let mut notifiers = Vec::with_capacity(endpoint.neighbours.len());
+        for &j in &endpoint.neighbours {
+            let service = round_of(j)?;
+            subscribers.push(
+                service
+                    .subscriber_builder()
+                    .buffer_size(SUBSCRIBER_BUFFER)
+                    .create()
+                    .map_err(|e| err(format!("cannot subscribe to agent {j}: {e:?}")))?,
+            );
+            notifiers.push(
+                wake_of(j)?
+                    .notifier_builder()
+                    .create()
+                    .map_err(|e| err(format!("cannot create a notifier for agent {j}: {e:?}")))?,
+            );
+        }
+        let barrier = match &endpoint.barrier_shm {
+            None => None,
+            Some(name) => Some(open_barrier(&node, name, endpoint.degrees.len(), &err)?),
+        };
+        // Start-up rendezvous: all neighbours subscribed to us.
+        let degree = endpoint.neighbours.len();
+        let started = Instant::now();
+        while own_round.dynamic_config().number_of_subscribers() < degree {
+            if Instant::now() >= deadline {
+                return Err(err(format!(
+                    "only {} of {degree} neighbours connected within {:?}",
+                    own_round.dynamic_config().number_of_subscribers(),
+                    started.elapsed()
+                )));
+            }
+            std::thread::sleep(Duration::from_micros(500));
+        }
+        Ok(Self {
+            index: i,
+            neighbours: endpoint.neighbours.clone(),
+            payload_len: endpoint.payload_len,
+            policy: endpoint.policy,
+            publisher,
+            listener,
+            subscribers,
+            notifiers,
+            held: (0..degree).map(|_| None).collect(),
+            pending: (0..degree).map(|_| None).collect(),
+            gathered: 0,
+            barrier,
+            _node: node,
+        })
+    }
+
+    /// Moves neighbour `k`'s round-`round` message into `held[k]`; `false` if not there yet.
+    fn advance(&mut self, k: usize, round: u64) -> Result<bool, ExchangeError> {
+        if self.held[k]
+            .as_ref()
+            .is_some_and(|s| s.user_header().round == round)
+        {
+            return Ok(true);
+        }
+        if self.pending[k]
+            .as_ref()
+            .is_some_and(|s| s.user_header().round == round)
+        {
+            self.held[k] = self.pending[k].take();
+            return Ok(true);
+        }
+        loop {
+            let sample = self.subscribers[k]
+                .receive()
+                .map_err(|e| transport(self.index, format!("receive failed: {e:?}")))?;
+            let Some(sample) = sample else {
+                return Ok(false);
+            };
+            let got = sample.user_header().round;
+            if sample.payload().len() != self.payload_len {
+                return Err(ExchangeError::WrongLength {
+                    agent: self.index,
+                    neighbour: self.neighbours[k],
+                    expected: self.payload_len,
+                    got: sample.payload().len(),
+                });
+            }
+            if got == round {
+                self.held[k] = Some(sample);
+                return Ok(true);
+            } else if got == round + 1 && self.pending[k].is_none() {
+                self.pending[k] = Some(sample);
+            } else {
+                return Err(ExchangeError::OutOfOrder {
+                    agent: self.index,
+                    neighbour: self.neighbours[k],
+                    expected: round,
+                    got,
+                });
+            }
+        }
+    }
+
+    fn all_held(&mut self, round: u64) -> Result<bool, ExchangeError> {
+        let mut all = true;
+        for k in 0..self.subscribers.len() {
+            all &= self.advance(k, round)?;
+        }
+        Ok(all)
+    }
+
+    /// Sleeps on `listener` until notified or `deadline`.
+    fn sleep_on(
+        listener: &Listener<Svc>,
+        agent: usize,
+        deadline: Instant,
+    ) -> Result<(), ExchangeError> {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if !left.is_zero() {
+            listener
+                .timed_wait(|_| {}, left)
+                .map_err(|e| transport(agent, format!("waiting for a wake-up failed: {e:?}")))?;
+        }
+        Ok(())
+    }
+
+    fn send(
+        &mut self,
+        compute: &mut dyn FnMut(&mut [f64]) -> RoundHeader,
+    ) -> Result<(), ExchangeError> {
+        let i = self.index;
+        // Zero-filled once (the loan is uninitialised memory), then written in place.
+        let mut sample = self
+            .publisher
+            .loan_slice_uninit(self.payload_len)
+            .map_err(|e| transport(i, format!("cannot loan a sample: {e:?}")))?
+            .write_from_fn(|_| 0.0);
+        let header = compute(sample.payload_mut());
+        *sample.user_header_mut() = header;
+        let delivered = sample
+            .send()
+            .map_err(|e| transport(i, format!("send failed: {e:?}")))?;
+        if delivered < self.subscribers.len() {
+            return Err(transport(
+                i,
+                format!(
+                    "round {} reached {delivered} of {} neighbours",
+                    header.round,
+                    self.subscribers.len()
+                ),
+            ));
+        }
+        for notifier in &self.notifiers {
+            notifier
+                .notify()
+                .map_err(|e| transport(i, format!("notify failed: {e:?}")))?;
+        }
+        Ok(())
+    }
+}
+
+fn open_barrier(
+    node: &Node<Svc>,
+    shm: &str,
+    parties: usize,
+    err: &dyn Fn(String) -> ExchangeError,
+) -> Result<GlobalBarrier, ExchangeError> {
+    let name =
+        FileName::new(shm.as_bytes()).map_err(|e| err(format!("bad barrier name: {e:?}")))?;
+    let memory = SharedMemoryBuilder::new(&name)
+        .is_memory_locked(false)
+        .open_existing(iceoryx2_bb_posix::access_mode::AccessMode::ReadWrite)
+        .map_err(|e| err(format!("cannot open the barrier memory {shm}: {e:?}")))?;
+    if memory.size() < std::mem::size_of::<CountingBarrier>() {
+        return Err(err(format!("barrier memory {shm} is too small")));
+    }
+    let service = node
+        .service_builder(
+            &ServiceName::new(BARRIER_SERVICE)
+                .map_err(|e| err(format!("bad service name: {e:?}")))?,
+        )
+        .event()
+        .max_listeners(parties)
+        .max_notifiers(parties)
+        .max_nodes(parties)
+        .open_or_create()
+        .map_err(|e| err(format!("cannot open the barrier service: {e:?}")))?;
+    Ok(GlobalBarrier {
+        memory,
+        listener: service
+            .listener_builder()
+            .create()
+            .map_err(|e| err(format!("cannot create the barrier listener: {e:?}")))?,
+        notifier: service
+            .notifier_builder()
+            .create()
+            .map_err(|e| err(format!("cannot create the barrier notifier: {e:?}")))?,
+        parties,
+    })
+}
+
+/// Neighbours' payloads of the gathered round, read in place from the received samples.
+struct SampleInbox<'a> {
+    held: &'a [Option<RoundSample>],
+}
+
+impl Inbox for SampleInbox<'_> {
+    fn len(&self) -> usize {
+        self.held.len()
+    }
+    fn payload(&self, k: usize) -> &[f64] {
+        self.held[k].as_ref().map_or(&[], |s| s.payload())
+    }
+}
+
+impl Exchange for IpcExchange {
+    fn degree(&self) -> usize {
+        self.subscribers.len()
+    }
+
+    fn publish_initial(
+        &mut self,
+        header: RoundHeader,
+        write: &mut dyn FnMut(&mut [f64]),
+    ) -> Result<(), ExchangeError> {
+        self.send(&mut |out| {
+            write(out);
+            header
+        })
+    }
+
+    fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
+        let started = Instant::now();
+        let spin_until = started + self.policy.spin;
+        while !self.all_held(round)? {
+            let now = Instant::now();
+            if now >= deadline {
+                let missing = (0..self.neighbours.len())
+                    .filter(|&k| {
+                        self.held[k]
+                            .as_ref()
+                            .is_none_or(|s| s.user_header().round != round)
+                    })
+                    .map(|k| self.neighbours[k])
+                    .collect();
+                return Err(ExchangeError::Timeout {
+                    agent: self.index,
+                    round,
+                    missing,
+                    waited: started.elapsed(),
+                });
+            }
+            if now < spin_until {
+                std::hint::spin_loop();
+            } else {
+                Self::sleep_on(&self.listener, self.index, deadline)?;
+            }
+        }
+        self.gathered = round;
+        Ok(())
+    }
+
+    fn neighbour_header(&self, k: usize) -> &RoundHeader {
+        self.held[k]
+            .as_ref()
+            .expect("neighbour_header is called after a successful gather")
+            .user_header()
+    }
+
+    fn compute_and_publish(
+        &mut self,
+        compute: &mut dyn FnMut(&dyn Inbox, &mut [f64]) -> RoundHeader,
+    ) -> Result<(), ExchangeError> {
+        let held = std::mem::take(&mut self.held);
+        let result = self.send(&mut |out| compute(&SampleInbox { held: &held }, out));
+        self.held = held;
+        result
+    }
+
+    fn global_barrier(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
+        let i = self.index;
+        let Some(barrier) = &self.barrier else {
+            return Err(transport(i, "this run has no global barrier"));
+        };
+        let started = Instant::now();
+        match barrier.state().arrive(barrier.parties) {
+            Arrival::Released => {
+                barrier
+                    .notifier
+                    .notify()
+                    .map_err(|e| transport(i, format!("notify failed: {e:?}")))?;
+                Ok(())
+            }
+            Arrival::Wait(ticket) => {
+                let spin_until = started + self.policy.spin;
+                while !barrier.state().released(ticket) {
+                    let now = Instant::now();
+                    if now >= deadline {
+                        return Err(ExchangeError::BarrierTimeout {
+                            agent: i,
+                            round,
+                            arrived: barrier.state().arrived(),
+                            expected: barrier.parties,
+                            waited: started.elapsed(),
+                        });
+                    }
+                    if now < spin_until {
+                        std::hint::spin_loop();
+                    } else {
+                        Self::sleep_on(&barrier.listener, i, deadline)?;
+                    }
+                }
+                Ok(())
+            }
+        }
+    }
+}

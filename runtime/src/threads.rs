@@ -1,0 +1,313 @@
+//! The `threads` transport: one OS thread per agent, exchanging payloads through a
+//! lock-free double-buffered slot per agent and waking each other with crossbeam parkers.
+//!
+//! Each agent owns two slots (round parity). It writes round `k+1` into slot `(k+1) % 2`
+//! and then publishes by storing `k+2` into its `published` counter (release); a neighbour
+//! that sees the counter (acquire) reads the slot in place. The neighbour barrier makes this
+//! safe without locks: see [`crate::exchange`].
+
+use crate::exchange::{AgentOutcome, AgentPlan, Exchange, ExchangeError, root_cause, run_agent};
+use crate::header::RoundHeader;
+use crate::wait::{Arrival, CountingBarrier, WaitPolicy};
+use admm_ta_agents::agent::{ConsensusAgent, Inbox};
+use admm_ta_topologies::Graph;
+use crossbeam::sync::{Parker, Unparker};
+use crossbeam::utils::CachePadded;
+use std::cell::UnsafeCell;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
+
+struct Slot {
+    header: UnsafeCell<RoundHeader>,
+    payload: UnsafeCell<Box<[f64]>>,
+}
+
+struct AgentSlots {
+    /// Rounds published: the latest round + 1 (0: nothing yet).
+    published: CachePadded<AtomicU64>,
+    slots: [Slot; 2],
+}
+
+/// Memory shared by the threads of one run.
+struct Fabric {
+    agents: Vec<AgentSlots>,
+    neighbours: Vec<Vec<usize>>,
+    unparkers: Vec<Unparker>,
+    barrier: CachePadded<CountingBarrier>,
+    /// Set when an agent fails, so the others stop waiting at once.
+    aborted: AtomicBool,
+}
+
+// SAFETY: slots are written only by their owner, for a round no neighbour reads any more,
+// and read only after the owner's release-store of `published` (see the module docs).
+unsafe impl Sync for Fabric {}
+
+impl Fabric {
+    fn wake_all(&self) {
+        self.unparkers.iter().for_each(Unparker::unpark);
+    }
+}
+
+/// One agent's end of the `threads` transport.
+pub struct ThreadExchange<'f> {
+    fabric: &'f Fabric,
+    index: usize,
+    parker: Parker,
+    policy: WaitPolicy,
+    gathered: u64,
+}
+
+/// Neighbours' payloads of the gathered round, read in place from their slots.
+struct SlotInbox<'a> {
+    fabric: &'a Fabric,
+    neighbours: &'a [usize],
+    parity: usize,
+}
+
+impl Inbox for SlotInbox<'_> {
+    fn len(&self) -> usize {
+        self.neighbours.len()
+    }
+    fn payload(&self, k: usize) -> &[f64] {
+        let slot = &self.fabric.agents[self.neighbours[k]].slots[self.parity];
+        // SAFETY: the neighbour published this round (acquire in `gather`) and will not
+        // rewrite this slot before we publish our next round.
+        unsafe { &*slot.payload.get() }
+    }
+}
+
+impl ThreadExchange<'_> {
+    fn missing(&self, round: u64) -> Vec<usize> {
+        self.fabric.neighbours[self.index]
+            .iter()
+            .copied()
+            .filter(|&j| self.fabric.agents[j].published.load(Ordering::Acquire) <= round)
+            .collect()
+    }
+
+    fn check_abort(&self) -> Result<(), ExchangeError> {
+        if self.fabric.aborted.load(Ordering::Acquire) {
+            return Err(ExchangeError::Aborted { agent: self.index });
+        }
+        Ok(())
+    }
+
+    /// Spins within the policy, then parks until `ready` or the deadline.
+    fn wait_until(
+        &self,
+        deadline: Instant,
+        ready: impl Fn() -> bool,
+    ) -> Result<bool, ExchangeError> {
+        let spin_until = Instant::now() + self.policy.spin;
+        loop {
+            if ready() {
+                return Ok(true);
+            }
+            self.check_abort()?;
+            let now = Instant::now();
+            if now >= deadline {
+                return Ok(false);
+            }
+            if now < spin_until {
+                std::hint::spin_loop();
+            } else {
+                self.parker.park_deadline(deadline);
+            }
+        }
+    }
+}
+
+impl Exchange for ThreadExchange<'_> {
+    fn degree(&self) -> usize {
+        self.fabric.neighbours[self.index].len()
+    }
+
+    fn publish_initial(
+        &mut self,
+        header: RoundHeader,
+        write: &mut dyn FnMut(&mut [f64]),
+    ) -> Result<(), ExchangeError> {
+        let own = &self.fabric.agents[self.index];
+        // SAFETY: nobody reads slot 0 before the release-store below.
+        unsafe {
+            write(&mut *own.slots[0].payload.get());
+            *own.slots[0].header.get() = header;
+        }
+        own.published.store(1, Ordering::Release);
+        self.fabric.neighbours[self.index]
+            .iter()
+            .for_each(|&j| self.fabric.unparkers[j].unpark());
+        Ok(())
+    }
+
+    fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
+        let started = Instant::now();
+        let fabric = self.fabric;
+        let neighbours = &fabric.neighbours[self.index];
+        let ready = || {
+            neighbours
+                .iter()
+                .all(|&j| fabric.agents[j].published.load(Ordering::Acquire) > round)
+        };
+        if !self.wait_until(deadline, ready)? {
+            return Err(ExchangeError::Timeout {
+                agent: self.index,
+                round,
+                missing: self.missing(round),
+                waited: started.elapsed(),
+            });
+        }
+        self.gathered = round;
+        for &j in neighbours {
+            let header = self.fabric_header(j, round);
+            if header.round != round {
+                return Err(ExchangeError::OutOfOrder {
+                    agent: self.index,
+                    neighbour: j,
+                    expected: round,
+                    got: header.round,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn neighbour_header(&self, k: usize) -> &RoundHeader {
+        self.fabric_header(self.fabric.neighbours[self.index][k], self.gathered)
+    }
+
+    fn compute_and_publish(
+        &mut self,
+        compute: &mut dyn FnMut(&dyn Inbox, &mut [f64]) -> RoundHeader,
+    ) -> Result<(), ExchangeError> {
+        let next = self.gathered + 1;
+        let own = &self.fabric.agents[self.index];
+        let slot = &own.slots[(next % 2) as usize];
+        let inbox = SlotInbox {
+            fabric: self.fabric,
+            neighbours: &self.fabric.neighbours[self.index],
+            parity: (self.gathered % 2) as usize,
+        };
+        // SAFETY: this slot held round `next − 2`, which every neighbour finished reading
+        // before publishing the round `next − 1` we gathered.
+        let header = compute(&inbox, unsafe { &mut *slot.payload.get() });
+        unsafe { *slot.header.get() = header };
+        own.published.store(next + 1, Ordering::Release);
+        self.fabric.neighbours[self.index]
+            .iter()
+            .for_each(|&j| self.fabric.unparkers[j].unpark());
+        Ok(())
+    }
+
+    fn global_barrier(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
+        let started = Instant::now();
+        let parties = self.fabric.agents.len();
+        let barrier = &self.fabric.barrier;
+        match barrier.arrive(parties) {
+            Arrival::Released => {
+                self.fabric.wake_all();
+                Ok(())
+            }
+            Arrival::Wait(ticket) => {
+                if self.wait_until(deadline, || barrier.released(ticket))? {
+                    Ok(())
+                } else {
+                    Err(ExchangeError::BarrierTimeout {
+                        agent: self.index,
+                        round,
+                        arrived: barrier.arrived(),
+                        expected: parties,
+                        waited: started.elapsed(),
+                    })
+                }
+            }
+        }
+    }
+}
+
+impl ThreadExchange<'_> {
+    fn fabric_header(&self, j: usize, round: u64) -> &RoundHeader {
+        // SAFETY: as for the payloads in `SlotInbox`.
+        unsafe {
+            &*self.fabric.agents[j].slots[(round % 2) as usize]
+                .header
+                .get()
+        }
+    }
+}
+
+/// Runs every agent in its own thread until the stop protocol or the round limit ends the
+/// run; `plans[i]` is agent `i`'s. Returns the outcomes in agent order, or the first
+/// failure (the other agents then stop at once).
+pub fn run_threads<A: ConsensusAgent + Send>(
+    agents: &mut [A],
+    graph: &Graph,
+    plans: &[AgentPlan],
+) -> Result<Vec<AgentOutcome>, ExchangeError> {
+    let n = agents.len();
+    assert_eq!(n, graph.robots(), "one agent per robot");
+    assert_eq!(n, plans.len(), "one plan per agent");
+    let len = agents.first().map_or(0, |a| a.payload_len());
+    let parkers: Vec<Parker> = (0..n).map(|_| Parker::new()).collect();
+    let fabric = Fabric {
+        agents: (0..n)
+            .map(|_| AgentSlots {
+                published: CachePadded::new(AtomicU64::new(0)),
+                slots: [(); 2].map(|_| Slot {
+                    header: UnsafeCell::new(RoundHeader::default()),
+                    payload: UnsafeCell::new(vec![0.0; len].into_boxed_slice()),
+                }),
+            })
+            .collect(),
+        neighbours: (0..n).map(|i| graph.neighbours(i).to_vec()).collect(),
+        unparkers: parkers.iter().map(|p| p.unparker().clone()).collect(),
+        barrier: CachePadded::new(CountingBarrier::default()),
+        aborted: AtomicBool::new(false),
+    };
+    let policy = WaitPolicy::for_team(n);
+    let results: Vec<Result<AgentOutcome, ExchangeError>> = std::thread::scope(|scope| {
+        let fabric = &fabric;
+        let handles: Vec<_> = agents
+            .iter_mut()
+            .zip(parkers)
+            .zip(plans)
+            .enumerate()
+            .map(|(index, ((agent, parker), plan))| {
+                std::thread::Builder::new()
+                    .name(format!("agent-{index}"))
+                    .spawn_scoped(scope, move || {
+                        let mut exchange = ThreadExchange {
+                            fabric,
+                            index,
+                            parker,
+                            policy,
+                            gathered: 0,
+                        };
+                        let result = run_agent(agent, &mut exchange, plan);
+                        if result.is_err() {
+                            fabric.aborted.store(true, Ordering::Release);
+                            fabric.wake_all();
+                        }
+                        result
+                    })
+                    .expect("spawning an agent thread")
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("agent thread panicked"))
+            .collect()
+    });
+    let mut outcomes = Vec::with_capacity(n);
+    let mut errors = Vec::new();
+    for result in results {
+        match result {
+            Ok(outcome) => outcomes.push(outcome),
+            Err(e) => errors.push(e),
+        }
+    }
+    match root_cause(errors) {
+        Some(e) => Err(e),
+        None => Ok(outcomes),
+    }
+}

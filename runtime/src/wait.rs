@@ -1,0 +1,93 @@
+//! Waiting without starving the machine: spin briefly, then sleep with a deadline.
+//!
+//! On a 2-core machine a team of 50 agents outnumbers the cores 25 to 1: an agent that spins
+//! while waiting steals the core its neighbour needs to produce the message it waits for.
+//! So agents spin only when there are at least as many cores as agents, and only briefly;
+//! otherwise they go to sleep on the transport's wake-up mechanism at once.
+
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::time::Duration;
+
+/// How long a waiter spins before it sleeps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WaitPolicy {
+    pub spin: Duration,
+}
+
+impl WaitPolicy {
+    /// Spin up to 20 µs when every agent can have a core of its own, else not at all.
+    pub fn for_team(agents: usize) -> Self {
+        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        Self {
+            spin: if agents <= cores {
+                Duration::from_micros(20)
+            } else {
+                Duration::ZERO
+            },
+        }
+    }
+}
+
+/// A sense-reversing counting barrier over two atomics; `#[repr(C)]` so that it can live in
+/// shared memory between processes. Waking the sleepers is the caller's business.
+#[repr(C)]
+#[derive(Debug, Default)]
+pub struct CountingBarrier {
+    arrived: AtomicUsize,
+    generation: AtomicU64,
+}
+
+/// What [`CountingBarrier::arrive`] tells its caller.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Arrival {
+    /// This caller arrived last and released everybody: wake the sleepers.
+    Released,
+    /// Wait until [`CountingBarrier::released`] says so for this ticket.
+    Wait(u64),
+}
+
+impl CountingBarrier {
+    /// Arrives at the barrier of a team of `parties`.
+    pub fn arrive(&self, parties: usize) -> Arrival {
+        // Read the generation before arriving: it cannot change until we have arrived.
+        let generation = self.generation.load(Ordering::Acquire);
+        if self.arrived.fetch_add(1, Ordering::AcqRel) + 1 == parties {
+            self.arrived.store(0, Ordering::Relaxed);
+            self.generation.fetch_add(1, Ordering::Release);
+            Arrival::Released
+        } else {
+            Arrival::Wait(generation)
+        }
+    }
+
+    /// Whether the barrier the ticket belongs to has released.
+    pub fn released(&self, ticket: u64) -> bool {
+        self.generation.load(Ordering::Acquire) != ticket
+    }
+
+    /// Agents arrived at the current barrier (for error messages).
+    pub fn arrived(&self) -> usize {
+        self.arrived.load(Ordering::Relaxed)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_last_arrival_releases_the_others() {
+        let barrier = CountingBarrier::default();
+        let a = barrier.arrive(3);
+        let b = barrier.arrive(3);
+        let (Arrival::Wait(ta), Arrival::Wait(tb)) = (a, b) else {
+            panic!("early release");
+        };
+        assert!(!barrier.released(ta));
+        assert_eq!(barrier.arrived(), 2);
+        assert_eq!(barrier.arrive(3), Arrival::Released);
+        assert!(barrier.released(ta) && barrier.released(tb));
+        // The next barrier starts from zero.
+        assert!(matches!(barrier.arrive(3), Arrival::Wait(_)));
+    }
+}
