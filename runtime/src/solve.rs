@@ -147,6 +147,8 @@ pub enum SolveError {
     Exchange(#[from] ExchangeError),
     #[error(transparent)]
     Launch(#[from] LaunchError),
+    #[error("the run finished but could not remove its files: {0:?}")]
+    Leftovers(Vec<PathBuf>),
     #[error("the topology has {graph} robots but the costs have {problem}")]
     SizeMismatch { graph: usize, problem: usize },
     #[error("ρ must be a positive finite number, got {0}")]
@@ -213,6 +215,10 @@ pub struct SolveReport {
     /// Time for all agent processes to start and connect (ipc).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub startup_ms: Option<f64>,
+    /// The ipc run's id: its iceoryx2 prefix is `adta<id>_`, its directory
+    /// `<tmp>/admm-ta-runs/<id>`; both are gone when the solve returns.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub run_id: Option<String>,
     /// Hash of each agent's last published payload (to compare transports).
     #[serde(skip)]
     pub iterate_digests: Vec<u64>,
@@ -328,6 +334,7 @@ pub fn solve(
                 projection_steps,
                 latency: None,
                 startup_ms: None,
+                run_id: None,
                 iterate_digests: (0..n).map(|i| payload_digest(sim.payload(i))).collect(),
             }
         }
@@ -401,11 +408,17 @@ pub fn solve(
                     global_barrier: config.global_barrier,
                 },
             )?;
-            RunResult::from_outcomes(
-                &run.outcomes,
-                Some(run.latency.summary()),
-                Some(run.startup.as_secs_f64() * 1e3),
-            )
+            if !run.leftovers.is_empty() {
+                return Err(SolveError::Leftovers(run.leftovers));
+            }
+            RunResult {
+                run_id: Some(run.run_id),
+                ..RunResult::from_outcomes(
+                    &run.outcomes,
+                    Some(run.latency.summary()),
+                    Some(run.startup.as_secs_f64() * 1e3),
+                )
+            }
         }
     };
     let wall_time_ms = started.elapsed().as_secs_f64() * 1e3;
@@ -439,6 +452,7 @@ pub fn solve(
         global_barrier: config.global_barrier,
         round_latency_us: run.latency,
         startup_ms: run.startup_ms,
+        run_id: run.run_id,
         iterate_digests: run.iterate_digests,
         check,
     })
@@ -453,6 +467,7 @@ struct RunResult {
     projection_steps: usize,
     latency: Option<LatencySummary>,
     startup_ms: Option<f64>,
+    run_id: Option<String>,
     iterate_digests: Vec<u64>,
 }
 
@@ -471,6 +486,7 @@ impl RunResult {
             projection_steps: outcomes.iter().map(|o| o.projection_steps as usize).sum(),
             latency,
             startup_ms,
+            run_id: None,
             iterate_digests: outcomes.iter().map(|o| o.iterate_digest).collect(),
         }
     }

@@ -56,6 +56,7 @@ pub enum LaunchError {
 /// What a multi-process run produced.
 #[derive(Debug, Clone)]
 pub struct IpcRun {
+    pub run_id: String,
     pub outcomes: Vec<AgentOutcome>,
     pub latency: RoundLatency,
     /// From the first spawn until every agent had all its neighbours connected.
@@ -83,6 +84,11 @@ impl Drop for RunGuard {
             }
         }
         self._barrier = None;
+        if std::env::var_os("ADMM_TA_STARTUP_TRACE").is_some() {
+            for i in 0..self.children.len() {
+                eprintln!("{}", last_log_line(&self.namespace.dir, i));
+            }
+        }
         let _ = self.namespace.cleanup();
     }
 }
@@ -232,6 +238,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
     let startup = Duration::from_nanos(connected.saturating_sub(spawned_unix_ns) as u64);
     drop(guard);
     Ok(IpcRun {
+        run_id: namespace.id.clone(),
         outcomes,
         latency,
         startup,

@@ -124,6 +124,7 @@ impl IpcExchange {
     ) -> Result<Self, ExchangeError> {
         let i = endpoint.index;
         let err = |what: String| transport(i, what);
+        let t0 = Instant::now();
         let node = NodeBuilder::new()
             .config(config)
             .create::<Svc>()
@@ -156,6 +157,7 @@ impl IpcExchange {
                 .map_err(|e| err(format!("cannot open service {}: {e:?}", wake_service(j))))
         };
         // Listener before subscribers: a neighbour that sees our subscriber can wake us.
+        let t_node = t0.elapsed();
         let own_wake = wake_of(i)?;
         let listener = own_wake
             .listener_builder()
@@ -169,6 +171,7 @@ impl IpcExchange {
             .backpressure_strategy(BackpressureStrategy::DiscardData)
             .create()
             .map_err(|e| err(format!("cannot create the publisher: {e:?}")))?;
+        let t_own = t0.elapsed();
         let mut subscribers = Vec::with_capacity(endpoint.neighbours.len());
         let mut notifiers = Vec::with_capacity(endpoint.neighbours.len());
         for &j in &endpoint.neighbours {
@@ -191,6 +194,7 @@ impl IpcExchange {
             None => None,
             Some(name) => Some(open_barrier(&node, name, endpoint.degrees.len(), &err)?),
         };
+        let t_ports = t0.elapsed();
         // Start-up rendezvous: all neighbours subscribed to us.
         let degree = endpoint.neighbours.len();
         let started = Instant::now();
@@ -203,6 +207,15 @@ impl IpcExchange {
                 )));
             }
             std::thread::sleep(Duration::from_micros(500));
+        }
+        if std::env::var_os("ADMM_TA_STARTUP_TRACE").is_some() {
+            eprintln!(
+                "startup agent {i}: node {:?} own {:?} ports {:?} rendezvous {:?}",
+                t_node,
+                t_own,
+                t_ports,
+                t0.elapsed()
+            );
         }
         Ok(Self {
             index: i,

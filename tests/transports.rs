@@ -1,0 +1,247 @@
+//! The three transports drive the same agent step: for the same seed they must produce the
+//! same iterates (bit for bit), stop at the same round and assign the same tasks. The ipc
+//! runs use real agent processes and real shared memory, each in its own namespace, and
+//! must leave nothing behind.
+
+use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_runtime::solve::{SolveConfig, SolveError, SolveReport, StopRule, Transport, solve};
+use admm_ta_topologies::{Graph, TopologySpec};
+use std::path::PathBuf;
+use std::time::Duration;
+
+fn problem(robots: usize, tasks: usize, seed: u64) -> TaskAssignmentProblem {
+    TaskAssignmentProblem::new(
+        CostMatrix::uniform(robots, tasks, seed).unwrap(),
+        CaseChoice::Auto,
+    )
+    .unwrap()
+}
+
+fn graph(spec: &str, robots: usize, seed: u64) -> Graph {
+    spec.parse::<TopologySpec>()
+        .unwrap()
+        .build(robots, seed)
+        .unwrap()
+}
+
+fn config(transport: Transport, stop: StopRule, max_iters: usize) -> SolveConfig {
+    SolveConfig {
+        transport,
+        stop,
+        max_iters,
+        check: true,
+        agent_program: Some(PathBuf::from(env!("CARGO_BIN_EXE_admm-ta"))),
+        ..SolveConfig::default()
+    }
+}
+
+/// Nothing of an ipc run may remain in /dev/shm or the run directory.
+fn assert_clean(report: &SolveReport) {
+    let id = report.run_id.as_ref().expect("ipc reports its run id");
+    let prefix = format!("adta{id}_");
+    let left: Vec<_> = std::fs::read_dir("/dev/shm")
+        .map(|d| {
+            d.filter_map(Result::ok)
+                .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
+                .map(|e| e.path())
+                .collect()
+        })
+        .unwrap_or_default();
+    assert!(left.is_empty(), "left in /dev/shm: {left:?}");
+    let dir = std::env::temp_dir().join("admm-ta-runs").join(id);
+    assert!(!dir.exists(), "run directory {} remains", dir.display());
+}
+
+fn assert_same(a: &SolveReport, b: &SolveReport) {
+    let what = format!("{} vs {}", a.transport.name(), b.transport.name());
+    assert_eq!(a.iterations, b.iterations, "{what}: rounds");
+    assert_eq!(a.converged, b.converged, "{what}: converged");
+    assert_eq!(
+        a.certified_round, b.certified_round,
+        "{what}: certified round"
+    );
+    assert_eq!(a.assignment, b.assignment, "{what}: assignment");
+    assert_eq!(a.iterate_digests, b.iterate_digests, "{what}: iterates");
+}
+
+fn all_transports(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    stop: StopRule,
+    max_iters: usize,
+) {
+    let sim = solve(problem, graph, &config(Transport::Sim, stop, max_iters)).unwrap();
+    let threads = solve(problem, graph, &config(Transport::Threads, stop, max_iters)).unwrap();
+    let ipc = solve(problem, graph, &config(Transport::Ipc, stop, max_iters)).unwrap();
+    assert_same(&sim, &threads);
+    assert_same(&sim, &ipc);
+    assert_clean(&ipc);
+    if stop == StopRule::Local {
+        assert!(sim.converged, "{}: no certified stop", graph.name());
+        assert!(
+            sim.check.as_ref().unwrap().optimal,
+            "{}: not optimal",
+            graph.name()
+        );
+        // The decentralized stop costs exactly the diameter over the certified round.
+        assert_eq!(
+            sim.iterations - sim.certified_round.unwrap(),
+            graph.diameter().unwrap()
+        );
+    }
+    for r in [&threads, &ipc] {
+        let latency = r.round_latency_us.expect("distributed runs record latency");
+        assert_eq!(
+            latency.round.count,
+            (problem.robots() * r.iterations) as u64
+        );
+        assert!(latency.round.p50 > 0.0 && latency.round.p99 >= latency.round.p50);
+    }
+    assert!(ipc.startup_ms.unwrap() > 0.0);
+}
+
+#[test]
+fn transports_agree_on_a_complete_graph() {
+    all_transports(
+        &problem(8, 8, 3),
+        &graph("complete", 8, 0),
+        StopRule::Local,
+        2000,
+    );
+}
+
+#[test]
+fn transports_agree_on_a_chain_in_case_2() {
+    all_transports(
+        &problem(10, 6, 4),
+        &graph("chain", 10, 0),
+        StopRule::Local,
+        4000,
+    );
+}
+
+#[test]
+fn transports_agree_on_a_random_graph_to_the_round_limit() {
+    all_transports(
+        &problem(12, 12, 5),
+        &graph("random:0.3", 12, 5),
+        StopRule::MaxIters,
+        60,
+    );
+}
+
+#[test]
+fn a_global_barrier_changes_timing_not_iterates() {
+    let (p, g) = (problem(6, 6, 8), graph("ring", 6, 0));
+    let plain = solve(&p, &g, &config(Transport::Sim, StopRule::Local, 2000)).unwrap();
+    for transport in [Transport::Threads, Transport::Ipc] {
+        let barrier = solve(
+            &p,
+            &g,
+            &SolveConfig {
+                global_barrier: true,
+                ..config(transport, StopRule::Local, 2000)
+            },
+        )
+        .unwrap();
+        assert_same(&plain, &barrier);
+        let latency = barrier.round_latency_us.unwrap();
+        assert_eq!(latency.barrier.count, latency.round.count);
+        if transport == Transport::Ipc {
+            assert_clean(&barrier);
+        }
+    }
+}
+
+#[test]
+fn concurrent_ipc_runs_do_not_collide() {
+    let runs: Vec<SolveReport> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..3)
+            .map(|seed| {
+                s.spawn(move || {
+                    let (p, g) = (problem(6, 6, seed), graph("complete", 6, 0));
+                    solve(&p, &g, &config(Transport::Ipc, StopRule::Local, 2000)).unwrap()
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    for r in &runs {
+        assert!(r.check.as_ref().unwrap().optimal);
+        assert_clean(r);
+    }
+}
+
+#[test]
+fn a_failing_agent_is_reported_and_cleaned_up() {
+    let (p, g) = (problem(4, 4, 1), graph("complete", 4, 0));
+    let broken = SolveConfig {
+        agent_program: Some(PathBuf::from("/bin/false")),
+        ..config(Transport::Ipc, StopRule::Local, 100)
+    };
+    let err = solve(&p, &g, &broken).unwrap_err();
+    assert!(
+        matches!(err, SolveError::Launch(_)) && err.to_string().contains("failed (exit code 1)"),
+        "{err}"
+    );
+    let missing = SolveConfig {
+        agent_program: Some(PathBuf::from("/nonexistent/admm-ta")),
+        ..config(Transport::Ipc, StopRule::Local, 100)
+    };
+    let err = solve(&p, &g, &missing).unwrap_err().to_string();
+    assert!(err.contains("cannot start agent process 0"), "{err}");
+}
+
+#[test]
+fn an_agent_that_never_connects_fails_the_run_within_the_deadline() {
+    // Agent 0 sleeps instead of running; its neighbours must give up after the start-up
+    // deadline with a message saying so, and the launcher must kill and reap agent 0.
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("agent.sh");
+    std::fs::write(
+        &script,
+        format!(
+            "#!/bin/sh\nif [ \"$5\" = 0 ]; then sleep 30; fi\nexec {} \"$@\"\n",
+            env!("CARGO_BIN_EXE_admm-ta")
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&script, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let (p, g) = (problem(4, 4, 1), graph("complete", 4, 0));
+    let started = std::time::Instant::now();
+    let err = solve(
+        &p,
+        &g,
+        &SolveConfig {
+            agent_program: Some(script),
+            startup_timeout: Duration::from_secs(1),
+            ..config(Transport::Ipc, StopRule::Local, 100)
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("of 3 neighbours connected"), "{err}");
+    assert!(
+        started.elapsed() < Duration::from_secs(25),
+        "the sleeping agent was not killed"
+    );
+}
+
+#[test]
+fn central_stop_rules_are_refused_on_distributed_transports() {
+    let (p, g) = (problem(4, 4, 1), graph("complete", 4, 0));
+    for transport in [Transport::Threads, Transport::Ipc] {
+        let err = solve(&p, &g, &config(transport, StopRule::Certified, 100)).unwrap_err();
+        assert!(err.to_string().contains("sim transport only"), "{err}");
+    }
+    let err = solve(
+        &p,
+        &g,
+        &SolveConfig {
+            global_barrier: true,
+            ..config(Transport::Sim, StopRule::Local, 100)
+        },
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("threads or ipc"), "{err}");
+}
