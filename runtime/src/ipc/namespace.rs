@@ -40,9 +40,15 @@ impl RunNamespace {
         })
     }
 
-    /// The iceoryx2 root directory of the run.
+    /// The iceoryx2 root directory of the run: on the shared-memory tmpfs when there is one,
+    /// because iceoryx2 writes and fsyncs several small files per service and port, and on a
+    /// disk-backed `/tmp` that made start-up of a 50-agent complete graph several times slower.
     pub fn iceoryx_root(&self) -> PathBuf {
-        self.dir.join("iox2")
+        if Path::new(SHM_DIR).is_dir() {
+            Path::new(SHM_DIR).join(format!("{}root", self.prefix))
+        } else {
+            self.dir.join("iox2")
+        }
     }
 
     /// Name of the global barrier's shared memory.
@@ -83,7 +89,12 @@ fn shm_objects(prefix: &str) -> Vec<PathBuf> {
 }
 
 fn remove_if_exists(path: &Path) -> std::io::Result<()> {
-    match std::fs::remove_file(path) {
+    let removed = if path.is_dir() {
+        std::fs::remove_dir_all(path)
+    } else {
+        std::fs::remove_file(path)
+    };
+    match removed {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(e),
         _ => Ok(()),
     }
@@ -101,6 +112,7 @@ mod tests {
         let shm = PathBuf::from(SHM_DIR).join(format!("{}test", a.prefix));
         if PathBuf::from(SHM_DIR).is_dir() {
             std::fs::write(&shm, b"x").unwrap();
+            std::fs::create_dir_all(a.iceoryx_root().join("services")).unwrap();
         }
         std::fs::write(a.dir.join("file"), b"x").unwrap();
         assert!(!a.leftovers().is_empty());

@@ -175,9 +175,8 @@ impl IpcExchange {
         let mut subscribers = Vec::with_capacity(endpoint.neighbours.len());
         let mut notifiers = Vec::with_capacity(endpoint.neighbours.len());
         for &j in &endpoint.neighbours {
-            let service = round_of(j)?;
             subscribers.push(
-                service
+                round_of(j)?
                     .subscriber_builder()
                     .buffer_size(SUBSCRIBER_BUFFER)
                     .create()
