@@ -397,7 +397,8 @@ pub fn solve(
                 diameter,
                 round_timeout_ms: 0,
                 startup_timeout_ms: 0,
-                barrier_shm: None,
+                board_shm: String::new(),
+                global_barrier: config.global_barrier,
             };
             let run = launcher::launch(
                 scenario,

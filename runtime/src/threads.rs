@@ -8,6 +8,7 @@
 
 use crate::exchange::{AgentOutcome, AgentPlan, Exchange, ExchangeError, root_cause, run_agent};
 use crate::header::RoundHeader;
+use crate::ipc::transport::arrivals_target;
 use crate::wait::{Arrival, CountingBarrier, WaitPolicy};
 use admm_ta_agents::agent::{ConsensusAgent, Inbox};
 use admm_ta_topologies::Graph;
@@ -25,6 +26,10 @@ struct Slot {
 struct AgentSlots {
     /// Rounds published: the latest round + 1 (0: nothing yet).
     published: CachePadded<AtomicU64>,
+    /// Neighbour messages counted for rounds of each parity, cumulative; the last arrival of
+    /// a round wakes the agent (one wake-up per round instead of one per neighbour; see
+    /// `ipc::transport` for why this never loses a wake-up).
+    arrivals: CachePadded<[AtomicU64; 2]>,
     slots: [Slot; 2],
 }
 
@@ -134,9 +139,7 @@ impl Exchange for ThreadExchange<'_> {
             *own.slots[0].header.get() = header;
         }
         own.published.store(1, Ordering::Release);
-        self.fabric.neighbours[self.index]
-            .iter()
-            .for_each(|&j| self.fabric.unparkers[j].unpark());
+        self.announce(0);
         Ok(())
     }
 
@@ -193,9 +196,7 @@ impl Exchange for ThreadExchange<'_> {
         let header = compute(&inbox, unsafe { &mut *slot.payload.get() });
         unsafe { *slot.header.get() = header };
         own.published.store(next + 1, Ordering::Release);
-        self.fabric.neighbours[self.index]
-            .iter()
-            .for_each(|&j| self.fabric.unparkers[j].unpark());
+        self.announce(next);
         Ok(())
     }
 
@@ -226,6 +227,18 @@ impl Exchange for ThreadExchange<'_> {
 }
 
 impl ThreadExchange<'_> {
+    /// Counts our round-`round` message at each neighbour and wakes those for which it was
+    /// the last one missing.
+    fn announce(&self, round: u64) {
+        for &j in &self.fabric.neighbours[self.index] {
+            let counter = &self.fabric.agents[j].arrivals[(round % 2) as usize];
+            let arrived = counter.fetch_add(1, Ordering::AcqRel) + 1;
+            if arrived == arrivals_target(self.fabric.neighbours[j].len(), round) {
+                self.fabric.unparkers[j].unpark();
+            }
+        }
+    }
+
     fn fabric_header(&self, j: usize, round: u64) -> &RoundHeader {
         // SAFETY: as for the payloads in `SlotInbox`.
         unsafe {
@@ -253,6 +266,7 @@ pub fn run_threads<A: ConsensusAgent + Send>(
         agents: (0..n)
             .map(|_| AgentSlots {
                 published: CachePadded::new(AtomicU64::new(0)),
+                arrivals: CachePadded::new([AtomicU64::new(0), AtomicU64::new(0)]),
                 slots: [(); 2].map(|_| Slot {
                     header: UnsafeCell::new(RoundHeader::default()),
                     payload: UnsafeCell::new(vec![0.0; len].into_boxed_slice()),

@@ -10,8 +10,8 @@ use crate::exchange::AgentOutcome;
 use crate::ipc::agent_process::{AgentReport, log_path, result_path};
 use crate::ipc::namespace::RunNamespace;
 use crate::ipc::scenario::Scenario;
+use crate::ipc::transport::board_size;
 use crate::latency::RoundLatency;
-use crate::wait::CountingBarrier;
 use iceoryx2::prelude::{FileName, SemanticString};
 use iceoryx2_bb_posix::creation_mode::CreationMode;
 use iceoryx2_bb_posix::permission::Permission;
@@ -35,8 +35,8 @@ pub struct IpcOptions {
 pub enum LaunchError {
     #[error("cannot prepare the run directory: {0}")]
     RunDirectory(std::io::Error),
-    #[error("cannot create the global barrier's shared memory: {0}")]
-    Barrier(String),
+    #[error("cannot create the run's shared board: {0}")]
+    Board(String),
     #[error("cannot start agent process {index} ({program}): {source}")]
     Spawn {
         index: usize,
@@ -70,7 +70,7 @@ pub struct IpcRun {
 struct RunGuard {
     namespace: RunNamespace,
     children: Vec<Option<Child>>,
-    _barrier: Option<SharedMemory>,
+    _board: Option<SharedMemory>,
 }
 
 impl Drop for RunGuard {
@@ -83,7 +83,7 @@ impl Drop for RunGuard {
                 let _ = c.wait();
             }
         }
-        self._barrier = None;
+        self._board = None;
         if std::env::var_os("ADMM_TA_STARTUP_TRACE").is_some() {
             for i in 0..self.children.len() {
                 eprintln!("{}", last_log_line(&self.namespace.dir, i));
@@ -127,30 +127,27 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
     let mut guard = RunGuard {
         namespace: namespace.clone(),
         children: Vec::new(),
-        _barrier: None,
+        _board: None,
     };
     scenario.run_id = namespace.id.clone();
     scenario.iceoryx_prefix = namespace.prefix.clone();
     scenario.iceoryx_root = namespace.iceoryx_root();
     scenario.round_timeout_ms = options.round_timeout.as_millis() as u64;
     scenario.startup_timeout_ms = options.startup_timeout.as_millis() as u64;
-    scenario.barrier_shm = None;
-    if options.global_barrier {
-        let name = namespace.barrier_shm();
-        let file =
-            FileName::new(name.as_bytes()).map_err(|e| LaunchError::Barrier(format!("{e:?}")))?;
-        let memory = SharedMemoryBuilder::new(&file)
-            .is_memory_locked(false)
-            .creation_mode(CreationMode::PurgeAndCreate)
-            .size(std::mem::size_of::<CountingBarrier>().max(64))
-            .permission(Permission::OWNER_READ_WRITE)
-            .zero_memory(true)
-            .has_ownership(true)
-            .create()
-            .map_err(|e| LaunchError::Barrier(format!("{e:?}")))?;
-        guard._barrier = Some(memory);
-        scenario.barrier_shm = Some(name);
-    }
+    scenario.global_barrier = options.global_barrier;
+    scenario.board_shm = namespace.board_shm();
+    let file = FileName::new(scenario.board_shm.as_bytes())
+        .map_err(|e| LaunchError::Board(format!("{e:?}")))?;
+    let board = SharedMemoryBuilder::new(&file)
+        .is_memory_locked(false)
+        .creation_mode(CreationMode::PurgeAndCreate)
+        .size(board_size(scenario.robots))
+        .permission(Permission::OWNER_READ_WRITE)
+        .zero_memory(true)
+        .has_ownership(true)
+        .create()
+        .map_err(|e| LaunchError::Board(format!("{e:?}")))?;
+    guard._board = Some(board);
     let run_dir = namespace.dir.clone();
     let scenario_path = run_dir.join("scenario.json");
     let text = serde_json::to_string(&scenario).expect("a scenario serialises");

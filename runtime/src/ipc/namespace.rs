@@ -51,9 +51,9 @@ impl RunNamespace {
         }
     }
 
-    /// Name of the global barrier's shared memory.
-    pub fn barrier_shm(&self) -> String {
-        format!("{}barrier", self.prefix)
+    /// Name of the run's board (arrival counters and global barrier) in shared memory.
+    pub fn board_shm(&self) -> String {
+        format!("{}board", self.prefix)
     }
 
     /// Files of the run that still exist: shared memory with its prefix, and the run directory.

@@ -47,8 +47,9 @@ pub struct Scenario {
     pub diameter: usize,
     pub round_timeout_ms: u64,
     pub startup_timeout_ms: u64,
-    /// Shared memory of the global barrier, when the run uses one.
-    pub barrier_shm: Option<String>,
+    /// Shared memory of the run's board (arrival counters, global barrier).
+    pub board_shm: String,
+    pub global_barrier: bool,
 }
 
 /// A scenario that cannot be used.
@@ -144,7 +145,7 @@ impl Scenario {
             max_rounds: self.max_rounds,
             stop,
             round_timeout: Duration::from_millis(self.round_timeout_ms),
-            global_barrier: self.barrier_shm.is_some(),
+            global_barrier: self.global_barrier,
         })
     }
 
@@ -156,7 +157,8 @@ impl Scenario {
             degrees: (0..graph.robots()).map(|j| graph.degree(j)).collect(),
             payload_len: self.robots * self.tasks,
             policy: WaitPolicy::for_team(self.robots),
-            barrier_shm: self.barrier_shm.clone(),
+            board_shm: self.board_shm.clone(),
+            global_barrier: self.global_barrier,
         }
     }
 

@@ -1,12 +1,23 @@
 //! The iceoryx2 end of one agent process: one publish-subscribe service per agent carrying
 //! its round messages (`[f64]` payload + [`RoundHeader`] user header), one event service per
-//! agent to wake it, and optionally a run-wide global barrier in shared memory.
+//! agent to wake it, and a run-wide *board* in shared memory (arrival counters and the
+//! optional global barrier).
 //!
-//! Agent `i` publishes on `admm-ta/i/round`; each neighbour subscribes to it, and after
-//! publishing, `i` notifies each neighbour's `admm-ta/j/wake` service. A waiting agent checks
-//! its subscribers, spins briefly (only when it has a core of its own) and then sleeps on its
-//! listener until the deadline. The payload is written in place into the loaned sample and
-//! read in place by the neighbours: no copy on either side.
+//! Agent `i` publishes on `admm-ta/i/round`; each neighbour subscribes to it. The payload is
+//! written in place into the loaned sample and read in place by the neighbours: no copy on
+//! either side. A waiting agent checks its subscribers, spins briefly (only when it has a
+//! core of its own) and then sleeps on its listener (`admm-ta/i/wake`) until the deadline.
+//!
+//! Wake-ups: after publishing round `r`, `i` increments each neighbour `j`'s arrival counter
+//! for the parity of `r` on the board, and notifies `j` only if the count reached
+//! `deg(j) · (⌊r/2⌋ + 1)`, i.e. it was the last of `j`'s round-`r` messages to be counted.
+//! So a waiting agent is woken about once per round, not once per neighbour: on a complete
+//! graph of 50 agents sharing 2 cores, waking every agent 49 times per round cost more than
+//! the algorithm. The counts are cumulative, never reset: a message is counted after it is
+//! delivered, so a reset could race with a late count and lose a wake-up. Counts of round
+//! `r + 2` can precede late counts of round `r`, but the count that completes round `r + 2`
+//! is always one of round `r + 2` (a neighbour counts its round `r` before its round `r + 2`),
+//! so a wake-up is never lost; at worst one is spurious.
 //!
 //! Buffers: a neighbour is at most one round ahead (neighbour barrier), so each subscriber
 //! holds at most two unread samples and borrows at most two; safe overflow is off, and a
@@ -23,6 +34,7 @@ use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
 use iceoryx2_bb_posix::shared_memory::{SharedMemory, SharedMemoryBuilder};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 type Svc = ipc::Service;
@@ -53,23 +65,50 @@ pub struct IpcEndpoint {
     pub degrees: Vec<usize>,
     pub payload_len: usize,
     pub policy: WaitPolicy,
-    /// Name of the global barrier's shared memory, when the run uses one.
-    pub barrier_shm: Option<String>,
+    /// Name of the run's board (shared memory created by the launcher, [`board_size`]).
+    pub board_shm: String,
+    pub global_barrier: bool,
 }
 
-struct GlobalBarrier {
+/// Bytes of the board: the global barrier's line, then one line of two counters per agent.
+pub fn board_size(agents: usize) -> usize {
+    LINE * (agents + 1)
+}
+
+const LINE: usize = 64;
+
+/// Cumulative arrival count, for the parity of `round`, once all round-`round` messages of
+/// an agent with `degree` neighbours are counted.
+pub fn arrivals_target(degree: usize, round: u64) -> u64 {
+    degree as u64 * (round / 2 + 1)
+}
+
+/// The run-wide shared memory of arrival counters and the global barrier.
+struct Board {
     memory: SharedMemory,
-    listener: Listener<Svc>,
-    notifier: Notifier<Svc>,
-    parties: usize,
+    agents: usize,
 }
 
-impl GlobalBarrier {
-    fn state(&self) -> &CountingBarrier {
-        // SAFETY: the launcher created the segment zeroed and at least this large; the
-        // mapping is page-aligned, and every process only touches it through atomics.
+impl Board {
+    fn barrier(&self) -> &CountingBarrier {
+        // SAFETY: the launcher created the segment zeroed and `board_size` large (checked on
+        // open); the mapping is page-aligned, and every process only touches it through
+        // atomics.
         unsafe { &*(self.memory.base_address().as_ptr() as *const CountingBarrier) }
     }
+
+    /// Agent `agent`'s arrival counter for rounds of parity `round % 2`.
+    fn arrivals(&self, agent: usize, round: u64) -> &AtomicU64 {
+        debug_assert!(agent < self.agents);
+        let offset = LINE * (agent + 1) + 8 * (round % 2) as usize;
+        // SAFETY: as in `barrier`; the offset is 8-aligned and inside the segment.
+        unsafe { &*(self.memory.base_address().as_ptr().add(offset) as *const AtomicU64) }
+    }
+}
+
+struct BarrierPorts {
+    listener: Listener<Svc>,
+    notifier: Notifier<Svc>,
 }
 
 /// One agent's iceoryx2 ports.
@@ -85,7 +124,9 @@ pub struct IpcExchange {
     held: Vec<Option<RoundSample>>,
     pending: Vec<Option<RoundSample>>,
     gathered: u64,
-    barrier: Option<GlobalBarrier>,
+    degrees: Vec<usize>,
+    board: Board,
+    barrier: Option<BarrierPorts>,
     // Ports first: they must drop before the node.
     _node: Node<Svc>,
 }
@@ -189,9 +230,11 @@ impl IpcExchange {
                     .map_err(|e| err(format!("cannot create a notifier for agent {j}: {e:?}")))?,
             );
         }
-        let barrier = match &endpoint.barrier_shm {
-            None => None,
-            Some(name) => Some(open_barrier(&node, name, endpoint.degrees.len(), &err)?),
+        let board = open_board(&endpoint.board_shm, endpoint.degrees.len(), &err)?;
+        let barrier = if endpoint.global_barrier {
+            Some(open_barrier(&node, endpoint.degrees.len(), &err)?)
+        } else {
+            None
         };
         let t_ports = t0.elapsed();
         // Start-up rendezvous: all neighbours subscribed to us.
@@ -228,6 +271,8 @@ impl IpcExchange {
             held: (0..degree).map(|_| None).collect(),
             pending: (0..degree).map(|_| None).collect(),
             gathered: 0,
+            degrees: endpoint.degrees.clone(),
+            board,
             barrier,
             _node: node,
         })
@@ -329,30 +374,43 @@ impl IpcExchange {
                 ),
             ));
         }
-        for notifier in &self.notifiers {
-            notifier
-                .notify()
-                .map_err(|e| transport(i, format!("notify failed: {e:?}")))?;
+        for (notifier, &j) in self.notifiers.iter().zip(&self.neighbours) {
+            let arrived = self
+                .board
+                .arrivals(j, header.round)
+                .fetch_add(1, Ordering::AcqRel)
+                + 1;
+            if arrived == arrivals_target(self.degrees[j], header.round) {
+                notifier
+                    .notify()
+                    .map_err(|e| transport(i, format!("notify failed: {e:?}")))?;
+            }
         }
         Ok(())
     }
 }
 
-fn open_barrier(
-    node: &Node<Svc>,
+fn open_board(
     shm: &str,
-    parties: usize,
+    agents: usize,
     err: &dyn Fn(String) -> ExchangeError,
-) -> Result<GlobalBarrier, ExchangeError> {
-    let name =
-        FileName::new(shm.as_bytes()).map_err(|e| err(format!("bad barrier name: {e:?}")))?;
+) -> Result<Board, ExchangeError> {
+    let name = FileName::new(shm.as_bytes()).map_err(|e| err(format!("bad board name: {e:?}")))?;
     let memory = SharedMemoryBuilder::new(&name)
         .is_memory_locked(false)
         .open_existing(iceoryx2_bb_posix::access_mode::AccessMode::ReadWrite)
-        .map_err(|e| err(format!("cannot open the barrier memory {shm}: {e:?}")))?;
-    if memory.size() < std::mem::size_of::<CountingBarrier>() {
-        return Err(err(format!("barrier memory {shm} is too small")));
+        .map_err(|e| err(format!("cannot open the run's board {shm}: {e:?}")))?;
+    if memory.size() < board_size(agents) {
+        return Err(err(format!("the run's board {shm} is too small")));
     }
+    Ok(Board { memory, agents })
+}
+
+fn open_barrier(
+    node: &Node<Svc>,
+    parties: usize,
+    err: &dyn Fn(String) -> ExchangeError,
+) -> Result<BarrierPorts, ExchangeError> {
     let service = node
         .service_builder(
             &ServiceName::new(BARRIER_SERVICE)
@@ -364,8 +422,7 @@ fn open_barrier(
         .max_nodes(parties)
         .open_or_create()
         .map_err(|e| err(format!("cannot open the barrier service: {e:?}")))?;
-    Ok(GlobalBarrier {
-        memory,
+    Ok(BarrierPorts {
         listener: service
             .listener_builder()
             .create()
@@ -374,7 +431,6 @@ fn open_barrier(
             .notifier_builder()
             .create()
             .map_err(|e| err(format!("cannot create the barrier notifier: {e:?}")))?,
-        parties,
     })
 }
 
@@ -462,7 +518,8 @@ impl Exchange for IpcExchange {
             return Err(transport(i, "this run has no global barrier"));
         };
         let started = Instant::now();
-        match barrier.state().arrive(barrier.parties) {
+        let (state, parties) = (self.board.barrier(), self.board.agents);
+        match state.arrive(parties) {
             Arrival::Released => {
                 barrier
                     .notifier
@@ -472,14 +529,14 @@ impl Exchange for IpcExchange {
             }
             Arrival::Wait(ticket) => {
                 let spin_until = started + self.policy.spin;
-                while !barrier.state().released(ticket) {
+                while !state.released(ticket) {
                     let now = Instant::now();
                     if now >= deadline {
                         return Err(ExchangeError::BarrierTimeout {
                             agent: i,
                             round,
-                            arrived: barrier.state().arrived(),
-                            expected: barrier.parties,
+                            arrived: state.arrived(),
+                            expected: parties,
                             waited: started.elapsed(),
                         });
                     }
