@@ -47,11 +47,51 @@ fn demo_solves_its_default_problem_optimally() {
     let report = json(&admm_ta(&["demo", "--json"]));
     assert_eq!(report["robots"], 20);
     assert_eq!(report["tasks"], 20);
+    assert_eq!(report["transport"], "ipc");
     assert_eq!(report["check"]["optimal"], true);
     assert_eq!(report["converged"], true);
     let human = admm_ta(&["demo"]);
     assert!(human.status.success());
-    assert!(String::from_utf8_lossy(&human.stdout).contains("optimal cost"));
+    let text = String::from_utf8_lossy(&human.stdout);
+    assert!(text.contains("optimal cost"), "{text}");
+    assert!(text.contains("round latency (µs): p50"), "{text}");
+    assert!(text.contains("20 agent processes connected"), "{text}");
+}
+
+#[test]
+fn ipc_solve_reports_round_latency_and_start_up() {
+    let report = json(&admm_ta(&[
+        "solve",
+        "--robots",
+        "20",
+        "--tasks",
+        "20",
+        "--transport",
+        "ipc",
+        "--check",
+        "--json",
+    ]));
+    assert_eq!(report["check"]["optimal"], true);
+    assert_eq!(report["stop"], "local");
+    for component in ["round", "wait", "compute", "publish"] {
+        let p = &report["round_latency_us"][component];
+        assert!(p["p50"].as_f64().unwrap() > 0.0, "{component}: {p}");
+        assert!(p["p99"].as_f64().unwrap() >= p["p50"].as_f64().unwrap());
+        assert!(p["max"].as_f64().unwrap() >= p["p99"].as_f64().unwrap());
+    }
+    assert!(report["startup_ms"].as_f64().unwrap() > 0.0);
+    let sim = json(&admm_ta(&[
+        "solve",
+        "--robots",
+        "20",
+        "--tasks",
+        "20",
+        "--transport",
+        "sim",
+        "--json",
+    ]));
+    assert_eq!(sim["iterations"], report["iterations"]);
+    assert_eq!(sim["assignment"], report["assignment"]);
 }
 
 #[test]
