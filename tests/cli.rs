@@ -60,17 +60,14 @@ fn demo_solves_its_default_problem_optimally() {
 
 #[test]
 fn ipc_solve_reports_round_latency_and_start_up() {
-    let report = json(&admm_ta(&[
-        "solve",
-        "--robots",
-        "20",
-        "--tasks",
-        "20",
-        "--transport",
-        "ipc",
-        "--check",
-        "--json",
-    ]));
+    let solve = |flags: &str| {
+        let args: Vec<&str> = "solve --robots 20 --tasks 20 --json"
+            .split_whitespace()
+            .chain(flags.split_whitespace())
+            .collect();
+        json(&admm_ta(&args))
+    };
+    let report = solve("--transport ipc --check");
     assert_eq!(report["check"]["optimal"], true);
     assert_eq!(report["stop"], "local");
     for component in ["round", "wait", "compute", "publish"] {
@@ -80,16 +77,7 @@ fn ipc_solve_reports_round_latency_and_start_up() {
         assert!(p["max"].as_f64().unwrap() >= p["p99"].as_f64().unwrap());
     }
     assert!(report["startup_ms"].as_f64().unwrap() > 0.0);
-    let sim = json(&admm_ta(&[
-        "solve",
-        "--robots",
-        "20",
-        "--tasks",
-        "20",
-        "--transport",
-        "sim",
-        "--json",
-    ]));
+    let sim = solve("--transport sim");
     assert_eq!(sim["iterations"], report["iterations"]);
     assert_eq!(sim["assignment"], report["assignment"]);
 }

@@ -185,29 +185,21 @@ pub fn run_agent<A: ConsensusAgent + ?Sized>(
             }
             AgentStop::MaxIters => Verdict::Continue,
         };
-        if let Verdict::Certified {
-            certified_round,
-            task,
-        } = verdict
-        {
+        let finished = match verdict {
+            Verdict::Certified {
+                certified_round,
+                task,
+            } => Some((task, Some(certified_round))),
+            Verdict::Continue if round >= plan.max_rounds => Some((agent.decide(), None)),
+            Verdict::Continue => None,
+        };
+        if let Some((task, certified_round)) = finished {
             return Ok(AgentOutcome {
                 index: plan.index,
                 task,
                 rounds: round,
-                converged: true,
-                certified_round: Some(certified_round),
-                iterate_digest,
-                projection_steps,
-                latency: latency.to_buckets(),
-            });
-        }
-        if round >= plan.max_rounds {
-            return Ok(AgentOutcome {
-                index: plan.index,
-                task: agent.decide(),
-                rounds: round,
-                converged: false,
-                certified_round: None,
+                converged: certified_round.is_some(),
+                certified_round,
                 iterate_digest,
                 projection_steps,
                 latency: latency.to_buckets(),

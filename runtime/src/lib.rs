@@ -22,5 +22,6 @@ pub mod ipc;
 pub mod latency;
 pub mod sim;
 pub mod solve;
+pub mod team;
 pub mod threads;
 pub mod wait;

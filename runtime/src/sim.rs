@@ -180,9 +180,10 @@ impl<A: ConsensusAgent + Send> LockstepSim<A> {
             "one stop protocol per agent"
         );
         let mut states = vec![NeighbourState::default(); self.agents.len()];
+        let mut verdicts = Vec::with_capacity(self.agents.len());
         loop {
             let round = self.round as u64;
-            let mut verdicts = Vec::with_capacity(self.agents.len());
+            verdicts.clear();
             for (i, (agent, stop)) in self.agents.iter().zip(stops.iter_mut()).enumerate() {
                 let theirs = self.neighbours[i].iter().map(|&j| states[j]);
                 verdicts.push(

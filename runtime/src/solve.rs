@@ -2,9 +2,10 @@
 
 use crate::exchange::{AgentOutcome, AgentPlan, AgentStop, ExchangeError, payload_digest};
 use crate::ipc::launcher::{self, IpcOptions, LaunchError};
-use crate::ipc::scenario::{Scenario, ScenarioStop, Team};
+use crate::ipc::scenario::{Scenario, ScenarioStop};
 use crate::latency::LatencySummary;
 use crate::sim::{LockstepSim, RoundView, SimOutcome};
+use crate::team::Team;
 use crate::threads;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::local_stop::{LocalCertifiedStop, LocalStopError};

@@ -97,28 +97,26 @@ impl ThreadExchange<'_> {
         Ok(())
     }
 
-    /// Spins within the policy, then parks until `ready` or the deadline.
+    /// Spins within the policy, then parks until `ready`, an abort or the deadline.
     fn wait_until(
         &self,
         deadline: Instant,
         ready: impl Fn() -> bool,
     ) -> Result<bool, ExchangeError> {
-        let spin_until = Instant::now() + self.policy.spin;
-        loop {
-            if ready() {
-                return Ok(true);
-            }
-            self.check_abort()?;
-            let now = Instant::now();
-            if now >= deadline {
-                return Ok(false);
-            }
-            if now < spin_until {
-                std::hint::spin_loop();
-            } else {
+        self.policy.wait_until(
+            &mut (),
+            deadline,
+            |()| {
+                if ready() {
+                    return Ok(true);
+                }
+                self.check_abort().map(|()| false)
+            },
+            |(), deadline| {
                 self.parker.park_deadline(deadline);
-            }
-        }
+                Ok(())
+            },
+        )
     }
 }
 

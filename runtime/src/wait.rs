@@ -6,7 +6,7 @@
 //! otherwise they go to sleep on the transport's wake-up mechanism at once.
 
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// How long a waiter spins before it sleeps.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -24,6 +24,35 @@ impl WaitPolicy {
             } else {
                 Duration::ZERO
             },
+        }
+    }
+}
+
+impl WaitPolicy {
+    /// Polls `ready` until it holds: spinning within the policy, then sleeping with
+    /// `sleep(deadline)`, which must return early when woken. `Ok(false)` at the deadline.
+    /// Both closures get `state`, so a `ready` that needs it mutably can share it with `sleep`.
+    pub fn wait_until<S: ?Sized, E>(
+        self,
+        state: &mut S,
+        deadline: Instant,
+        mut ready: impl FnMut(&mut S) -> Result<bool, E>,
+        mut sleep: impl FnMut(&mut S, Instant) -> Result<(), E>,
+    ) -> Result<bool, E> {
+        let spin_until = Instant::now() + self.spin;
+        loop {
+            if ready(state)? {
+                return Ok(true);
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                return Ok(false);
+            }
+            if now < spin_until {
+                std::hint::spin_loop();
+            } else {
+                sleep(state, deadline)?;
+            }
         }
     }
 }

@@ -18,7 +18,7 @@ use iceoryx2_bb_posix::permission::Permission;
 use iceoryx2_bb_posix::shared_memory::{SharedMemory, SharedMemoryBuilder};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 /// How to run the agent processes.
 #[derive(Debug, Clone, PartialEq)]
@@ -155,7 +155,6 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
     std::fs::create_dir_all(namespace.iceoryx_root()).map_err(LaunchError::RunDirectory)?;
 
     let spawned_unix_ns = unix_ns();
-    let spawned = Instant::now();
     for index in 0..scenario.robots {
         let log =
             std::fs::File::create(log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
@@ -176,7 +175,6 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
             })?;
         guard.children.push(Some(child));
     }
-    let _ = spawned;
 
     // Supervise: reap children as they exit; the first failure ends the run.
     let mut running = scenario.robots;

@@ -5,6 +5,7 @@
 
 use crate::exchange::{AgentPlan, AgentStop};
 use crate::ipc::transport::IpcEndpoint;
+use crate::team::Team;
 use crate::wait::WaitPolicy;
 use admm_ta_agents::local_stop::LocalCertifiedStop;
 use admm_ta_agents::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
@@ -75,15 +76,6 @@ pub enum ScenarioError {
     BadIndex { index: usize, robots: usize },
     #[error("scenario is inconsistent: {0}")]
     Inconsistent(String),
-}
-
-/// What the agents share: the problem, the graph and the algorithm's settings.
-pub struct Team<'a> {
-    pub problem: &'a TaskAssignmentProblem,
-    pub graph: &'a Graph,
-    pub settings: PrimalSettings,
-    pub epsilon: Option<f64>,
-    pub seed: u64,
 }
 
 impl Scenario {
@@ -180,26 +172,5 @@ impl Scenario {
             seed: self.seed,
         };
         Ok(team.agent(index))
-    }
-}
-
-impl Team<'_> {
-    /// Robot `i`'s agent, with its own (optionally perturbed) costs.
-    pub fn agent(&self, i: usize) -> PrimalAgent {
-        let costs =
-            admm_ta_agents::ties::perturbed_row(self.problem.costs(), i, self.epsilon, self.seed);
-        PrimalAgent::new(
-            i,
-            costs,
-            self.problem.robots(),
-            self.problem.case(),
-            self.graph.degree(i),
-            self.settings,
-        )
-    }
-
-    /// Every robot's agent.
-    pub fn agents(&self) -> Vec<PrimalAgent> {
-        (0..self.problem.robots()).map(|i| self.agent(i)).collect()
     }
 }

@@ -466,30 +466,27 @@ impl Exchange for IpcExchange {
 
     fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
         let started = Instant::now();
-        let spin_until = started + self.policy.spin;
-        while !self.all_held(round)? {
-            let now = Instant::now();
-            if now >= deadline {
-                let missing = (0..self.neighbours.len())
-                    .filter(|&k| {
-                        self.held[k]
-                            .as_ref()
-                            .is_none_or(|s| s.user_header().round != round)
-                    })
-                    .map(|k| self.neighbours[k])
-                    .collect();
-                return Err(ExchangeError::Timeout {
-                    agent: self.index,
-                    round,
-                    missing,
-                    waited: started.elapsed(),
-                });
-            }
-            if now < spin_until {
-                std::hint::spin_loop();
-            } else {
-                Self::sleep_on(&self.listener, self.index, deadline)?;
-            }
+        let held = self.policy.wait_until(
+            self,
+            deadline,
+            |s| s.all_held(round),
+            |s, deadline| Self::sleep_on(&s.listener, s.index, deadline),
+        )?;
+        if !held {
+            let missing = (0..self.neighbours.len())
+                .filter(|&k| {
+                    self.held[k]
+                        .as_ref()
+                        .is_none_or(|s| s.user_header().round != round)
+                })
+                .map(|k| self.neighbours[k])
+                .collect();
+            return Err(ExchangeError::Timeout {
+                agent: self.index,
+                round,
+                missing,
+                waited: started.elapsed(),
+            });
         }
         self.gathered = round;
         Ok(())
@@ -528,25 +525,23 @@ impl Exchange for IpcExchange {
                 Ok(())
             }
             Arrival::Wait(ticket) => {
-                let spin_until = started + self.policy.spin;
-                while !state.released(ticket) {
-                    let now = Instant::now();
-                    if now >= deadline {
-                        return Err(ExchangeError::BarrierTimeout {
-                            agent: i,
-                            round,
-                            arrived: state.arrived(),
-                            expected: parties,
-                            waited: started.elapsed(),
-                        });
-                    }
-                    if now < spin_until {
-                        std::hint::spin_loop();
-                    } else {
-                        Self::sleep_on(&barrier.listener, i, deadline)?;
-                    }
+                let released = self.policy.wait_until(
+                    &mut (),
+                    deadline,
+                    |()| Ok(state.released(ticket)),
+                    |(), deadline| Self::sleep_on(&barrier.listener, i, deadline),
+                )?;
+                if released {
+                    Ok(())
+                } else {
+                    Err(ExchangeError::BarrierTimeout {
+                        agent: i,
+                        round,
+                        arrived: state.arrived(),
+                        expected: parties,
+                        waited: started.elapsed(),
+                    })
                 }
-                Ok(())
             }
         }
     }

@@ -1,0 +1,36 @@
+//! A team: every robot's agent built the same way by every transport, so that they compute
+//! with exactly the same numbers.
+
+use admm_ta_agents::primal::{PrimalAgent, PrimalSettings};
+use admm_ta_agents::problem::TaskAssignmentProblem;
+use admm_ta_topologies::Graph;
+
+/// What the agents share: the problem, the graph and the algorithm's settings.
+pub struct Team<'a> {
+    pub problem: &'a TaskAssignmentProblem,
+    pub graph: &'a Graph,
+    pub settings: PrimalSettings,
+    pub epsilon: Option<f64>,
+    pub seed: u64,
+}
+
+impl Team<'_> {
+    /// Robot `i`'s agent, with its own (optionally perturbed) costs.
+    pub fn agent(&self, i: usize) -> PrimalAgent {
+        let costs =
+            admm_ta_agents::ties::perturbed_row(self.problem.costs(), i, self.epsilon, self.seed);
+        PrimalAgent::new(
+            i,
+            costs,
+            self.problem.robots(),
+            self.problem.case(),
+            self.graph.degree(i),
+            self.settings,
+        )
+    }
+
+    /// Every robot's agent.
+    pub fn agents(&self) -> Vec<PrimalAgent> {
+        (0..self.problem.robots()).map(|i| self.agent(i)).collect()
+    }
+}
