@@ -80,20 +80,32 @@ struct SolveArgs {
     /// complete | chain | ring | star | grid | random:P | geometric:R | FILE.toml
     #[arg(long, default_value = "complete")]
     topology: String,
+    /// primal (Algorithm 1, exchanges m×n matrices), dual (Algorithm 2, exchanges n+m
+    /// multipliers) or inexact-dual (proximal-gradient x-update, no inner solve).
     #[arg(long, value_enum, default_value = "primal")]
     method: MethodArg,
     #[arg(long, value_enum, default_value = "sim")]
     transport: TransportArg,
-    /// ADMM penalty ρ (default: the scale-free rule 0.5·spread·√((n−1)/d̄)/(2·d̄·n), d̄ the mean degree).
+    /// ADMM penalty ρ: auto (scale-free rule from the cost spread and the graph's mean
+    /// degree d̄: primal 0.5·spread·√((n−1)/d̄)/(2·d̄·n), dual 5/(spread·d̄), inexact dual
+    /// 10/(spread·d̄)) or a positive number.
+    #[arg(long, default_value = "auto", allow_negative_numbers = true)]
+    rho: String,
+    /// Shrink ρ 0.5% per round down to 0.3 of its initial value (every agent at the same
+    /// round).
+    #[arg(long)]
+    adaptive_rho: bool,
+    /// Inexact dual: g of the proximal weight γ = g·(m+1)/(2·|N(i)|·ρ) (default 0.5).
     #[arg(long, allow_negative_numbers = true)]
-    rho: Option<f64>,
+    gamma_factor: Option<f64>,
     #[arg(long, default_value_t = 5000)]
     max_iters: usize,
     /// local: every robot checks its own optimality certificate and agreement with its
     /// neighbours, and a header protocol stops all robots at the same round (any transport);
-    /// certified: the same certificate checked centrally (sim); agreement: all robots agree
-    /// on one near-integral assignment for --stop-rounds rounds (sim); max-iters: always run
-    /// --max-iters rounds.
+    /// certified: the same certificate checked centrally (sim, primal); agreement: all robots
+    /// agree on one near-integral assignment for --stop-rounds rounds (sim, primal); oracle:
+    /// the paper's criterion, the first round whose relaxed objective is within 0.1% of the
+    /// centralized optimum (sim, experiments only); max-iters: always run --max-iters rounds.
     #[arg(long, value_enum, default_value = "local")]
     stop: StopArg,
     #[arg(long, default_value_t = 10)]
@@ -135,6 +147,18 @@ enum CaseArg {
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum MethodArg {
     Primal,
+    Dual,
+    InexactDual,
+}
+
+impl MethodArg {
+    fn method(self) -> Method {
+        match self {
+            Self::Primal => Method::Primal,
+            Self::Dual => Method::Dual,
+            Self::InexactDual => Method::InexactDual,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -150,6 +174,7 @@ enum StopArg {
     Agreement,
     Certified,
     MaxIters,
+    Oracle,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -203,17 +228,18 @@ fn run_solve(args: SolveArgs) -> Result<()> {
         },
     };
     let config = SolveConfig {
-        method: match args.method {
-            MethodArg::Primal => Method::Primal,
-        },
+        method: args.method.method(),
         transport: transport(args.transport),
-        rho: args.rho,
+        rho: parse_rho(&args.rho)?,
+        adaptive_rho: args.adaptive_rho,
+        gamma_factor: args.gamma_factor,
         max_iters: args.max_iters,
         stop: match args.stop {
             StopArg::Local => StopRule::Local,
             StopArg::Agreement => StopRule::Agreement,
             StopArg::Certified => StopRule::Certified,
             StopArg::MaxIters => StopRule::MaxIters,
+            StopArg::Oracle => StopRule::Oracle,
         },
         stop_rounds: args.stop_rounds,
         seed: args.seed,
@@ -237,6 +263,17 @@ fn transport(arg: TransportArg) -> Transport {
         TransportArg::Sim => Transport::Sim,
         TransportArg::Threads => Transport::Threads,
         TransportArg::Ipc => Transport::Ipc,
+    }
+}
+
+/// `auto` (None) or a positive finite ρ.
+fn parse_rho(text: &str) -> Result<Option<f64>> {
+    if text == "auto" {
+        return Ok(None);
+    }
+    match text.parse::<f64>() {
+        Ok(rho) if rho > 0.0 && rho.is_finite() => Ok(Some(rho)),
+        _ => bail!("--rho must be auto or a positive number, got '{text}'"),
     }
 }
 

@@ -64,4 +64,7 @@ pub trait ConsensusAgent {
     /// robots round to the same assignment, its cost exceeds the optimum by at most `Σ_i s_i`
     /// (`∞` when there is no such certificate). Costs one `m × n` assignment problem.
     fn certificate_slack(&self) -> f64;
+    /// The robot's own relaxed assignment vector `x_i ∈ [0, 1]^m` (its own column), for
+    /// observers such as the paper's "within 0.1% of the optimum" criterion.
+    fn own_column(&self) -> &[f64];
 }

@@ -4,9 +4,11 @@
 //! drive the agents through [`agent::ConsensusAgent`].
 
 pub mod agent;
+pub mod dual;
 pub mod general;
 pub mod local_stop;
 pub mod lsap;
+pub mod method;
 pub mod oracle;
 pub mod primal;
 pub mod problem;
@@ -15,3 +17,4 @@ pub mod rho;
 pub mod rounding;
 pub mod stopping;
 pub mod ties;
+pub mod two_block;

@@ -324,4 +324,8 @@ impl ConsensusAgent for PrimalAgent {
     fn certificate_slack(&self) -> f64 {
         PrimalAgent::certificate_slack(self)
     }
+
+    fn own_column(&self) -> &[f64] {
+        &self.x[self.index * self.tasks..(self.index + 1) * self.tasks]
+    }
 }

@@ -14,6 +14,7 @@
 //! rounds to the optimal assignment from 246 to 148 (15×15 chain, 20 seeds), from ≈1450 (half
 //! the runs within 3000 rounds) to 561 (50×30 chain) and from 259 to 132 (50×30, random:0.1).
 
+use crate::method::Method;
 use crate::problem::CostMatrix;
 
 /// The `0.5` of the rule.
@@ -25,6 +26,65 @@ pub fn default_rho(costs: &CostMatrix, mean_degree: f64) -> f64 {
     let degree = mean_degree.max(1.0);
     let density_correction = ((n - 1.0).max(1.0) / degree).sqrt();
     RHO_FACTOR * costs.spread() * density_correction / (2.0 * degree * n)
+}
+
+/// `c` of the dual methods' rule `ρ = c / (spread · d̄)`: their multipliers are prices in
+/// cost units, so ρ scales like 1/cost. 20×20 complete graph, uniform costs, 20 seeds
+/// (`runtime/examples/dual_tuning.rs`), rounds to within 0.1% / to the optimal assignment /
+/// to the certificate: exact dual c = 3: 70 / 110 / 405, c = 5: 84 / 141 / 397,
+/// c = 10: 136 / 159 / 317, c = 20: 253 / 245 / 373; inexact (γ factor 0.5) c = 3:
+/// 130 / 184 / 707 (5 of 20 not certified within 3000 rounds), c = 5: 116 / 200 / 756 (3),
+/// c = 10: 143 / 258 / 708 (1); with γ factor 0.15, c = 20: 257 / 275 / 447 and c = 40:
+/// 471 / 478 / 606.
+pub const DUAL_RHO_FACTOR: f64 = 5.0;
+/// The inexact dual's `c` (it needs a larger ρ than the exact one to stay stable).
+pub const INEXACT_DUAL_RHO_FACTOR: f64 = 10.0;
+
+/// The default ρ of `method` for these costs on a graph with this mean degree.
+pub fn default_rho_for(method: Method, costs: &CostMatrix, mean_degree: f64) -> f64 {
+    let dual = |factor: f64| factor / (costs.spread() * mean_degree.max(1.0));
+    match method {
+        Method::Primal => default_rho(costs, mean_degree),
+        Method::Dual => dual(DUAL_RHO_FACTOR),
+        Method::InexactDual => dual(INEXACT_DUAL_RHO_FACTOR),
+    }
+}
+
+/// The `--adaptive-rho` schedule: `ρ_k = ρ_0 · max(FLOOR, DECAY^k)`.
+///
+/// A penalty that every robot changes at the same round keeps the consensus constraints
+/// consistent (all robots' `Q`/`p` stay antisymmetric over the edges, since they are kept
+/// unscaled), so the schedule is a pure function of the round, computed by each robot:
+/// nothing is exchanged. Residual balancing (Boyd et al. §3.4.1) would need the team's
+/// residuals, i.e. a max-consensus over the graph diameter before every change; the schedule
+/// captures what it does here (large ρ early for fast agreement, smaller later so the costs
+/// dominate; ρ shrinking 0.5% per round to 0.3 ρ_0 took the primal from 120 to 93 rounds to
+/// the optimal assignment at 20×20, `runtime/examples/rho_schedule.rs`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RhoSchedule {
+    pub initial: f64,
+    pub decay: f64,
+    pub floor: f64,
+}
+
+impl RhoSchedule {
+    /// Shrink by 0.5% per round down to 0.3 of the initial ρ.
+    pub const DECAY: f64 = 0.995;
+    pub const FLOOR: f64 = 0.3;
+
+    pub fn new(initial: f64) -> Self {
+        Self {
+            initial,
+            decay: Self::DECAY,
+            floor: Self::FLOOR,
+        }
+    }
+
+    /// ρ of step `round` (0 for the first step).
+    pub fn rho(&self, round: u64) -> f64 {
+        let exponent = round.min(i32::MAX as u64) as i32;
+        self.initial * self.decay.powi(exponent).max(self.floor)
+    }
 }
 
 #[cfg(test)]
@@ -42,5 +102,19 @@ mod tests {
         .unwrap();
         let ratio = default_rho(&scaled, 9.0) / default_rho(&costs, 9.0);
         assert!((ratio - 250.0).abs() < 1e-9);
+        for method in [Method::Dual, Method::InexactDual] {
+            let ratio =
+                default_rho_for(method, &costs, 9.0) / default_rho_for(method, &scaled, 9.0);
+            assert!((ratio - 250.0).abs() < 1e-9, "dual ρ scales like 1/cost");
+        }
+    }
+
+    #[test]
+    fn schedule_decays_to_its_floor() {
+        let s = RhoSchedule::new(2.0);
+        assert_eq!(s.rho(0), 2.0);
+        assert!((s.rho(10) - 2.0 * 0.995f64.powi(10)).abs() < 1e-15);
+        assert_eq!(s.rho(100_000), 0.6);
+        assert!(s.rho(200) < s.rho(100));
     }
 }

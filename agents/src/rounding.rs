@@ -30,15 +30,19 @@ pub fn local_assignment(
 /// Per-column argmax of `x` (first on ties) into `out` (one task per robot).
 pub fn argmax_assignment(x: &[f64], tasks: usize, out: &mut [usize]) {
     for (j, slot) in out.iter_mut().enumerate() {
-        let column = &x[j * tasks..(j + 1) * tasks];
-        let mut best = 0;
-        for (t, v) in column.iter().enumerate() {
-            if *v > column[best] {
-                best = t;
-            }
-        }
-        *slot = best;
+        *slot = argmax(&x[j * tasks..(j + 1) * tasks]);
     }
+}
+
+/// Index of the largest entry (the first on ties; 0 for an empty slice).
+pub fn argmax(column: &[f64]) -> usize {
+    let mut best = 0;
+    for (t, v) in column.iter().enumerate() {
+        if *v > column[best] {
+            best = t;
+        }
+    }
+    best
 }
 
 /// Whether `assignment` covers the tasks as `case` requires; `load` is scratch of length

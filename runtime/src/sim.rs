@@ -30,6 +30,19 @@ pub struct RoundView<'a> {
     /// Every agent's payload, concatenated (`payload_len` each).
     pub payloads: &'a [f64],
     pub payload_len: usize,
+    /// The agents' own relaxed columns.
+    pub columns: &'a dyn OwnColumns,
+}
+
+/// Each robot's own relaxed assignment vector `x_i` (whatever its method's payload is).
+pub trait OwnColumns {
+    fn own_column(&self, robot: usize) -> &[f64];
+}
+
+impl<A: ConsensusAgent> OwnColumns for Vec<A> {
+    fn own_column(&self, robot: usize) -> &[f64] {
+        self[robot].own_column()
+    }
 }
 
 /// How a simulation ended.
@@ -235,6 +248,7 @@ impl<A: ConsensusAgent + Send> LockstepSim<A> {
             reports: &self.reports,
             payloads: &self.current,
             payload_len: self.len,
+            columns: &self.agents,
         }
     }
 

@@ -9,11 +9,13 @@ use crate::team::Team;
 use crate::threads;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::local_stop::{LocalCertifiedStop, LocalStopError};
+use admm_ta_agents::method::{AgentSettings, MethodAgent};
 use admm_ta_agents::oracle::{self, OptimalAssignment};
 use admm_ta_agents::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
 use admm_ta_agents::problem::TaskAssignmentProblem;
+use admm_ta_agents::rho::{self, RhoSchedule};
 use admm_ta_agents::stopping::{AgreementStop, AgreementStreak, NeverStop};
-use admm_ta_agents::{rho, rounding, ties};
+use admm_ta_agents::{rounding, ties};
 use admm_ta_topologies::Graph;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -22,23 +24,7 @@ use std::time::{Duration, Instant};
 /// Agent state plus round buffers above this many bytes is refused up front.
 pub const MEMORY_LIMIT_BYTES: f64 = 8.0 * (1u64 << 30) as f64;
 
-/// The consensus algorithm.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// Primal consensus ADMM (Algorithm 1).
-    #[default]
-    Primal,
-}
-
-impl Method {
-    /// The name used on the command line and in JSON.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Primal => "primal",
-        }
-    }
-}
+pub use admm_ta_agents::method::Method;
 
 /// What carries the messages.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
@@ -82,6 +68,22 @@ pub enum StopRule {
     Local,
     /// Run to the iteration limit.
     MaxIters,
+    /// The paper's criterion, for experiments only: stop at the first round whose relaxed
+    /// objective (the robots' own columns) is within 0.1% of the centralized optimum. It
+    /// needs the optimum, which no robot has (sim only).
+    Oracle,
+}
+
+impl StopRule {
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Agreement => "agreement",
+            Self::Certified => "certified",
+            Self::Local => "local",
+            Self::MaxIters => "max-iters",
+            Self::Oracle => "oracle",
+        }
+    }
 }
 
 /// Everything a solve needs besides the problem and the graph.
@@ -89,8 +91,13 @@ pub enum StopRule {
 pub struct SolveConfig {
     pub method: Method,
     pub transport: Transport,
-    /// `None`: the scale-free default of [`rho::default_rho`].
+    /// `None`: the scale-free default of [`rho::default_rho_for`].
     pub rho: Option<f64>,
+    /// Anneal ρ by the schedule of [`rho::RhoSchedule`] (every agent applies it at the same
+    /// round).
+    pub adaptive_rho: bool,
+    /// `g` of the inexact dual's `γ = g (m+1)/(2dρ)`; `None`: the default.
+    pub gamma_factor: Option<f64>,
     pub max_iters: usize,
     pub stop: StopRule,
     pub stop_rounds: usize,
@@ -116,6 +123,8 @@ impl Default for SolveConfig {
             method: Method::Primal,
             transport: Transport::Sim,
             rho: None,
+            adaptive_rho: false,
+            gamma_factor: None,
             max_iters: 5000,
             stop: StopRule::Local,
             stop_rounds: 10,
@@ -154,6 +163,12 @@ pub enum SolveError {
     SizeMismatch { graph: usize, problem: usize },
     #[error("ρ must be a positive finite number, got {0}")]
     BadRho(f64),
+    #[error("the γ factor must be a positive finite number, got {0}")]
+    BadGamma(f64),
+    #[error(
+        "--stop {stop} reads every robot's m×n matrix: it works with --method primal only (use --stop local, oracle or max-iters)"
+    )]
+    PrimalOnlyStop { stop: &'static str },
     #[error("--max-iters must be at least 1")]
     NoIterations,
     #[error(
@@ -251,42 +266,56 @@ pub fn solve(
             gib: bytes / (1u64 << 30) as f64,
         });
     }
-    let rho = config
-        .rho
-        .unwrap_or_else(|| rho::default_rho(problem.costs(), graph.mean_degree()));
+    let rho = config.rho.unwrap_or_else(|| {
+        rho::default_rho_for(config.method, problem.costs(), graph.mean_degree())
+    });
     if !(rho > 0.0 && rho.is_finite()) {
         return Err(SolveError::BadRho(rho));
     }
+    let gamma_factor = config
+        .gamma_factor
+        .unwrap_or(admm_ta_agents::dual::DEFAULT_GAMMA_FACTOR);
+    if !(gamma_factor > 0.0 && gamma_factor.is_finite()) {
+        return Err(SolveError::BadGamma(gamma_factor));
+    }
     let epsilon = ties::epsilon(problem.costs(), config.perturbation);
-    let settings = PrimalSettings {
+    let tolerance = 1e-9 * problem.costs().spread() * n as f64;
+    let diameter = graph.diameter().unwrap_or(0);
+    let settings = AgentSettings {
         projection: config.projection,
-        ..PrimalSettings::new(rho)
+        gamma_factor,
+        ..AgentSettings::new(config.method, rho, diameter, tolerance)
     };
+    let schedule = config.adaptive_rho.then(|| RhoSchedule::new(rho));
     let team = Team {
         problem,
         graph,
         settings,
         epsilon,
         seed: config.seed,
+        schedule,
     };
-    let optimum = config
-        .check
+    let optimum = (config.check || config.stop == StopRule::Oracle)
         .then(|| oracle::solve(problem).expect("validated costs have an optimum"));
-    let tolerance = 1e-9 * problem.costs().spread() * n as f64;
-    let diameter = graph.diameter().unwrap_or(0);
     let local_stop = || LocalCertifiedStop::new(diameter, n, tolerance);
     if config.global_barrier && config.transport == Transport::Sim {
         return Err(SolveError::BarrierNeedsAgents);
     }
     if config.transport != Transport::Sim
-        && matches!(config.stop, StopRule::Certified | StopRule::Agreement)
+        && matches!(
+            config.stop,
+            StopRule::Certified | StopRule::Agreement | StopRule::Oracle
+        )
     {
         return Err(SolveError::CentralStop {
-            stop: if config.stop == StopRule::Certified {
-                "certified"
-            } else {
-                "agreement"
-            },
+            stop: config.stop.name(),
+        });
+    }
+    if config.method != Method::Primal
+        && matches!(config.stop, StopRule::Certified | StopRule::Agreement)
+    {
+        return Err(SolveError::PrimalOnlyStop {
+            stop: config.stop.name(),
         });
     }
     let started = Instant::now();
@@ -312,6 +341,16 @@ pub fn solve(
                 StopRule::MaxIters => sim.run(config.max_iters, &mut NeverStop, &mut observer),
                 StopRule::Certified => {
                     run_until_certified(&mut sim, config.max_iters, tolerance, &mut observer)
+                }
+                StopRule::Oracle => {
+                    let optimal_cost = optimum.as_ref().expect("oracle stop has the optimum").cost;
+                    run_until_within(
+                        &mut sim,
+                        problem,
+                        optimal_cost,
+                        config.max_iters,
+                        &mut observer,
+                    )
                 }
                 StopRule::Local => {
                     let mut stops = vec![local_stop()?; n];
@@ -384,7 +423,10 @@ pub fn solve(
                     .collect(),
                 edges: graph.edges().collect(),
                 topology: graph.name().to_string(),
+                method: config.method,
                 rho_bits: rho.to_bits(),
+                gamma_factor_bits: gamma_factor.to_bits(),
+                adaptive_rho: config.adaptive_rho,
                 epsilon_bits: epsilon.map(f64::to_bits),
                 seed: config.seed,
                 qp_projection: config.projection == ProjectionPath::Qp,
@@ -502,14 +544,18 @@ pub fn primal_team(
     epsilon: Option<f64>,
     seed: u64,
 ) -> Vec<PrimalAgent> {
-    Team {
-        problem,
-        graph,
-        settings,
-        epsilon,
-        seed,
-    }
-    .agents()
+    (0..problem.robots())
+        .map(|i| {
+            PrimalAgent::new(
+                i,
+                ties::perturbed_row(problem.costs(), i, epsilon, seed),
+                problem.robots(),
+                problem.case(),
+                graph.degree(i),
+                settings,
+            )
+        })
+        .collect()
 }
 
 /// Rounds after which an agreement is first certified, and the spacing of later checks
@@ -520,7 +566,7 @@ const CERTIFY_EVERY: usize = 5;
 /// Steps until the robots agree on one assignment whose certificate slacks sum to at most
 /// `tolerance` (see [`PrimalAgent::certificate_slack`]), or `max_rounds`.
 fn run_until_certified(
-    sim: &mut LockstepSim<PrimalAgent>,
+    sim: &mut LockstepSim<MethodAgent>,
     max_rounds: usize,
     tolerance: f64,
     observer: &mut dyn FnMut(&RoundView<'_>),
@@ -535,7 +581,7 @@ fn run_until_certified(
             let slack: f64 = sim
                 .agents()
                 .iter()
-                .map(PrimalAgent::certificate_slack)
+                .map(ConsensusAgent::certificate_slack)
                 .sum();
             if slack <= tolerance {
                 return SimOutcome {
@@ -549,6 +595,61 @@ fn run_until_certified(
         rounds: sim.round(),
         stopped: false,
     }
+}
+
+/// Steps until the robots' own columns have a relaxed objective within 0.1% of
+/// `optimal_cost` (the paper's criterion), or `max_rounds`.
+fn run_until_within(
+    sim: &mut LockstepSim<MethodAgent>,
+    problem: &TaskAssignmentProblem,
+    optimal_cost: f64,
+    max_rounds: usize,
+    observer: &mut dyn FnMut(&RoundView<'_>),
+) -> SimOutcome {
+    while sim.round() < max_rounds {
+        sim.step_round();
+        let view = sim.view();
+        observer(&view);
+        if within_0_1pct(relaxed_objective(problem, &view), optimal_cost) {
+            return SimOutcome {
+                rounds: sim.round(),
+                stopped: true,
+            };
+        }
+    }
+    SimOutcome {
+        rounds: sim.round(),
+        stopped: false,
+    }
+}
+
+/// `Σ_i α_iᵀ x_i` over the robots' own relaxed columns.
+fn relaxed_objective(problem: &TaskAssignmentProblem, view: &RoundView<'_>) -> f64 {
+    (0..problem.robots())
+        .map(|i| {
+            view.columns
+                .own_column(i)
+                .iter()
+                .zip(problem.costs().row(i))
+                .map(|(x, a)| x * a)
+                .sum::<f64>()
+        })
+        .sum()
+}
+
+/// `(value − optimum)/|optimum|` (absolute difference when the optimum is 0).
+fn relative_gap(value: f64, optimum: f64) -> f64 {
+    let diff = value - optimum;
+    if optimum != 0.0 {
+        diff / optimum.abs()
+    } else {
+        diff
+    }
+}
+
+/// The paper's criterion: within 0.1% of the optimum.
+fn within_0_1pct(value: f64, optimum: f64) -> bool {
+    relative_gap(value, optimum).abs() <= 1e-3
 }
 
 /// Follows the run against the optimum (only when checking).
@@ -574,24 +675,14 @@ impl<'p> Tracer<'p> {
     }
 
     fn relative_gap(&self, cost: f64) -> f64 {
-        let scale = self.optimal_cost.abs();
-        let diff = cost - self.optimal_cost;
-        if scale > 0.0 { diff / scale } else { diff }
+        relative_gap(cost, self.optimal_cost)
     }
 
     fn observe(&mut self, view: &RoundView<'_>) {
-        let m = self.problem.tasks();
-        let mut relaxed = 0.0;
         for i in 0..self.problem.robots() {
-            let own = &view.payloads[i * view.payload_len + i * m..][..m];
-            relaxed += own
-                .iter()
-                .zip(self.problem.costs().row(i))
-                .map(|(x, a)| x * a)
-                .sum::<f64>();
-            rounding::argmax_assignment(own, m, &mut self.decisions[i..i + 1]);
+            self.decisions[i] = rounding::argmax(view.columns.own_column(i));
         }
-        if self.relative_gap(relaxed).abs() <= 1e-3 {
+        if within_0_1pct(relaxed_objective(self.problem, view), self.optimal_cost) {
             self.first_within.get_or_insert(view.round);
             self.settled_within.get_or_insert(view.round);
         } else {

@@ -8,8 +8,10 @@ use crate::ipc::transport::IpcEndpoint;
 use crate::team::Team;
 use crate::wait::WaitPolicy;
 use admm_ta_agents::local_stop::LocalCertifiedStop;
-use admm_ta_agents::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
+use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
+use admm_ta_agents::primal::ProjectionPath;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_agents::rho::RhoSchedule;
 use admm_ta_topologies::Graph;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -39,7 +41,11 @@ pub struct Scenario {
     pub cost_bits: Vec<u64>,
     pub edges: Vec<(usize, usize)>,
     pub topology: String,
+    pub method: Method,
     pub rho_bits: u64,
+    pub gamma_factor_bits: u64,
+    /// Follow the `--adaptive-rho` schedule from `rho_bits`.
+    pub adaptive_rho: bool,
     pub epsilon_bits: Option<u64>,
     pub seed: u64,
     pub qp_projection: bool,
@@ -112,14 +118,24 @@ impl Scenario {
             .map_err(|e| ScenarioError::Inconsistent(e.to_string()))
     }
 
-    pub fn settings(&self) -> PrimalSettings {
-        PrimalSettings {
+    pub fn settings(&self) -> AgentSettings {
+        let tolerance = match self.stop {
+            ScenarioStop::Local { tolerance_bits } => f64::from_bits(tolerance_bits),
+            ScenarioStop::MaxIters => f64::INFINITY,
+        };
+        AgentSettings {
             projection: if self.qp_projection {
                 ProjectionPath::Qp
             } else {
                 ProjectionPath::Fast
             },
-            ..PrimalSettings::new(f64::from_bits(self.rho_bits))
+            gamma_factor: f64::from_bits(self.gamma_factor_bits),
+            ..AgentSettings::new(
+                self.method,
+                f64::from_bits(self.rho_bits),
+                self.diameter,
+                tolerance,
+            )
         }
     }
 
@@ -147,7 +163,7 @@ impl Scenario {
             index,
             neighbours: graph.neighbours(index).to_vec(),
             degrees: (0..graph.robots()).map(|j| graph.degree(j)).collect(),
-            payload_len: self.robots * self.tasks,
+            payload_len: self.method.payload_len(self.robots, self.tasks),
             policy: WaitPolicy::for_team(self.robots),
             board_shm: self.board_shm.clone(),
             global_barrier: self.global_barrier,
@@ -155,7 +171,7 @@ impl Scenario {
     }
 
     /// Builds agent `index` exactly as the other transports do.
-    pub fn agent(&self, index: usize) -> Result<PrimalAgent, ScenarioError> {
+    pub fn agent(&self, index: usize) -> Result<MethodAgent, ScenarioError> {
         if index >= self.robots {
             return Err(ScenarioError::BadIndex {
                 index,
@@ -170,6 +186,9 @@ impl Scenario {
             settings: self.settings(),
             epsilon: self.epsilon_bits.map(f64::from_bits),
             seed: self.seed,
+            schedule: self
+                .adaptive_rho
+                .then(|| RhoSchedule::new(f64::from_bits(self.rho_bits))),
         };
         Ok(team.agent(index))
     }
