@@ -47,6 +47,11 @@ enum Command {
         #[arg(long)]
         scenario: PathBuf,
     },
+    /// Reproduce an experiment of the paper.
+    Experiment {
+        #[command(subcommand)]
+        experiment: Experiment,
+    },
     /// Print a generated topology in the topology file format (TOML).
     Topology {
         /// complete | chain | ring | star | grid | random:P | geometric:R
@@ -56,6 +61,31 @@ enum Command {
         robots: usize,
         #[arg(long, default_value_t = 0)]
         seed: u64,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+enum Experiment {
+    /// Table 1: iterations of primal / dual / inexact dual at 20×20 on the complete graph
+    /// (paper: 28 / 159 / 387), for uniform costs in [0,1) and shifted to [1,2).
+    Table1 {
+        #[arg(long, default_value_t = 50)]
+        trials: u64,
+        /// Directory for table1.json (created if missing).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Run every method with the --adaptive-rho schedule.
+        #[arg(long)]
+        adaptive_rho: bool,
+        /// Multiply every method's default ρ by this factor (for ρ studies).
+        #[arg(long, default_value_t = 1.0)]
+        rho_scale: f64,
+        /// Round limit of every run.
+        #[arg(long, default_value_t = 3000)]
+        max_iters: usize,
+        /// Print the JSON instead of the table.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -193,6 +223,7 @@ pub fn run(cli: Cli) -> Result<()> {
             scenario,
         } => admm_ta_runtime::ipc::agent_process::run(&run, index, &scenario)
             .map_err(|e| anyhow::anyhow!("agent {index}: {e}")),
+        Command::Experiment { experiment } => run_experiment(experiment),
         Command::Topology { kind, robots, seed } => {
             let spec: TopologySpec = kind.parse()?;
             print!("{}", topology_file::to_toml(&spec.build(robots, seed)?));
@@ -273,7 +304,7 @@ fn parse_rho(text: &str) -> Result<Option<f64>> {
     }
     match text.parse::<f64>() {
         Ok(rho) if rho > 0.0 && rho.is_finite() => Ok(Some(rho)),
-        _ => bail!("--rho must be auto or a positive number, got '{text}'"),
+        _ => bail!("--rho (ρ) must be auto or a positive number, got '{text}'"),
     }
 }
 
@@ -306,4 +337,58 @@ fn run_demo(json: bool, transport_arg: TransportArg) -> Result<()> {
     }
     let report = solve::solve(&problem, &graph, &config)?;
     output::print_report(&report, json)
+}
+
+fn run_experiment(experiment: Experiment) -> Result<()> {
+    use admm_ta_bench::table1;
+    match experiment {
+        Experiment::Table1 {
+            trials,
+            out,
+            adaptive_rho,
+            rho_scale,
+            max_iters,
+            json,
+        } => {
+            if trials == 0 || max_iters == 0 {
+                bail!("--trials and --max-iters must be at least 1");
+            }
+            if !(rho_scale > 0.0 && rho_scale.is_finite()) {
+                bail!("--rho-scale must be a positive number, got {rho_scale}");
+            }
+            let config = table1::Table1Config {
+                trials,
+                adaptive_rho,
+                rho_scale,
+                max_iters,
+                ..table1::Table1Config::default()
+            };
+            let progress = |done: usize, total: usize| {
+                if !json {
+                    eprint!("\rtable1: {done}/{total} runs");
+                    if done == total {
+                        eprintln!();
+                    }
+                }
+            };
+            let table = table1::run(&config, &progress)?;
+            let text = serde_json::to_string_pretty(&table)?;
+            if let Some(dir) = out {
+                std::fs::create_dir_all(&dir)
+                    .with_context(|| format!("cannot create {}", dir.display()))?;
+                let path = dir.join("table1.json");
+                std::fs::write(&path, &text)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+                if !json {
+                    eprintln!("wrote {}", path.display());
+                }
+            }
+            if json {
+                println!("{text}");
+            } else {
+                print!("{}", table1::render(&table));
+            }
+            Ok(())
+        }
+    }
 }

@@ -241,6 +241,20 @@ fn bad_input_gives_one_clear_line() {
         ("--robots 0 --tasks 0".into(), "zero"),
         ("--robots 5000 --tasks 5000".into(), "GiB"),
         ("--robots 3 --tasks 3 --rho -1".into(), "ρ"),
+        ("--robots 3 --tasks 3 --rho fast".into(), "auto"),
+        ("--robots 3 --tasks 3 --method simplex".into(), "simplex"),
+        (
+            "--robots 3 --tasks 3 --method inexact-dual --gamma-factor 0".into(),
+            "γ",
+        ),
+        (
+            "--robots 3 --tasks 3 --method dual --stop agreement".into(),
+            "--method primal",
+        ),
+        (
+            "--robots 3 --tasks 3 --transport threads --stop oracle".into(),
+            "sim",
+        ),
         ("--robots 3 --tasks 3 --perturb x".into(), "perturb"),
         ("--robots 5 --tasks 3 --case 1".into(), "Case 1"),
         (String::new(), "--costs"),
@@ -251,5 +265,68 @@ fn bad_input_gives_one_clear_line() {
             .chain(args.split_whitespace())
             .collect();
         assert_clear_error(&admm_ta(&all), needle);
+    }
+}
+
+#[test]
+fn every_method_solves_from_the_command_line_and_the_oracle_stop_is_the_papers_criterion() {
+    for method in ["primal", "dual", "inexact-dual"] {
+        let out = admm_ta(&[
+            "solve", "--robots", "12", "--tasks", "12", "--seed", "4", "--method", method,
+            "--check", "--json",
+        ]);
+        let v = json(&out);
+        assert_eq!(v["method"], method);
+        assert_eq!(v["check"]["optimal"], true, "{method}");
+        assert_eq!(v["converged"], true, "{method}");
+        let oracle = json(&admm_ta(&[
+            "solve", "--robots", "12", "--tasks", "12", "--seed", "4", "--method", method,
+            "--stop", "oracle", "--check", "--json",
+        ]));
+        assert_eq!(
+            oracle["iterations"], oracle["check"]["rounds_within_0_1pct"],
+            "{method}: the oracle stop ends at the first round within 0.1%"
+        );
+    }
+    // An explicit ρ is used as given; --adaptive-rho changes the run.
+    let run = |extra: &[&str]| {
+        let mut args = vec!["solve", "--robots", "8", "--tasks", "8", "--rho", "0.002"];
+        args.extend_from_slice(&["--stop", "oracle", "--json"]);
+        args.extend_from_slice(extra);
+        json(&admm_ta(&args))
+    };
+    let (fixed, adaptive) = (run(&[]), run(&["--adaptive-rho"]));
+    assert_eq!(fixed["rho"], 0.002);
+    assert_ne!(fixed["iterations"], adaptive["iterations"]);
+}
+
+#[test]
+fn table1_experiment_writes_its_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = admm_ta(&[
+        "experiment",
+        "table1",
+        "--trials",
+        "2",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    for needle in ["primal", "dual", "inexact-dual", "159", "387", "[1,2)"] {
+        assert!(table.contains(needle), "{needle} not in:\n{table}");
+    }
+    let text = std::fs::read_to_string(dir.path().join("table1.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 6);
+    for row in rows {
+        assert_eq!(row["wrong_stops"], 0);
+        assert_eq!(row["trials"].as_array().unwrap().len(), 2);
+        assert_eq!(row["within_0_1pct"]["reached"], 2);
     }
 }

@@ -4,7 +4,9 @@
 //! must leave nothing behind.
 
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::solve::{SolveConfig, SolveError, SolveReport, StopRule, Transport, solve};
+use admm_ta_runtime::solve::{
+    Method, SolveConfig, SolveError, SolveReport, StopRule, Transport, solve,
+};
 use admm_ta_topologies::{Graph, TopologySpec};
 use std::path::PathBuf;
 use std::time::Duration;
@@ -70,9 +72,28 @@ fn all_transports(
     stop: StopRule,
     max_iters: usize,
 ) {
-    let sim = solve(problem, graph, &config(Transport::Sim, stop, max_iters)).unwrap();
-    let threads = solve(problem, graph, &config(Transport::Threads, stop, max_iters)).unwrap();
-    let ipc = solve(problem, graph, &config(Transport::Ipc, stop, max_iters)).unwrap();
+    all_transports_with(Method::Primal, problem, graph, stop, max_iters)
+}
+
+fn all_transports_with(
+    method: Method,
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    stop: StopRule,
+    max_iters: usize,
+) {
+    let run = |transport| {
+        let config = SolveConfig {
+            method,
+            ..config(transport, stop, max_iters)
+        };
+        solve(problem, graph, &config).unwrap()
+    };
+    let (sim, threads, ipc) = (
+        run(Transport::Sim),
+        run(Transport::Threads),
+        run(Transport::Ipc),
+    );
     assert_same(&sim, &threads);
     assert_same(&sim, &ipc);
     assert_clean(&ipc);
@@ -117,6 +138,25 @@ fn transports_agree_on_a_chain_in_case_2() {
         &graph("chain", 10, 0),
         StopRule::Local,
         4000,
+    );
+}
+
+#[test]
+fn dual_methods_agree_across_transports() {
+    // The dual payload is the n + m multipliers, not the m × n matrix.
+    all_transports_with(
+        Method::Dual,
+        &problem(8, 8, 3),
+        &graph("complete", 8, 0),
+        StopRule::Local,
+        3000,
+    );
+    all_transports_with(
+        Method::InexactDual,
+        &problem(9, 5, 6),
+        &graph("random:0.5", 9, 6),
+        StopRule::Local,
+        5000,
     );
 }
 

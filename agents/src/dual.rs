@@ -118,6 +118,7 @@ pub struct DualAgent {
     degree: usize,
     case: AssignmentCase,
     settings: DualSettings,
+    /// Own costs `α_i`, centred (minus their mean).
     costs: Vec<f64>,
     /// Own multipliers of the current round (the payload), `n` robot rows then `m` task rows.
     y: Vec<f64>,
@@ -155,6 +156,11 @@ impl DualAgent {
                 "γ must be positive"
             );
         }
+        // Each robot does exactly one task, so subtracting a constant from its own costs
+        // changes every assignment's cost by the same amount: centring them makes the
+        // iterates independent of cost shifts (as the primal's are), using only own data.
+        let mean = costs.iter().sum::<f64>() / tasks as f64;
+        let costs = costs.into_iter().map(|c| c - mean).collect();
         let len = robots + tasks;
         Self {
             index,

@@ -1,8 +1,9 @@
 //! The per-round step works in buffers allocated at construction: after the first rounds,
-//! a primal step (fused update + Newton projection + rounding inspection) allocates nothing.
+//! a primal step (fused update + Newton projection + rounding inspection) and a dual or
+//! inexact-dual step (multiplier update, x-update, certificate) allocate nothing.
 
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::primal::{PrimalAgent, PrimalSettings};
+use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -32,22 +33,20 @@ unsafe impl GlobalAlloc for CountingAllocator {
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
-fn team_rounds(robots: usize, tasks: usize, case: AssignmentCase, rounds: usize) -> usize {
+fn team_rounds(
+    method: Method,
+    robots: usize,
+    tasks: usize,
+    case: AssignmentCase,
+    rounds: usize,
+) -> usize {
     let costs = CostMatrix::uniform(robots, tasks, 11).unwrap();
-    let rho = admm_ta_agents::rho::default_rho(&costs, (robots - 1) as f64);
-    let mut agents: Vec<PrimalAgent> = (0..robots)
-        .map(|i| {
-            PrimalAgent::new(
-                i,
-                costs.row(i).to_vec(),
-                robots,
-                case,
-                robots - 1,
-                PrimalSettings::new(rho),
-            )
-        })
+    let rho = admm_ta_agents::rho::default_rho_for(method, &costs, (robots - 1) as f64);
+    let settings = AgentSettings::new(method, rho, 1, 1e-9);
+    let mut agents: Vec<MethodAgent> = (0..robots)
+        .map(|i| MethodAgent::new(i, costs.row(i).to_vec(), robots, case, robots - 1, settings))
         .collect();
-    let len = robots * tasks;
+    let len = method.payload_len(robots, tasks);
     let mut current = vec![0.0; len * robots];
     let mut next = vec![0.0; len * robots];
     let mut allocations_in_steps = 0;
@@ -70,7 +69,17 @@ fn team_rounds(robots: usize, tasks: usize, case: AssignmentCase, rounds: usize)
 }
 
 #[test]
-fn primal_step_allocates_nothing_after_warm_up() {
-    assert_eq!(team_rounds(12, 12, AssignmentCase::One, 40), 0);
-    assert_eq!(team_rounds(14, 6, AssignmentCase::Two, 40), 0);
+fn every_method_steps_without_allocating_after_warm_up() {
+    for method in Method::ALL {
+        assert_eq!(
+            team_rounds(method, 12, 12, AssignmentCase::One, 40),
+            0,
+            "{method:?}"
+        );
+        assert_eq!(
+            team_rounds(method, 14, 6, AssignmentCase::Two, 40),
+            0,
+            "{method:?}"
+        );
+    }
 }

@@ -1,7 +1,10 @@
 //! Benchmarks and experiment helpers for admm-ta.
 //!
 //! `cargo bench -p admm-ta-bench` runs the criterion micro-benchmarks in `benches/`
-//! (see `bench/README.md`). This library holds the inputs they share.
+//! (see `bench/README.md`). This library holds the inputs they share and the experiments
+//! `admm-ta experiment NAME` reproduces ([`table1`]).
+
+pub mod table1;
 
 use admm_ta_topologies::rng::SeededRng;
 use faer::Mat;

@@ -1,0 +1,62 @@
+//! The decentralized stop never certifies a non-optimal assignment: every method, Case 1
+//! and Case 2, complete and random graphs, many seeds. (The oracle instances are checked in
+//! the workspace's `tests/oracle_instances.rs`.)
+
+use admm_ta_agents::method::Method;
+use admm_ta_agents::oracle;
+use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_runtime::solve::{SolveConfig, solve};
+use admm_ta_topologies::TopologySpec;
+
+#[test]
+fn the_local_stop_never_certifies_a_wrong_assignment() {
+    let settings = [
+        (10, 10, "complete"),
+        (10, 10, "random:0.4"),
+        (12, 7, "complete"),
+        (12, 7, "random:0.4"),
+    ];
+    let (mut runs, mut certified) = (0, 0);
+    for method in Method::ALL {
+        for (robots, tasks, topology) in settings {
+            for seed in 0..15 {
+                let problem = TaskAssignmentProblem::new(
+                    CostMatrix::uniform(robots, tasks, 100 + seed).unwrap(),
+                    CaseChoice::Auto,
+                )
+                .unwrap();
+                let graph = topology
+                    .parse::<TopologySpec>()
+                    .unwrap()
+                    .build(robots, seed)
+                    .unwrap();
+                let config = SolveConfig {
+                    method,
+                    seed,
+                    max_iters: 4000,
+                    ..SolveConfig::default()
+                };
+                let report = solve(&problem, &graph, &config).unwrap();
+                let optimum = oracle::solve(&problem).unwrap();
+                runs += 1;
+                if report.converged {
+                    certified += 1;
+                    assert!(
+                        report.cost <= optimum.cost + 1e-9 * optimum.cost.abs().max(1.0),
+                        "{} {robots}×{tasks} {topology} seed {seed}: certified cost {} > optimum {}",
+                        method.name(),
+                        report.cost,
+                        optimum.cost
+                    );
+                    assert!(!report.repaired, "a certified assignment needs no repair");
+                }
+            }
+        }
+    }
+    // The rule must also actually stop: nearly every run certifies within the limit.
+    assert!(
+        certified * 10 >= runs * 9,
+        "{certified} of {runs} runs certified"
+    );
+    eprintln!("{certified} of {runs} runs certified, none wrong");
+}
