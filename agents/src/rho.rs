@@ -30,12 +30,12 @@ pub fn default_rho(costs: &CostMatrix, mean_degree: f64) -> f64 {
 
 /// `c` of the dual methods' rule `ρ = c / (spread · d̄)`: their multipliers are prices in
 /// cost units, so ρ scales like 1/cost. 20×20 complete graph, uniform costs, 20 seeds
-/// (`runtime/examples/dual_tuning.rs`), rounds to within 0.1% / to the optimal assignment /
-/// to the certificate: exact dual c = 3: 70 / 110 / 405, c = 5: 84 / 141 / 397,
-/// c = 10: 136 / 159 / 317, c = 20: 253 / 245 / 373; inexact (γ factor 0.5) c = 3:
-/// 130 / 184 / 707 (5 of 20 not certified within 3000 rounds), c = 5: 116 / 200 / 756 (3),
-/// c = 10: 143 / 258 / 708 (1); with γ factor 0.15, c = 20: 257 / 275 / 447 and c = 40:
-/// 471 / 478 / 606.
+/// (`runtime/examples/dual_tuning.rs`, robots centring their own costs), rounds to within
+/// 0.1% / to the optimal assignment / to the certificate: exact dual c = 2: 122 / 113 / 505,
+/// c = 3: 114 / 114 / 495, c = 5: 102 / 138 / 385, c = 8: 104 / 144 / 326; inexact dual
+/// (γ factor 0.5) c = 5: 154 / 231 / 875, c = 10: 150 / 269 / 711, c = 20: 155 / 307 / 579.
+/// Larger c makes the multipliers agree (and the certificate fire) sooner but the
+/// assignment settle later; we take the middle.
 pub const DUAL_RHO_FACTOR: f64 = 5.0;
 /// The inexact dual's `c` (it needs a larger ρ than the exact one to stay stable).
 pub const INEXACT_DUAL_RHO_FACTOR: f64 = 10.0;
