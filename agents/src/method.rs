@@ -103,25 +103,16 @@ impl MethodAgent {
         degree: usize,
         settings: AgentSettings,
     ) -> Self {
-        let dual = |update| {
-            Algorithm::Dual(DualAgent::new(
-                index,
-                costs.clone(),
-                robots,
-                case,
-                degree,
-                DualSettings {
-                    rho: settings.rho,
-                    update,
-                    diameter: settings.diameter,
-                    tolerance: settings.tolerance,
-                },
-            ))
+        let dual = |update| DualSettings {
+            rho: settings.rho,
+            update,
+            diameter: settings.diameter,
+            tolerance: settings.tolerance,
         };
         let algorithm = match settings.method {
             Method::Primal => Algorithm::Primal(PrimalAgent::new(
                 index,
-                costs.clone(),
+                costs,
                 robots,
                 case,
                 degree,
@@ -130,10 +121,24 @@ impl MethodAgent {
                     ..PrimalSettings::new(settings.rho)
                 },
             )),
-            Method::Dual => dual(DualUpdate::Exact),
-            Method::InexactDual => dual(DualUpdate::Inexact {
-                gamma_factor: settings.gamma_factor,
-            }),
+            Method::Dual => Algorithm::Dual(DualAgent::new(
+                index,
+                costs,
+                robots,
+                case,
+                degree,
+                dual(DualUpdate::Exact),
+            )),
+            Method::InexactDual => Algorithm::Dual(DualAgent::new(
+                index,
+                costs,
+                robots,
+                case,
+                degree,
+                dual(DualUpdate::Inexact {
+                    gamma_factor: settings.gamma_factor,
+                }),
+            )),
         };
         Self {
             algorithm,
