@@ -121,8 +121,9 @@ struct SolveArgs {
     /// 10/(spread·d̄)) or a positive number.
     #[arg(long, default_value = "auto", allow_negative_numbers = true)]
     rho: String,
-    /// Shrink ρ 0.5% per round down to 0.3 of its initial value (every agent at the same
-    /// round).
+    /// Vary ρ by the method's schedule, computed by every agent from the round number
+    /// (primal: 3ρ shrinking 2% per round to 0.6ρ; dual methods: ρ, then growing 1% per
+    /// round to 10ρ). Cuts the rounds to the certified stop by 25–45% on the paper's settings.
     #[arg(long)]
     adaptive_rho: bool,
     /// Inexact dual: g of the proximal weight γ = g·(m+1)/(2·|N(i)|·ρ) (default 0.5).

@@ -67,7 +67,8 @@
 //! * **Disagreement:** every robot requires its largest neighbour disagreement
 //!   `δ_i ≤ δ* = tol / (8 n D)` (`D` the diameter), so every `y_j` is within
 //!   `R = D δ*` of `ȳ = y_c`, and robot `i` bounds `s_i(ȳ)` by its worst case over that
-//!   ball: `r_π + 2R − Σ_t min(0, r_t − 2R)` (each `r_t` moves by at most `2R`). In Case 2
+//!   ball: `max(r_π + 2R, 0) − Σ_{t≠π} min(0, r_t − 2R)` (`s_i = max(r_π, 0) −
+//!   Σ_{t≠π} min(0, r_t)` and each `r_t` moves by at most `2R`). In Case 2
 //!   a task covered more than once has `Σ_i w_{i,t} ≤ −1`, so some robot sees
 //!   `w_t < −1/(2n)`, which its check allows only where its `λ_t = 0`: then `λ̄_t ≤ R`, and
 //!   as the extra covers sum to `n − m` the coverage term is at most `R (n − m)`; each robot
@@ -354,14 +355,18 @@ impl DualAgent {
             AssignmentCase::Two => self.costs[t] + prices[self.index] - prices[n + t],
         };
         // Worst case of s_i over every common multiplier within `radius` of ours.
+        // s_i = max(r_π, 0) − Σ_{t≠π} min(0, r_t); each term is monotone in each r_t.
         let shift = 2.0 * radius;
-        let worst =
-            reduced(self.task) + shift - (0..m).map(|t| (reduced(t) - shift).min(0.0)).sum::<f64>();
+        let worst = (reduced(self.task) + shift).max(0.0)
+            - (0..m)
+                .filter(|&t| t != self.task)
+                .map(|t| (reduced(t) - shift).min(0.0))
+                .sum::<f64>();
         // Case 2: a task covered more than once has a robot with `w_t < −1/(2n)`, hence
         // `λ_t = 0` there and `λ̄_t ≤ radius`; the extra covers total `n − m`, so that term
         // is at most `radius (n − m)`, shared evenly.
         let over_cover = radius * (n - m) as f64 / n as f64;
-        worst.max(0.0) + over_cover
+        worst + over_cover
     }
 
     /// The neighbour disagreement `δ*` every robot must be within for its certificate:

@@ -286,7 +286,9 @@ pub fn solve(
         gamma_factor,
         ..AgentSettings::new(config.method, rho, diameter, tolerance)
     };
-    let schedule = config.adaptive_rho.then(|| RhoSchedule::new(rho));
+    let schedule = config
+        .adaptive_rho
+        .then(|| RhoSchedule::for_method(config.method, rho));
     let team = Team {
         problem,
         graph,

@@ -188,7 +188,7 @@ impl Scenario {
             seed: self.seed,
             schedule: self
                 .adaptive_rho
-                .then(|| RhoSchedule::new(f64::from_bits(self.rho_bits))),
+                .then(|| RhoSchedule::for_method(self.method, f64::from_bits(self.rho_bits))),
         };
         Ok(team.agent(index))
     }
