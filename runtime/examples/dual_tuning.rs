@@ -18,7 +18,11 @@ fn main() {
     let seeds: u64 = args[4].parse().unwrap();
     let exact = args[5] == "exact";
     let factor: f64 = args[6].parse().unwrap();
-    let gamma: f64 = args.get(7).map_or(0.3, |a| a.parse().unwrap());
+    let gamma: f64 = args
+        .get(7)
+        .map_or(admm_ta_agents::dual::DEFAULT_GAMMA_FACTOR, |a| {
+            a.parse().unwrap()
+        });
     let shift: f64 = args.get(8).map_or(0.0, |a| a.parse().unwrap());
     let rel_tol: f64 = args.get(9).map_or(1e-9, |a| a.parse().unwrap());
     let max_rounds = 3000;
