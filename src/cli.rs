@@ -123,7 +123,7 @@ struct SolveArgs {
     rho: String,
     /// Vary ρ by the method's schedule, computed by every agent from the round number
     /// (primal: 3ρ shrinking 2% per round to 0.6ρ; dual methods: ρ, then growing 1% per
-    /// round to 10ρ). Cut the rounds to the certified stop by 10–69% in every setting measured.
+    /// round to 10ρ). Cut the rounds to the certified stop by 10–69% wherever the runs certified.
     #[arg(long)]
     adaptive_rho: bool,
     /// Inexact dual: g of the proximal weight γ = g·(m+1)/(2·|N(i)|·ρ) (default 0.5).
