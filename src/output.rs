@@ -17,8 +17,16 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         report.case,
         report.topology
     );
+    let inner = if report.method == admm_ta_runtime::solve::Method::Primal {
+        format!(
+            ", {:.2} Newton steps per projection",
+            report.mean_projection_steps
+        )
+    } else {
+        String::new()
+    };
     println!(
-        "ρ = {:.4e}; {} after {} iterations ({:.1} ms, {:.2} Newton steps per projection)",
+        "ρ = {:.4e}; {} after {} iterations ({:.1} ms{inner})",
         report.rho,
         if report.converged {
             "converged"
@@ -27,7 +35,6 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         },
         report.iterations,
         report.wall_time_ms,
-        report.mean_projection_steps
     );
     if let Some(r) = report.certified_round {
         println!(

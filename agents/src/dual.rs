@@ -230,7 +230,7 @@ impl DualAgent {
     /// Updates `p`, forms `κ`; returns the neighbour disagreement of the round's `y`.
     fn accumulate(&mut self, inbox: &dyn Inbox) -> f64 {
         let rho = self.settings.rho;
-        let own = !inbox.is_empty();
+        let has_neighbours = !inbox.is_empty();
         let degree = inbox.len().max(1) as f64;
         let mut disagreement: f64 = 0.0;
         self.kappa.fill(0.0);
@@ -246,7 +246,8 @@ impl DualAgent {
                 disagreement = disagreement.max((mine - v).abs());
             }
         }
-        if !own {
+        if !has_neighbours {
+            // A lone robot (n = 1) is its own neighbour, as in the primal agent.
             self.kappa.copy_from_slice(&self.y);
         }
         for c in 0..self.y.len() {
@@ -504,7 +505,8 @@ impl ConsensusAgent for DualAgent {
         StepReport {
             disagreement,
             change,
-            inner_iterations: 1,
+            // The x-update is closed form (exact root or one gradient step): no inner loop.
+            inner_iterations: 0,
             inner_converged: true,
             integrality_gap: gap,
             own_integrality_gap: gap,
@@ -634,6 +636,26 @@ mod tests {
                 let inbox: Vec<&[f64]> = theirs.iter().map(Vec::as_slice).collect();
                 agent.accumulate(&inbox);
                 agent.update_x();
+                // (15)'s objective is convex and C¹ (the hinge is squared): the KKT
+                // conditions of the box are necessary and sufficient.
+                let theta_own =
+                    agent.x.iter().sum::<f64>() / agent.settings.rho + agent.kappa[agent.index];
+                let scale = agent.settings.rho.recip().max(1.0);
+                for t in 0..tasks {
+                    let g = agent.gradient(t, theta_own);
+                    let x = agent.x[t];
+                    let ok = if x <= 0.0 {
+                        g >= -1e-9 * scale
+                    } else if x >= 1.0 {
+                        g <= 1e-9 * scale
+                    } else {
+                        g.abs() <= 1e-9 * scale
+                    };
+                    assert!(
+                        ok,
+                        "{case:?} trial {trial}: KKT fails at {t}: x {x}, gradient {g}"
+                    );
+                }
                 let best = subproblem(&agent, &agent.x);
                 for _ in 0..200 {
                     let probe: Vec<f64> = agent
