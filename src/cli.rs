@@ -111,7 +111,9 @@ struct SolveArgs {
     #[arg(long, default_value = "complete")]
     topology: String,
     /// primal (Algorithm 1, exchanges m×n matrices), dual (Algorithm 2, exchanges n+m
-    /// multipliers) or inexact-dual (proximal-gradient x-update, no inner solve).
+    /// multipliers), inexact-dual (proximal-gradient x-update, no inner solve), cbaa (the
+    /// consensus-based auction baseline: fast, conflict-free, not optimal) or hungarian (the
+    /// centralized optimum, one round, sim only).
     #[arg(long, value_enum, default_value = "primal")]
     method: MethodArg,
     #[arg(long, value_enum, default_value = "sim")]
@@ -180,6 +182,8 @@ enum MethodArg {
     Primal,
     Dual,
     InexactDual,
+    Cbaa,
+    Hungarian,
 }
 
 impl MethodArg {
@@ -188,6 +192,8 @@ impl MethodArg {
             Self::Primal => Method::Primal,
             Self::Dual => Method::Dual,
             Self::InexactDual => Method::InexactDual,
+            Self::Cbaa => Method::Cbaa,
+            Self::Hungarian => Method::Hungarian,
         }
     }
 }

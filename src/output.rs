@@ -25,9 +25,13 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
     } else {
         String::new()
     };
+    let rho = if report.method.is_admm() {
+        format!("ρ = {:.4e}; ", report.rho)
+    } else {
+        String::new()
+    };
     println!(
-        "ρ = {:.4e}; {} after {} iterations ({:.1} ms{inner})",
-        report.rho,
+        "{rho}{} after {} iterations ({:.1} ms{inner}); {} messages of {} bytes per agent",
         if report.converged {
             "converged"
         } else {
@@ -35,6 +39,8 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         },
         report.iterations,
         report.wall_time_ms,
+        report.messages_per_agent,
+        report.message_bytes,
     );
     if let Some(r) = report.certified_round {
         println!(

@@ -255,6 +255,10 @@ fn bad_input_gives_one_clear_line() {
             "--robots 3 --tasks 3 --transport threads --stop oracle".into(),
             "sim",
         ),
+        (
+            "--robots 3 --tasks 3 --method hungarian --transport ipc".into(),
+            "centralized",
+        ),
         ("--robots 3 --tasks 3 --perturb x".into(), "perturb"),
         ("--robots 5 --tasks 3 --case 1".into(), "Case 1"),
         (String::new(), "--costs"),
@@ -329,4 +333,41 @@ fn table1_experiment_writes_its_json() {
         assert_eq!(row["trials"].as_array().unwrap().len(), 2);
         assert_eq!(row["within_0_1pct"]["reached"], 2);
     }
+}
+
+#[test]
+fn baselines_report_rounds_messages_and_bytes() {
+    let hungarian = json(&admm_ta(&[
+        "solve",
+        "--robots",
+        "10",
+        "--tasks",
+        "10",
+        "--method",
+        "hungarian",
+        "--check",
+        "--json",
+    ]));
+    assert_eq!(hungarian["iterations"], 1);
+    assert_eq!(hungarian["check"]["optimal"], true);
+    assert_eq!(hungarian["messages_per_agent"], 0);
+    let cbaa = json(&admm_ta(&[
+        "solve", "--robots", "10", "--tasks", "10", "--method", "cbaa", "--check", "--json",
+    ]));
+    assert_eq!(cbaa["converged"], true);
+    assert_eq!(cbaa["repaired"], false);
+    let rounds = cbaa["iterations"].as_u64().unwrap();
+    assert_eq!(cbaa["messages_per_agent"].as_u64().unwrap(), rounds);
+    // 2m f64 lists plus the round header.
+    let bytes = cbaa["message_bytes"].as_u64().unwrap();
+    assert!(bytes > 8 * 20, "{bytes}");
+    assert_eq!(cbaa["bytes_per_agent"].as_u64().unwrap(), rounds * bytes);
+    let primal = json(&admm_ta(&[
+        "solve", "--robots", "10", "--tasks", "10", "--json",
+    ]));
+    assert_eq!(
+        primal["message_bytes"].as_u64().unwrap() - bytes,
+        8 * (100 - 20),
+        "the primal sends the m×n matrix, CBAA 2m values"
+    );
 }

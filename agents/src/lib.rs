@@ -4,6 +4,7 @@
 //! drive the agents through [`agent::ConsensusAgent`].
 
 pub mod agent;
+pub mod cbaa;
 pub mod dual;
 pub mod general;
 pub mod local_stop;

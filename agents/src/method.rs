@@ -1,5 +1,5 @@
-//! The consensus methods, and one agent type that runs any of them, so that runners and
-//! transports handle every method the same way.
+//! The methods (consensus ADMM, the baselines), and one agent type that runs any of the
+//! distributed ones, so that runners and transports handle every method the same way.
 //!
 //! ```
 //! use admm_ta_agents::agent::ConsensusAgent;
@@ -11,6 +11,7 @@
 //! ```
 
 use crate::agent::{ConsensusAgent, Inbox, StepReport};
+use crate::cbaa::CbaaAgent;
 use crate::dual::{DEFAULT_GAMMA_FACTOR, DualAgent, DualSettings, DualUpdate};
 use crate::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
 use crate::problem::AssignmentCase;
@@ -28,10 +29,22 @@ pub enum Method {
     Dual,
     /// Dual consensus ADMM with the proximal-gradient x-update (no inner solve).
     InexactDual,
+    /// Consensus-based auction algorithm (Choi, Brunet & How 2009): a greedy baseline.
+    Cbaa,
+    /// The centralized optimum (one "round", no agents): the reference row.
+    Hungarian,
 }
 
 impl Method {
-    pub const ALL: [Method; 3] = [Method::Primal, Method::Dual, Method::InexactDual];
+    /// The consensus ADMM methods of the paper.
+    pub const ADMM: [Method; 3] = [Method::Primal, Method::Dual, Method::InexactDual];
+    /// Every method that runs as agents exchanging messages.
+    pub const DISTRIBUTED: [Method; 4] = [
+        Method::Primal,
+        Method::Dual,
+        Method::InexactDual,
+        Method::Cbaa,
+    ];
 
     /// The name used on the command line and in JSON.
     pub fn name(self) -> &'static str {
@@ -39,14 +52,23 @@ impl Method {
             Self::Primal => "primal",
             Self::Dual => "dual",
             Self::InexactDual => "inexact-dual",
+            Self::Cbaa => "cbaa",
+            Self::Hungarian => "hungarian",
         }
     }
 
-    /// Length of the payload exchanged every round.
+    /// A consensus ADMM method (it has a penalty ρ).
+    pub fn is_admm(self) -> bool {
+        Self::ADMM.contains(&self)
+    }
+
+    /// Length of the payload exchanged every round (0: no messages).
     pub fn payload_len(self, robots: usize, tasks: usize) -> usize {
         match self {
             Self::Primal => robots * tasks,
             Self::Dual | Self::InexactDual => robots + tasks,
+            Self::Cbaa => 2 * tasks,
+            Self::Hungarian => 0,
         }
     }
 }
@@ -91,10 +113,14 @@ pub struct MethodAgent {
 enum Algorithm {
     Primal(PrimalAgent),
     Dual(DualAgent),
+    Cbaa(CbaaAgent),
 }
 
 impl MethodAgent {
     /// Robot `index` of `robots` with its own costs, `degree = |N(i)|`.
+    ///
+    /// # Panics
+    /// For [`Method::Hungarian`], which has no agents (runners solve it centrally).
     pub fn new(
         index: usize,
         costs: Vec<f64>,
@@ -139,6 +165,8 @@ impl MethodAgent {
                     gamma_factor: settings.gamma_factor,
                 }),
             )),
+            Method::Cbaa => Algorithm::Cbaa(CbaaAgent::new(index, costs, case)),
+            Method::Hungarian => panic!("the centralized Hungarian method has no agents"),
         };
         Self {
             algorithm,
@@ -153,11 +181,13 @@ impl MethodAgent {
         self
     }
 
-    /// Changes ρ from the next step on; every robot must change it at the same round.
+    /// Changes ρ from the next step on; every robot must change it at the same round
+    /// (no effect on methods without a ρ).
     pub fn set_rho(&mut self, rho: f64) {
         match &mut self.algorithm {
             Algorithm::Primal(a) => a.set_rho(rho),
             Algorithm::Dual(a) => a.set_rho(rho),
+            Algorithm::Cbaa(_) => {}
         }
     }
 
@@ -165,7 +195,7 @@ impl MethodAgent {
     pub fn as_primal(&self) -> Option<&PrimalAgent> {
         match &self.algorithm {
             Algorithm::Primal(a) => Some(a),
-            Algorithm::Dual(_) => None,
+            Algorithm::Dual(_) | Algorithm::Cbaa(_) => None,
         }
     }
 
@@ -173,6 +203,7 @@ impl MethodAgent {
         match &self.algorithm {
             Algorithm::Primal(a) => a,
             Algorithm::Dual(a) => a,
+            Algorithm::Cbaa(a) => a,
         }
     }
 }
@@ -192,6 +223,7 @@ impl ConsensusAgent for MethodAgent {
         match &mut self.algorithm {
             Algorithm::Primal(a) => a.step(inbox, out),
             Algorithm::Dual(a) => a.step(inbox, out),
+            Algorithm::Cbaa(a) => a.step(inbox, out),
         }
     }
     fn decide(&self) -> usize {

@@ -40,13 +40,15 @@ pub const DUAL_RHO_FACTOR: f64 = 5.0;
 /// The inexact dual's `c` (it needs a larger ρ than the exact one to stay stable).
 pub const INEXACT_DUAL_RHO_FACTOR: f64 = 10.0;
 
-/// The default ρ of `method` for these costs on a graph with this mean degree.
+/// The default ρ of `method` for these costs on a graph with this mean degree (0 for the
+/// methods without a penalty).
 pub fn default_rho_for(method: Method, costs: &CostMatrix, mean_degree: f64) -> f64 {
     let dual = |factor: f64| factor / (costs.spread() * mean_degree.max(1.0));
     match method {
         Method::Primal => default_rho(costs, mean_degree),
         Method::Dual => dual(DUAL_RHO_FACTOR),
         Method::InexactDual => dual(INEXACT_DUAL_RHO_FACTOR),
+        Method::Cbaa | Method::Hungarian => 0.0,
     }
 }
 
@@ -93,7 +95,7 @@ impl RhoSchedule {
                 min: 0.6,
                 max: 3.0,
             },
-            Method::Dual | Method::InexactDual => Self {
+            Method::Dual | Method::InexactDual | Method::Cbaa | Method::Hungarian => Self {
                 initial,
                 start: 0.5,
                 rate: 1.01,

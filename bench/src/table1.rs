@@ -180,7 +180,7 @@ pub fn run(
         .shifts
         .iter()
         .flat_map(|&shift| {
-            Method::ALL
+            Method::ADMM
                 .into_iter()
                 .flat_map(move |m| (0..config.trials).map(move |s| (m, shift, s)))
         })

@@ -163,6 +163,10 @@ pub enum SolveError {
     SizeMismatch { graph: usize, problem: usize },
     #[error("ρ must be a positive finite number, got {0}")]
     BadRho(f64),
+    #[error(
+        "--method hungarian is the centralized solver: it runs in this process, with --transport sim"
+    )]
+    CentralizedMethod,
     #[error("the γ factor must be a positive finite number, got {0}")]
     BadGamma(f64),
     #[error(
@@ -220,6 +224,12 @@ pub struct SolveReport {
     pub perturbation: Option<f64>,
     /// Mean Newton steps of the projection per robot and round.
     pub mean_projection_steps: f64,
+    /// Bytes of one message (payload and header); every agent publishes one per round.
+    pub message_bytes: usize,
+    /// Messages each agent published (one per round; 0 for the centralized method).
+    pub messages_per_agent: usize,
+    /// `messages_per_agent · message_bytes`.
+    pub bytes_per_agent: usize,
     pub wall_time_ms: f64,
     pub stop: StopRule,
     /// Round whose assignment the local stop certified (`iterations − diameter`).
@@ -266,11 +276,19 @@ pub fn solve(
             gib: bytes / (1u64 << 30) as f64,
         });
     }
-    let rho = config.rho.unwrap_or_else(|| {
-        rho::default_rho_for(config.method, problem.costs(), graph.mean_degree())
-    });
-    if !(rho > 0.0 && rho.is_finite()) {
+    // Methods without a penalty report ρ = 0 and ignore --rho and --adaptive-rho.
+    let rho = if config.method.is_admm() {
+        config.rho.unwrap_or_else(|| {
+            rho::default_rho_for(config.method, problem.costs(), graph.mean_degree())
+        })
+    } else {
+        0.0
+    };
+    if config.method.is_admm() && !(rho > 0.0 && rho.is_finite()) {
         return Err(SolveError::BadRho(rho));
+    }
+    if config.method == Method::Hungarian && config.transport != Transport::Sim {
+        return Err(SolveError::CentralizedMethod);
     }
     let gamma_factor = config
         .gamma_factor
@@ -286,8 +304,7 @@ pub fn solve(
         gamma_factor,
         ..AgentSettings::new(config.method, rho, diameter, tolerance)
     };
-    let schedule = config
-        .adaptive_rho
+    let schedule = (config.adaptive_rho && config.method.is_admm())
         .then(|| RhoSchedule::for_method(config.method, rho));
     let team = Team {
         problem,
@@ -299,7 +316,6 @@ pub fn solve(
     };
     let optimum = (config.check || config.stop == StopRule::Oracle)
         .then(|| oracle::solve(problem).expect("validated costs have an optimum"));
-    let local_stop = || LocalCertifiedStop::new(diameter, n, tolerance);
     if config.global_barrier && config.transport == Transport::Sim {
         return Err(SolveError::BarrierNeedsAgents);
     }
@@ -322,6 +338,82 @@ pub fn solve(
     }
     let started = Instant::now();
     let mut tracer = optimum.as_ref().map(|o| Tracer::new(problem, o));
+    let run = if config.method == Method::Hungarian {
+        tracer = None;
+        RunResult::centralized(problem)
+    } else {
+        run_agents(
+            problem,
+            graph,
+            config,
+            &team,
+            &mut tracer,
+            optimum.as_ref(),
+            tolerance,
+            diameter,
+        )?
+    };
+    let wall_time_ms = started.elapsed().as_secs_f64() * 1e3;
+    let (message_bytes, messages_per_agent) = match config.method {
+        Method::Hungarian => (0, 0),
+        method => (
+            8 * method.payload_len(n, m) + std::mem::size_of::<crate::header::RoundHeader>(),
+            run.rounds,
+        ),
+    };
+    let (assignment, repaired) = rounding::repair(problem, &run.decisions);
+    let cost = problem
+        .cost_of(&assignment)
+        .expect("repaired assignment is in range");
+    let check = match (tracer, optimum) {
+        (Some(t), _) => Some(t.finish(cost)),
+        (None, Some(o)) => Some(Tracer::new(problem, &o).finish(cost)),
+        (None, None) => None,
+    };
+    Ok(SolveReport {
+        assignment,
+        cost,
+        iterations: run.rounds,
+        converged: run.converged,
+        repaired,
+        method: config.method,
+        transport: config.transport,
+        rho,
+        robots: n,
+        tasks: m,
+        case: problem.case().number(),
+        topology: graph.name().to_string(),
+        perturbation: epsilon,
+        mean_projection_steps: run.projection_steps as f64 / (n * run.rounds.max(1)) as f64,
+        message_bytes,
+        messages_per_agent,
+        bytes_per_agent: message_bytes * messages_per_agent,
+        wall_time_ms,
+        stop: config.stop,
+        certified_round: run.certified_round,
+        global_barrier: config.global_barrier,
+        round_latency_us: run.latency,
+        startup_ms: run.startup_ms,
+        run_id: run.run_id,
+        iterate_digests: run.iterate_digests,
+        check,
+    })
+}
+
+/// Runs the agents of a distributed method over the configured transport.
+#[allow(clippy::too_many_arguments)]
+fn run_agents(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    config: &SolveConfig,
+    team: &Team<'_>,
+    tracer: &mut Option<Tracer<'_>>,
+    optimum: Option<&OptimalAssignment>,
+    tolerance: f64,
+    diameter: usize,
+) -> Result<RunResult, SolveError> {
+    let (n, m) = (problem.robots(), problem.tasks());
+    let local_stop = || LocalCertifiedStop::new(diameter, n, tolerance);
     let run = match config.transport {
         Transport::Sim => {
             let mut sim = LockstepSim::new(team.agents(), graph);
@@ -426,10 +518,10 @@ pub fn solve(
                 edges: graph.edges().collect(),
                 topology: graph.name().to_string(),
                 method: config.method,
-                rho_bits: rho.to_bits(),
-                gamma_factor_bits: gamma_factor.to_bits(),
+                rho_bits: team.settings.rho.to_bits(),
+                gamma_factor_bits: team.settings.gamma_factor.to_bits(),
                 adaptive_rho: config.adaptive_rho,
-                epsilon_bits: epsilon.map(f64::to_bits),
+                epsilon_bits: team.epsilon.map(f64::to_bits),
                 seed: config.seed,
                 qp_projection: config.projection == ProjectionPath::Qp,
                 stop: match config.stop {
@@ -467,41 +559,7 @@ pub fn solve(
             }
         }
     };
-    let wall_time_ms = started.elapsed().as_secs_f64() * 1e3;
-    let (assignment, repaired) = rounding::repair(problem, &run.decisions);
-    let cost = problem
-        .cost_of(&assignment)
-        .expect("repaired assignment is in range");
-    let check = match (tracer, optimum) {
-        (Some(t), _) => Some(t.finish(cost)),
-        (None, Some(o)) => Some(Tracer::new(problem, &o).finish(cost)),
-        (None, None) => None,
-    };
-    Ok(SolveReport {
-        assignment,
-        cost,
-        iterations: run.rounds,
-        converged: run.converged,
-        repaired,
-        method: config.method,
-        transport: config.transport,
-        rho,
-        robots: n,
-        tasks: m,
-        case: problem.case().number(),
-        topology: graph.name().to_string(),
-        perturbation: epsilon,
-        mean_projection_steps: run.projection_steps as f64 / (n * run.rounds.max(1)) as f64,
-        wall_time_ms,
-        stop: config.stop,
-        certified_round: run.certified_round,
-        global_barrier: config.global_barrier,
-        round_latency_us: run.latency,
-        startup_ms: run.startup_ms,
-        run_id: run.run_id,
-        iterate_digests: run.iterate_digests,
-        check,
-    })
+    Ok(run)
 }
 
 /// What any transport's run yields, before rounding and checking.
@@ -518,6 +576,22 @@ struct RunResult {
 }
 
 impl RunResult {
+    /// The centralized Hungarian method: the optimum in one "round", no messages.
+    fn centralized(problem: &TaskAssignmentProblem) -> Self {
+        let optimum = oracle::solve(problem).expect("validated costs have an optimum");
+        Self {
+            decisions: optimum.assignment,
+            rounds: 1,
+            converged: true,
+            certified_round: None,
+            projection_steps: 0,
+            latency: None,
+            startup_ms: None,
+            run_id: None,
+            iterate_digests: Vec::new(),
+        }
+    }
+
     fn from_outcomes(
         outcomes: &[AgentOutcome],
         latency: Option<LatencySummary>,

@@ -17,7 +17,7 @@ fn the_local_stop_never_certifies_a_wrong_assignment() {
         (12, 7, "random:0.4"),
     ];
     let (mut runs, mut certified) = (0, 0);
-    for method in Method::ALL {
+    for method in Method::ADMM {
         for (robots, tasks, topology) in settings {
             for seed in 0..15 {
                 let problem = TaskAssignmentProblem::new(
