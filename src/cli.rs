@@ -112,8 +112,9 @@ struct SolveArgs {
     topology: String,
     /// primal (Algorithm 1, exchanges m×n matrices), dual (Algorithm 2, exchanges n+m
     /// multipliers), inexact-dual (proximal-gradient x-update, no inner solve), cbaa (the
-    /// consensus-based auction baseline: fast, conflict-free, not optimal) or hungarian (the
-    /// centralized optimum, one round, sim only).
+    /// consensus-based auction baseline: fast, conflict-free, not optimal), dist-hungarian
+    /// (robots flood their cost rows and solve locally: optimal after a graph diameter) or
+    /// hungarian (the centralized optimum, one round, sim only).
     #[arg(long, value_enum, default_value = "primal")]
     method: MethodArg,
     #[arg(long, value_enum, default_value = "sim")]
@@ -183,6 +184,7 @@ enum MethodArg {
     Dual,
     InexactDual,
     Cbaa,
+    DistHungarian,
     Hungarian,
 }
 
@@ -193,6 +195,7 @@ impl MethodArg {
             Self::Dual => Method::Dual,
             Self::InexactDual => Method::InexactDual,
             Self::Cbaa => Method::Cbaa,
+            Self::DistHungarian => Method::DistHungarian,
             Self::Hungarian => Method::Hungarian,
         }
     }

@@ -195,3 +195,37 @@ fn inexact_dual_reaches_the_100_by_100_optimum() {
         report.converged
     );
 }
+
+/// The distributed Hungarian baseline reaches every oracle optimum, on the complete graph and
+/// on a sparse random one, stopping by itself without conflicts.
+#[test]
+fn distributed_hungarian_reaches_every_optimum() {
+    for instance in oracle_instances() {
+        let problem = load(&instance);
+        let n = problem.robots();
+        for graph in [
+            generate::complete(n).unwrap(),
+            generate::random_connected(n, 0.2, 3).unwrap(),
+        ] {
+            let config = SolveConfig {
+                method: Method::DistHungarian,
+                ..SolveConfig::default()
+            };
+            let report = solve(&problem, &graph, &config).unwrap();
+            let name = format!("{} on {}", instance.name, graph.name());
+            assert!(report.converged, "{name}: no stop");
+            assert!(!report.repaired, "{name}: conflicting choices");
+            assert!(
+                relative_gap(report.cost, instance.optimal_cost) <= 1e-9,
+                "{name}: cost {} vs optimum {}",
+                report.cost,
+                instance.optimal_cost
+            );
+            assert_eq!(
+                report.iterations - report.certified_round.unwrap(),
+                graph.diameter().unwrap(),
+                "{name}"
+            );
+        }
+    }
+}

@@ -163,11 +163,18 @@ fn dual_methods_agree_across_transports() {
 }
 
 #[test]
-fn cbaa_agrees_across_transports() {
+fn baselines_agree_across_transports() {
     all_transports_with(
         Method::Cbaa,
         &problem(9, 9, 2),
         &graph("ring", 9, 0),
+        StopRule::Local,
+        1000,
+    );
+    all_transports_with(
+        Method::DistHungarian,
+        &problem(10, 6, 7),
+        &graph("chain", 10, 0),
         StopRule::Local,
         1000,
     );

@@ -5,6 +5,7 @@
 
 pub mod agent;
 pub mod cbaa;
+pub mod dist_hungarian;
 pub mod dual;
 pub mod general;
 pub mod local_stop;

@@ -12,6 +12,7 @@
 
 use crate::agent::{ConsensusAgent, Inbox, StepReport};
 use crate::cbaa::CbaaAgent;
+use crate::dist_hungarian::DistHungarianAgent;
 use crate::dual::{DEFAULT_GAMMA_FACTOR, DualAgent, DualSettings, DualUpdate};
 use crate::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
 use crate::problem::AssignmentCase;
@@ -31,6 +32,8 @@ pub enum Method {
     InexactDual,
     /// Consensus-based auction algorithm (Choi, Brunet & How 2009): a greedy baseline.
     Cbaa,
+    /// Distributed Hungarian as the paper runs it: flood the cost rows, solve locally.
+    DistHungarian,
     /// The centralized optimum (one "round", no agents): the reference row.
     Hungarian,
 }
@@ -39,11 +42,12 @@ impl Method {
     /// The consensus ADMM methods of the paper.
     pub const ADMM: [Method; 3] = [Method::Primal, Method::Dual, Method::InexactDual];
     /// Every method that runs as agents exchanging messages.
-    pub const DISTRIBUTED: [Method; 4] = [
+    pub const DISTRIBUTED: [Method; 5] = [
         Method::Primal,
         Method::Dual,
         Method::InexactDual,
         Method::Cbaa,
+        Method::DistHungarian,
     ];
 
     /// The name used on the command line and in JSON.
@@ -53,6 +57,7 @@ impl Method {
             Self::Dual => "dual",
             Self::InexactDual => "inexact-dual",
             Self::Cbaa => "cbaa",
+            Self::DistHungarian => "dist-hungarian",
             Self::Hungarian => "hungarian",
         }
     }
@@ -65,7 +70,7 @@ impl Method {
     /// Length of the payload exchanged every round (0: no messages).
     pub fn payload_len(self, robots: usize, tasks: usize) -> usize {
         match self {
-            Self::Primal => robots * tasks,
+            Self::Primal | Self::DistHungarian => robots * tasks,
             Self::Dual | Self::InexactDual => robots + tasks,
             Self::Cbaa => 2 * tasks,
             Self::Hungarian => 0,
@@ -114,6 +119,7 @@ enum Algorithm {
     Primal(PrimalAgent),
     Dual(DualAgent),
     Cbaa(CbaaAgent),
+    DistHungarian(DistHungarianAgent),
 }
 
 impl MethodAgent {
@@ -166,6 +172,9 @@ impl MethodAgent {
                 }),
             )),
             Method::Cbaa => Algorithm::Cbaa(CbaaAgent::new(index, costs, case)),
+            Method::DistHungarian => {
+                Algorithm::DistHungarian(DistHungarianAgent::new(index, costs, robots, case))
+            }
             Method::Hungarian => panic!("the centralized Hungarian method has no agents"),
         };
         Self {
@@ -187,7 +196,7 @@ impl MethodAgent {
         match &mut self.algorithm {
             Algorithm::Primal(a) => a.set_rho(rho),
             Algorithm::Dual(a) => a.set_rho(rho),
-            Algorithm::Cbaa(_) => {}
+            Algorithm::Cbaa(_) | Algorithm::DistHungarian(_) => {}
         }
     }
 
@@ -195,7 +204,7 @@ impl MethodAgent {
     pub fn as_primal(&self) -> Option<&PrimalAgent> {
         match &self.algorithm {
             Algorithm::Primal(a) => Some(a),
-            Algorithm::Dual(_) | Algorithm::Cbaa(_) => None,
+            Algorithm::Dual(_) | Algorithm::Cbaa(_) | Algorithm::DistHungarian(_) => None,
         }
     }
 
@@ -204,6 +213,7 @@ impl MethodAgent {
             Algorithm::Primal(a) => a,
             Algorithm::Dual(a) => a,
             Algorithm::Cbaa(a) => a,
+            Algorithm::DistHungarian(a) => a,
         }
     }
 }
@@ -224,6 +234,7 @@ impl ConsensusAgent for MethodAgent {
             Algorithm::Primal(a) => a.step(inbox, out),
             Algorithm::Dual(a) => a.step(inbox, out),
             Algorithm::Cbaa(a) => a.step(inbox, out),
+            Algorithm::DistHungarian(a) => a.step(inbox, out),
         }
     }
     fn decide(&self) -> usize {
