@@ -66,6 +66,33 @@ enum Command {
 
 #[derive(Subcommand, Debug)]
 enum Experiment {
+    /// Every method side by side (rounds to its own stop, optimality, bytes per agent, wall
+    /// time) on uniform square problems, per team size and transport; prints a Markdown table.
+    Compare {
+        /// Team sizes (robots = tasks), comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = [10usize, 20, 50])]
+        robots: Vec<usize>,
+        /// Seeds per size (problems and random graphs).
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
+        /// Methods, comma-separated (default: all).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        methods: Vec<MethodArg>,
+        /// Transports, comma-separated.
+        #[arg(long, value_enum, value_delimiter = ',', default_values = ["sim", "ipc"])]
+        transports: Vec<TransportArg>,
+        /// complete | chain | ring | star | grid | random:P | geometric:R
+        #[arg(long, default_value = "complete")]
+        topology: String,
+        /// Run the ADMM methods with --adaptive-rho.
+        #[arg(long)]
+        adaptive_rho: bool,
+        #[arg(long, default_value_t = 5000)]
+        max_iters: usize,
+        /// Directory for compare.json (created if missing).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Table 1: iterations of primal / dual / inexact dual at 20×20 on the complete graph
     /// (paper: 28 / 159 / 387), for uniform costs in [0,1) and shifted to [1,2).
     Table1 {
@@ -350,8 +377,55 @@ fn run_demo(json: bool, transport_arg: TransportArg) -> Result<()> {
 }
 
 fn run_experiment(experiment: Experiment) -> Result<()> {
-    use admm_ta_bench::table1;
+    use admm_ta_bench::{compare, table1};
     match experiment {
+        Experiment::Compare {
+            robots,
+            seeds,
+            methods,
+            transports,
+            topology,
+            adaptive_rho,
+            max_iters,
+            out,
+        } => {
+            if seeds == 0 || max_iters == 0 || robots.contains(&0) {
+                bail!("--seeds, --max-iters and every --robots size must be at least 1");
+            }
+            let methods = if methods.is_empty() {
+                vec![
+                    Method::Primal,
+                    Method::Dual,
+                    Method::InexactDual,
+                    Method::Cbaa,
+                    Method::DistHungarian,
+                    Method::Hungarian,
+                ]
+            } else {
+                methods.into_iter().map(MethodArg::method).collect()
+            };
+            let config = compare::CompareConfig {
+                robots,
+                seeds,
+                methods,
+                transports: transports.into_iter().map(transport).collect(),
+                topology: topology.parse()?,
+                adaptive_rho,
+                max_iters,
+                agent_program: Some(agent_program()?),
+            };
+            println!("{}", compare::TABLE_HEADER);
+            let rows = compare::run(&config, &|row| println!("{}", compare::render_row(row)))?;
+            if let Some(dir) = out {
+                std::fs::create_dir_all(&dir)
+                    .with_context(|| format!("cannot create {}", dir.display()))?;
+                let path = dir.join("compare.json");
+                std::fs::write(&path, serde_json::to_string_pretty(&rows)?)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+                eprintln!("wrote {}", path.display());
+            }
+            Ok(())
+        }
         Experiment::Table1 {
             trials,
             out,

@@ -371,3 +371,40 @@ fn baselines_report_rounds_messages_and_bytes() {
         "the primal sends the m×n matrix, CBAA 2m values"
     );
 }
+
+#[test]
+fn compare_experiment_prints_a_row_per_method_and_transport() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = admm_ta(&[
+        "experiment",
+        "compare",
+        "--robots",
+        "4",
+        "--seeds",
+        "1",
+        "--transports",
+        "sim,threads",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    // 5 distributed methods × 2 transports + the centralized row, plus the header.
+    assert_eq!(
+        table.lines().filter(|l| l.starts_with("| 4 |")).count(),
+        11,
+        "{table}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("compare.json")).unwrap())
+            .unwrap();
+    for row in v.as_array().unwrap() {
+        if row["method"] != "cbaa" {
+            assert_eq!(row["optimal_runs"], 1, "{row}");
+        }
+    }
+}

@@ -2,8 +2,9 @@
 //!
 //! `cargo bench -p admm-ta-bench` runs the criterion micro-benchmarks in `benches/`
 //! (see `bench/README.md`). This library holds the inputs they share and the experiments
-//! `admm-ta experiment NAME` reproduces ([`table1`]).
+//! `admm-ta experiment NAME` reproduces ([`table1`], [`compare`]).
 
+pub mod compare;
 pub mod table1;
 
 use admm_ta_topologies::rng::SeededRng;
