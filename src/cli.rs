@@ -393,14 +393,7 @@ fn run_experiment(experiment: Experiment) -> Result<()> {
                 bail!("--seeds, --max-iters and every --robots size must be at least 1");
             }
             let methods = if methods.is_empty() {
-                vec![
-                    Method::Primal,
-                    Method::Dual,
-                    Method::InexactDual,
-                    Method::Cbaa,
-                    Method::DistHungarian,
-                    Method::Hungarian,
-                ]
+                Method::ALL.to_vec()
             } else {
                 methods.into_iter().map(MethodArg::method).collect()
             };

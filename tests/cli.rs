@@ -304,28 +304,32 @@ fn every_method_solves_from_the_command_line_and_the_oracle_stop_is_the_papers_c
     assert_ne!(fixed["iterations"], adaptive["iterations"]);
 }
 
-#[test]
-fn table1_experiment_writes_its_json() {
+/// Runs `admm-ta experiment ARGS --out DIR` and returns its printed table and the JSON file
+/// `file` it wrote.
+fn experiment(args: &[&str], file: &str) -> (String, serde_json::Value) {
     let dir = tempfile::tempdir().unwrap();
-    let out = admm_ta(&[
-        "experiment",
-        "table1",
-        "--trials",
-        "2",
-        "--out",
-        dir.path().to_str().unwrap(),
-    ]);
+    let mut all = vec!["experiment"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--out", dir.path().to_str().unwrap()]);
+    let out = admm_ta(&all);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let table = String::from_utf8_lossy(&out.stdout);
+    let text = std::fs::read_to_string(dir.path().join(file)).unwrap();
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        serde_json::from_str(&text).unwrap(),
+    )
+}
+
+#[test]
+fn table1_experiment_writes_its_json() {
+    let (table, v) = experiment(&["table1", "--trials", "2"], "table1.json");
     for needle in ["primal", "dual", "inexact-dual", "159", "387", "[1,2)"] {
         assert!(table.contains(needle), "{needle} not in:\n{table}");
     }
-    let text = std::fs::read_to_string(dir.path().join("table1.json")).unwrap();
-    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
     let rows = v["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 6);
     for row in rows {
@@ -374,9 +378,7 @@ fn baselines_report_rounds_messages_and_bytes() {
 
 #[test]
 fn compare_experiment_prints_a_row_per_method_and_transport() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = admm_ta(&[
-        "experiment",
+    let args = [
         "compare",
         "--robots",
         "4",
@@ -384,24 +386,14 @@ fn compare_experiment_prints_a_row_per_method_and_transport() {
         "1",
         "--transports",
         "sim,threads",
-        "--out",
-        dir.path().to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let table = String::from_utf8_lossy(&out.stdout);
+    ];
+    let (table, v) = experiment(&args, "compare.json");
     // 5 distributed methods × 2 transports + the centralized row, plus the header.
     assert_eq!(
         table.lines().filter(|l| l.starts_with("| 4 |")).count(),
         11,
         "{table}"
     );
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("compare.json")).unwrap())
-            .unwrap();
     for row in v.as_array().unwrap() {
         if row["method"] != "cbaa" {
             assert_eq!(row["optimal_runs"], 1, "{row}");

@@ -6,8 +6,8 @@ mod common;
 
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::solve::{Method, SolveConfig, solve};
-use admm_ta_topologies::generate;
+use admm_ta_runtime::solve::{Method, SolveConfig, SolveReport, solve};
+use admm_ta_topologies::{Graph, generate};
 use common::{oracle_instances, relative_gap};
 
 fn load(instance: &common::OracleInstance) -> TaskAssignmentProblem {
@@ -44,6 +44,60 @@ fn centralized_oracle_matches_every_instance() {
     }
 }
 
+/// The shared 100×100 instance.
+fn instance_100x100() -> common::OracleInstance {
+    oracle_instances()
+        .into_iter()
+        .find(|i| i.name == "case1_uniform_100x100")
+        .expect("the 100×100 oracle instance")
+}
+
+/// The run's assignment is conflict-free (no repair needed) and within `tolerance` of the
+/// known optimum.
+fn assert_optimal(
+    report: &SolveReport,
+    instance: &common::OracleInstance,
+    name: &str,
+    tolerance: f64,
+) {
+    assert!(!report.repaired, "{name}: robots' choices conflicted");
+    assert!(
+        relative_gap(report.cost, instance.optimal_cost) <= tolerance,
+        "{name}: cost {} vs optimum {} after {} rounds",
+        report.cost,
+        instance.optimal_cost,
+        report.iterations
+    );
+}
+
+/// Runs `method` on `graph` with the decentralized stop and the oracle watching.
+fn run(
+    method: Method,
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    max_iters: usize,
+) -> SolveReport {
+    let config = SolveConfig {
+        method,
+        check: true,
+        max_iters,
+        ..SolveConfig::default()
+    };
+    solve(problem, graph, &config).unwrap()
+}
+
+fn trace(name: &str, report: &SolveReport) {
+    let check = report.check.as_ref().unwrap();
+    eprintln!(
+        "{name}: stopped at {} (certified: {}), within 0.1% from {:?}, optimal assignment from {:?}, ρ = {:.3e}",
+        report.iterations,
+        report.converged,
+        check.rounds_within_0_1pct,
+        check.rounds_to_optimal_assignment,
+        report.rho
+    );
+}
+
 #[test]
 fn primal_admm_reaches_every_optimum_on_the_complete_graph() {
     for instance in oracle_instances() {
@@ -54,70 +108,28 @@ fn primal_admm_reaches_every_optimum_on_the_complete_graph() {
             continue;
         }
         let graph = generate::complete(problem.robots()).unwrap();
-        let config = SolveConfig {
-            check: true,
-            ..SolveConfig::default()
-        };
-        let report = solve(&problem, &graph, &config).unwrap();
-        assert!(problem.is_feasible(&report.assignment), "{}", instance.name);
-        assert!(
-            relative_gap(report.cost, instance.optimal_cost) <= 1e-6,
-            "{}: cost {} vs optimum {} after {} rounds",
-            instance.name,
-            report.cost,
-            instance.optimal_cost,
-            report.iterations
-        );
+        let report = run(Method::Primal, &problem, &graph, 5000);
+        assert_optimal(&report, &instance, &instance.name, 1e-6);
         assert!(
             report.converged,
             "{}: hit the iteration limit",
             instance.name
         );
-        assert!(
-            !report.repaired,
-            "{}: robots disagreed at the stop",
-            instance.name
-        );
-        eprintln!(
-            "{}: {} rounds (optimal assignment from round {:?}), ρ = {:.3e}",
-            instance.name,
-            report.iterations,
-            report.check.as_ref().unwrap().rounds_to_optimal_assignment,
-            report.rho
-        );
+        trace(&instance.name, &report);
     }
 }
 
 #[test]
 fn primal_admm_reaches_the_100_by_100_optimum_on_a_random_graph() {
-    let instance = oracle_instances()
-        .into_iter()
-        .find(|i| i.name == "case1_uniform_100x100")
-        .expect("the 100×100 oracle instance");
+    let instance = instance_100x100();
     let problem = load(&instance);
     // A sparse random graph keeps a round at a tenth of the complete graph's cost. The round
     // cap leaves a 2× margin over the ≈2100 rounds the assignment needs to become optimal;
     // the result must be conflict-free and optimal whether or not the certificate fired.
     let graph = generate::random_connected(100, 0.1, 7).unwrap();
-    let config = SolveConfig {
-        max_iters: 4000,
-        check: true,
-        ..SolveConfig::default()
-    };
-    let report = solve(&problem, &graph, &config).unwrap();
-    assert!(!report.repaired, "robots' choices conflicted");
-    assert!(
-        relative_gap(report.cost, instance.optimal_cost) <= 1e-6,
-        "cost {} vs optimum {}",
-        report.cost,
-        instance.optimal_cost
-    );
-    eprintln!(
-        "100x100 random:0.1: optimal assignment from round {:?}, stopped at {} (certified: {})",
-        report.check.unwrap().rounds_to_optimal_assignment,
-        report.iterations,
-        report.converged
-    );
+    let report = run(Method::Primal, &problem, &graph, 4000);
+    assert_optimal(&report, &instance, "primal 100x100 random:0.1", 1e-6);
+    trace("primal 100x100 random:0.1", &report);
 }
 
 /// The dual methods stop by their own certificate (the decentralized rule) at the optimum on
@@ -127,38 +139,17 @@ fn dual_methods_reach_every_optimum_on_the_complete_graph() {
     for method in [Method::Dual, Method::InexactDual] {
         for instance in oracle_instances() {
             let problem = load(&instance);
+            let large = problem.robots() >= 100;
             // The inexact dual needs ≈4700 rounds for the 100×100 optimum: its own test.
-            if problem.robots() >= 100 && method == Method::InexactDual {
+            if large && method == Method::InexactDual {
                 continue;
             }
             let graph = generate::complete(problem.robots()).unwrap();
-            let config = SolveConfig {
-                method,
-                check: true,
-                max_iters: if problem.robots() >= 100 { 1500 } else { 5000 },
-                ..SolveConfig::default()
-            };
-            let report = solve(&problem, &graph, &config).unwrap();
-            let check = report.check.as_ref().unwrap();
+            let report = run(method, &problem, &graph, if large { 1500 } else { 5000 });
             let name = format!("{} {}", method.name(), instance.name);
-            assert!(
-                relative_gap(report.cost, instance.optimal_cost) <= 1e-6,
-                "{name}: cost {} vs optimum {} after {} rounds",
-                report.cost,
-                instance.optimal_cost,
-                report.iterations
-            );
-            assert!(!report.repaired, "{name}: robots' choices conflicted");
-            if problem.robots() < 100 {
-                assert!(report.converged, "{name}: hit the iteration limit");
-            }
-            eprintln!(
-                "{name}: stopped at {} (certified: {}), within 0.1% from {:?}, optimal assignment from {:?}",
-                report.iterations,
-                report.converged,
-                check.rounds_within_0_1pct,
-                check.rounds_to_optimal_assignment
-            );
+            assert_optimal(&report, &instance, &name, 1e-6);
+            assert!(large || report.converged, "{name}: hit the iteration limit");
+            trace(&name, &report);
         }
     }
 }
@@ -168,32 +159,12 @@ fn dual_methods_reach_every_optimum_on_the_complete_graph() {
 /// optimal, conflict-free assignment there. The sim is deterministic, so this is exact.
 #[test]
 fn inexact_dual_reaches_the_100_by_100_optimum() {
-    let instance = oracle_instances()
-        .into_iter()
-        .find(|i| i.name == "case1_uniform_100x100")
-        .expect("the 100×100 oracle instance");
+    let instance = instance_100x100();
     let problem = load(&instance);
     let graph = generate::complete(100).unwrap();
-    let config = SolveConfig {
-        method: Method::InexactDual,
-        max_iters: 6000,
-        check: true,
-        ..SolveConfig::default()
-    };
-    let report = solve(&problem, &graph, &config).unwrap();
-    assert!(!report.repaired, "robots' choices conflicted");
-    assert!(
-        relative_gap(report.cost, instance.optimal_cost) <= 1e-6,
-        "cost {} vs optimum {}",
-        report.cost,
-        instance.optimal_cost
-    );
-    eprintln!(
-        "inexact dual 100x100: optimal assignment from round {:?}, stopped at {} (certified: {})",
-        report.check.unwrap().rounds_to_optimal_assignment,
-        report.iterations,
-        report.converged
-    );
+    let report = run(Method::InexactDual, &problem, &graph, 6000);
+    assert_optimal(&report, &instance, "inexact dual 100x100", 1e-6);
+    trace("inexact dual 100x100", &report);
 }
 
 /// The distributed Hungarian baseline reaches every oracle optimum, on the complete graph and
@@ -207,20 +178,10 @@ fn distributed_hungarian_reaches_every_optimum() {
             generate::complete(n).unwrap(),
             generate::random_connected(n, 0.2, 3).unwrap(),
         ] {
-            let config = SolveConfig {
-                method: Method::DistHungarian,
-                ..SolveConfig::default()
-            };
-            let report = solve(&problem, &graph, &config).unwrap();
+            let report = run(Method::DistHungarian, &problem, &graph, 5000);
             let name = format!("{} on {}", instance.name, graph.name());
+            assert_optimal(&report, &instance, &name, 1e-9);
             assert!(report.converged, "{name}: no stop");
-            assert!(!report.repaired, "{name}: conflicting choices");
-            assert!(
-                relative_gap(report.cost, instance.optimal_cost) <= 1e-9,
-                "{name}: cost {} vs optimum {}",
-                report.cost,
-                instance.optimal_cost
-            );
             assert_eq!(
                 report.iterations - report.certified_round.unwrap(),
                 graph.diameter().unwrap(),

@@ -29,7 +29,6 @@
 //! never was in their trials). Its optimality gap is reported by `solve --check`.
 
 use crate::agent::{ConsensusAgent, Inbox, StepReport};
-use crate::problem::AssignmentCase;
 
 /// No winner (as stored in the payload).
 const NOBODY: f64 = -1.0;
@@ -38,8 +37,9 @@ const NOBODY: f64 = -1.0;
 pub struct CbaaAgent {
     index: usize,
     tasks: usize,
-    case: AssignmentCase,
     costs: Vec<f64>,
+    /// Its cheapest task: what it does without a task of its own (Case 2 extras).
+    cheapest: usize,
     /// Own lists `(y, z)` of the current round: the payload.
     lists: Vec<f64>,
     /// The task this robot holds.
@@ -51,16 +51,17 @@ pub struct CbaaAgent {
 }
 
 impl CbaaAgent {
-    pub fn new(index: usize, costs: Vec<f64>, case: AssignmentCase) -> Self {
+    pub fn new(index: usize, costs: Vec<f64>) -> Self {
         let tasks = costs.len();
         assert!(tasks >= 1);
         let mut lists = vec![f64::NEG_INFINITY; 2 * tasks];
         lists[tasks..].fill(NOBODY);
+        let cheapest = crate::oracle::argmin(&costs);
         let mut agent = Self {
             index,
             tasks,
-            case,
             costs,
+            cheapest,
             lists,
             task: None,
             column: vec![0.0; tasks],
@@ -77,19 +78,13 @@ impl CbaaAgent {
 
     /// The task it does: the one it holds, or (unassigned, Case 2 extras) its cheapest.
     fn chosen(&self) -> usize {
-        self.task
-            .unwrap_or_else(|| crate::rounding::argmax(&self.column))
+        self.task.unwrap_or(self.cheapest)
     }
 
     fn refresh_column(&mut self) {
+        let task = self.chosen();
         self.column.fill(0.0);
-        let t = match self.task {
-            Some(t) => t,
-            None => (0..self.tasks)
-                .min_by(|&a, &b| self.costs[a].total_cmp(&self.costs[b]))
-                .expect("at least one task"),
-        };
-        self.column[t] = 1.0;
+        self.column[task] = 1.0;
     }
 
     /// `(bid, winner)` `a` beats `b`: higher bid, or equal bids and a lower winner index
@@ -185,14 +180,6 @@ impl ConsensusAgent for CbaaAgent {
 
     fn own_column(&self) -> &[f64] {
         &self.column
-    }
-}
-
-impl CbaaAgent {
-    /// Which coverage case the team solves (unassigned robots take their cheapest task in
-    /// Case 2).
-    pub fn case(&self) -> AssignmentCase {
-        self.case
     }
 }
 

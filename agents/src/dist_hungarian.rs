@@ -40,9 +40,7 @@ impl DistHungarianAgent {
         assert!(index < robots && tasks >= 1);
         let mut known = vec![f64::NAN; robots * tasks];
         known[index * tasks..(index + 1) * tasks].copy_from_slice(&costs);
-        let cheapest = (0..tasks)
-            .min_by(|&a, &b| costs[a].total_cmp(&costs[b]))
-            .expect("at least one task");
+        let cheapest = crate::oracle::argmin(&costs);
         let mut column = vec![0.0; tasks];
         column[cheapest] = 1.0;
         let mut agent = Self {

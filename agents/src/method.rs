@@ -41,13 +41,14 @@ pub enum Method {
 impl Method {
     /// The consensus ADMM methods of the paper.
     pub const ADMM: [Method; 3] = [Method::Primal, Method::Dual, Method::InexactDual];
-    /// Every method that runs as agents exchanging messages.
-    pub const DISTRIBUTED: [Method; 5] = [
+    /// Every method.
+    pub const ALL: [Method; 6] = [
         Method::Primal,
         Method::Dual,
         Method::InexactDual,
         Method::Cbaa,
         Method::DistHungarian,
+        Method::Hungarian,
     ];
 
     /// The name used on the command line and in JSON.
@@ -171,7 +172,7 @@ impl MethodAgent {
                     gamma_factor: settings.gamma_factor,
                 }),
             )),
-            Method::Cbaa => Algorithm::Cbaa(CbaaAgent::new(index, costs, case)),
+            Method::Cbaa => Algorithm::Cbaa(CbaaAgent::new(index, costs)),
             Method::DistHungarian => {
                 Algorithm::DistHungarian(DistHungarianAgent::new(index, costs, robots, case))
             }

@@ -161,10 +161,22 @@ impl<A: ConsensusAgent + Send> LockstepSim<A> {
         stop: &mut dyn TeamStopRule,
         observer: &mut dyn FnMut(&RoundView<'_>),
     ) -> SimOutcome {
+        self.run_until(max_rounds, observer, |sim| stop.should_stop(&sim.reports))
+    }
+
+    /// Steps until `done` (which sees the whole simulation after each round, after the
+    /// observer) is true or `max_rounds` rounds have run: for stop rules that need more
+    /// than the step reports (the agents' certificates, the centralized optimum).
+    pub fn run_until(
+        &mut self,
+        max_rounds: usize,
+        observer: &mut dyn FnMut(&RoundView<'_>),
+        mut done: impl FnMut(&Self) -> bool,
+    ) -> SimOutcome {
         while self.round < max_rounds {
             self.step_round();
             observer(&self.view());
-            if stop.should_stop(&self.reports) {
+            if done(self) {
                 return SimOutcome {
                     rounds: self.round,
                     stopped: true,

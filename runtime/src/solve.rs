@@ -11,7 +11,7 @@ use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::local_stop::{LocalCertifiedStop, LocalStopError};
 use admm_ta_agents::method::{AgentSettings, MethodAgent};
 use admm_ta_agents::oracle::{self, OptimalAssignment};
-use admm_ta_agents::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
+use admm_ta_agents::primal::{PrimalSettings, ProjectionPath};
 use admm_ta_agents::problem::TaskAssignmentProblem;
 use admm_ta_agents::rho::{self, RhoSchedule};
 use admm_ta_agents::stopping::{AgreementStop, AgreementStreak, NeverStop};
@@ -57,7 +57,7 @@ pub enum StopRule {
     /// All robots agree on one near-integral assignment for some rounds (default 10).
     Agreement,
     /// All robots round to the same assignment and their optimality-certificate slacks
-    /// ([`PrimalAgent::certificate_slack`]) sum to at most `1e-9 ·` its cost scale: the
+    /// ([`admm_ta_agents::primal::PrimalAgent::certificate_slack`]) sum to at most `1e-9 ·` its cost scale: the
     /// assignment is then provably optimal to that tolerance. Checked centrally (sim only).
     Certified,
     /// The same certificate, decentralized: each robot checks its own slack and agreement
@@ -340,7 +340,10 @@ pub fn solve(
     let mut tracer = optimum.as_ref().map(|o| Tracer::new(problem, o));
     let run = if config.method == Method::Hungarian {
         tracer = None;
-        RunResult::centralized(problem)
+        let optimum = optimum
+            .clone()
+            .unwrap_or_else(|| oracle::solve(problem).expect("validated costs have an optimum"));
+        RunResult::centralized(optimum)
     } else {
         run_agents(
             problem,
@@ -437,14 +440,11 @@ fn run_agents(
                     run_until_certified(&mut sim, config.max_iters, tolerance, &mut observer)
                 }
                 StopRule::Oracle => {
-                    let optimal_cost = optimum.as_ref().expect("oracle stop has the optimum").cost;
-                    run_until_within(
-                        &mut sim,
-                        problem,
-                        optimal_cost,
-                        config.max_iters,
-                        &mut observer,
-                    )
+                    // The paper's criterion, with the centralized optimum (experiments only).
+                    let optimal_cost = optimum.expect("oracle stop has the optimum").cost;
+                    sim.run_until(config.max_iters, &mut observer, |sim| {
+                        within_0_1pct(relaxed_objective(problem, &sim.view()), optimal_cost)
+                    })
                 }
                 StopRule::Local => {
                     let mut stops = vec![local_stop()?; n];
@@ -577,8 +577,7 @@ struct RunResult {
 
 impl RunResult {
     /// The centralized Hungarian method: the optimum in one "round", no messages.
-    fn centralized(problem: &TaskAssignmentProblem) -> Self {
-        let optimum = oracle::solve(problem).expect("validated costs have an optimum");
+    fn centralized(optimum: OptimalAssignment) -> Self {
         Self {
             decisions: optimum.assignment,
             rounds: 1,
@@ -612,26 +611,28 @@ impl RunResult {
     }
 }
 
-/// One primal agent per robot of `graph`, each with its own (optionally perturbed) costs.
+/// One primal agent per robot of `graph`, each with its own (optionally perturbed) costs,
+/// built as [`solve`] builds them (for examples and tests that drive a simulation).
 pub fn primal_team(
     problem: &TaskAssignmentProblem,
     graph: &Graph,
     settings: PrimalSettings,
     epsilon: Option<f64>,
     seed: u64,
-) -> Vec<PrimalAgent> {
-    (0..problem.robots())
-        .map(|i| {
-            PrimalAgent::new(
-                i,
-                ties::perturbed_row(problem.costs(), i, epsilon, seed),
-                problem.robots(),
-                problem.case(),
-                graph.degree(i),
-                settings,
-            )
-        })
-        .collect()
+) -> Vec<MethodAgent> {
+    let diameter = graph.diameter().unwrap_or(0);
+    Team {
+        problem,
+        graph,
+        settings: AgentSettings {
+            projection: settings.projection,
+            ..AgentSettings::new(Method::Primal, settings.rho, diameter, f64::INFINITY)
+        },
+        epsilon,
+        seed,
+        schedule: None,
+    }
+    .agents()
 }
 
 /// Rounds after which an agreement is first certified, and the spacing of later checks
@@ -640,7 +641,8 @@ const CERTIFY_AFTER: usize = 3;
 const CERTIFY_EVERY: usize = 5;
 
 /// Steps until the robots agree on one assignment whose certificate slacks sum to at most
-/// `tolerance` (see [`PrimalAgent::certificate_slack`]), or `max_rounds`.
+/// `tolerance` (see [`admm_ta_agents::primal::PrimalAgent::certificate_slack`]), or
+/// `max_rounds`.
 fn run_until_certified(
     sim: &mut LockstepSim<MethodAgent>,
     max_rounds: usize,
@@ -649,54 +651,17 @@ fn run_until_certified(
 ) -> SimOutcome {
     // Agreement on one feasible assignment; near-integrality is not needed here.
     let mut streak = AgreementStreak::default();
-    while sim.round() < max_rounds {
-        let agreed_for = streak.observe(sim.step_round(), f64::MAX);
-        observer(&sim.view());
-        if agreed_for >= CERTIFY_AFTER && (agreed_for - CERTIFY_AFTER).is_multiple_of(CERTIFY_EVERY)
-        {
-            let slack: f64 = sim
+    sim.run_until(max_rounds, observer, |sim| {
+        let agreed_for = streak.observe(sim.view().reports, f64::MAX);
+        agreed_for >= CERTIFY_AFTER
+            && (agreed_for - CERTIFY_AFTER).is_multiple_of(CERTIFY_EVERY)
+            && sim
                 .agents()
                 .iter()
                 .map(ConsensusAgent::certificate_slack)
-                .sum();
-            if slack <= tolerance {
-                return SimOutcome {
-                    rounds: sim.round(),
-                    stopped: true,
-                };
-            }
-        }
-    }
-    SimOutcome {
-        rounds: sim.round(),
-        stopped: false,
-    }
-}
-
-/// Steps until the robots' own columns have a relaxed objective within 0.1% of
-/// `optimal_cost` (the paper's criterion), or `max_rounds`.
-fn run_until_within(
-    sim: &mut LockstepSim<MethodAgent>,
-    problem: &TaskAssignmentProblem,
-    optimal_cost: f64,
-    max_rounds: usize,
-    observer: &mut dyn FnMut(&RoundView<'_>),
-) -> SimOutcome {
-    while sim.round() < max_rounds {
-        sim.step_round();
-        let view = sim.view();
-        observer(&view);
-        if within_0_1pct(relaxed_objective(problem, &view), optimal_cost) {
-            return SimOutcome {
-                rounds: sim.round(),
-                stopped: true,
-            };
-        }
-    }
-    SimOutcome {
-        rounds: sim.round(),
-        stopped: false,
-    }
+                .sum::<f64>()
+                <= tolerance
+    })
 }
 
 /// `Σ_i α_iᵀ x_i` over the robots' own relaxed columns.

@@ -2,11 +2,11 @@
 //! with a conflict-free assignment, whatever the graph; its optimality gap is measured, not
 //! assumed.
 
+mod common;
+
 use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
-use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::solve::{SolveConfig, solve};
-use admm_ta_topologies::TopologySpec;
 
 #[test]
 fn cbaa_always_ends_conflict_free_on_any_connected_graph() {
@@ -21,16 +21,8 @@ fn cbaa_always_ends_conflict_free_on_any_connected_graph() {
             "geometric:0.5",
         ] {
             for seed in 0..8 {
-                let problem = TaskAssignmentProblem::new(
-                    CostMatrix::uniform(robots, tasks, 500 + seed).unwrap(),
-                    CaseChoice::Auto,
-                )
-                .unwrap();
-                let graph = topology
-                    .parse::<TopologySpec>()
-                    .unwrap()
-                    .build(robots, seed)
-                    .unwrap();
+                let (problem, graph) =
+                    common::uniform_instance(robots, tasks, 500 + seed, topology, seed);
                 let config = SolveConfig {
                     method: Method::Cbaa,
                     seed,

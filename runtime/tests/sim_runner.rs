@@ -1,8 +1,9 @@
 //! The lockstep simulation: deterministic, worker-count independent, and its stop rule
 //! does not stop at wrong assignments.
 
+use admm_ta_agents::method::MethodAgent;
 use admm_ta_agents::oracle;
-use admm_ta_agents::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
+use admm_ta_agents::primal::{PrimalSettings, ProjectionPath};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rho::default_rho;
 use admm_ta_agents::stopping::NeverStop;
@@ -14,7 +15,7 @@ fn agents(
     problem: &TaskAssignmentProblem,
     graph: &Graph,
     path: ProjectionPath,
-) -> Vec<PrimalAgent> {
+) -> Vec<MethodAgent> {
     let rho = default_rho(problem.costs(), graph.mean_degree());
     let settings = PrimalSettings {
         projection: path,
@@ -214,7 +215,11 @@ fn certificate_slack_bounds_the_optimality_gap_in_every_round() {
                 let slack: f64 = sim
                     .agents()
                     .iter()
-                    .map(|a| a.certificate_slack_for(pi))
+                    .map(|a| {
+                        a.as_primal()
+                            .expect("primal team")
+                            .certificate_slack_for(pi)
+                    })
                     .sum();
                 assert!(
                     gap <= slack + 1e-9,

@@ -2,11 +2,11 @@
 //! and Case 2, complete and random graphs, many seeds. (The oracle instances are checked in
 //! the workspace's `tests/oracle_instances.rs`.)
 
+mod common;
+
 use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
-use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::solve::{SolveConfig, solve};
-use admm_ta_topologies::TopologySpec;
 
 #[test]
 fn the_local_stop_never_certifies_a_wrong_assignment() {
@@ -20,16 +20,8 @@ fn the_local_stop_never_certifies_a_wrong_assignment() {
     for method in Method::ADMM {
         for (robots, tasks, topology) in settings {
             for seed in 0..15 {
-                let problem = TaskAssignmentProblem::new(
-                    CostMatrix::uniform(robots, tasks, 100 + seed).unwrap(),
-                    CaseChoice::Auto,
-                )
-                .unwrap();
-                let graph = topology
-                    .parse::<TopologySpec>()
-                    .unwrap()
-                    .build(robots, seed)
-                    .unwrap();
+                let (problem, graph) =
+                    common::uniform_instance(robots, tasks, 100 + seed, topology, seed);
                 let config = SolveConfig {
                     method,
                     seed,
