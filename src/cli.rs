@@ -139,7 +139,9 @@ struct SolveArgs {
     topology: String,
     /// primal (Algorithm 1, exchanges m×n matrices), dual (Algorithm 2, exchanges n+m
     /// multipliers), inexact-dual (proximal-gradient x-update, no inner solve), cbaa (the
-    /// consensus-based auction baseline: fast, conflict-free, not optimal), dist-hungarian
+    /// consensus-based auction baseline: fast, conflict-free, not optimal), market (Liu &
+    /// Shell's price-escalation market replicated over the graph: optimal, 2·diameter
+    /// rounds per price raise, sends demand bits only), dist-hungarian
     /// (robots flood their cost rows and solve locally: optimal after a graph diameter) or
     /// hungarian (the centralized optimum, one round, sim only).
     #[arg(long, value_enum, default_value = "primal")]
@@ -211,6 +213,7 @@ enum MethodArg {
     Dual,
     InexactDual,
     Cbaa,
+    Market,
     DistHungarian,
     Hungarian,
 }
@@ -222,6 +225,7 @@ impl MethodArg {
             Self::Dual => Method::Dual,
             Self::InexactDual => Method::InexactDual,
             Self::Cbaa => Method::Cbaa,
+            Self::Market => Method::Market,
             Self::DistHungarian => Method::DistHungarian,
             Self::Hungarian => Method::Hungarian,
         }

@@ -374,6 +374,27 @@ fn baselines_report_rounds_messages_and_bytes() {
         8 * (100 - 20),
         "the primal sends the m×n matrix, CBAA 2m values"
     );
+    let market = json(&admm_ta(&[
+        "solve",
+        "--robots",
+        "10",
+        "--tasks",
+        "10",
+        "--method",
+        "market",
+        "--topology",
+        "chain",
+        "--check",
+        "--json",
+    ]));
+    assert_eq!(market["converged"], true);
+    assert_eq!(market["check"]["optimal"], true);
+    // n row flags, n packed demand words, one price increment: 21 values against 20.
+    assert_eq!(
+        market["message_bytes"].as_u64().unwrap() - bytes,
+        8,
+        "the market sends demand bits, not costs"
+    );
 }
 
 #[test]

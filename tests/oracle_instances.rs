@@ -167,10 +167,19 @@ fn inexact_dual_reaches_the_100_by_100_optimum() {
     trace("inexact dual 100x100", &report);
 }
 
-/// The distributed Hungarian baseline reaches every oracle optimum, on the complete graph and
-/// on a sparse random one, stopping by itself without conflicts.
+/// The optimal baselines (distributed Hungarian, market) reach every oracle optimum, on the
+/// complete graph and on a sparse random one, stopping by themselves without conflicts.
 #[test]
 fn distributed_hungarian_reaches_every_optimum() {
+    optimal_baseline_reaches_every_optimum(Method::DistHungarian);
+}
+
+#[test]
+fn market_reaches_every_optimum() {
+    optimal_baseline_reaches_every_optimum(Method::Market);
+}
+
+fn optimal_baseline_reaches_every_optimum(method: Method) {
     for instance in oracle_instances() {
         let problem = load(&instance);
         let n = problem.robots();
@@ -178,8 +187,8 @@ fn distributed_hungarian_reaches_every_optimum() {
             generate::complete(n).unwrap(),
             generate::random_connected(n, 0.2, 3).unwrap(),
         ] {
-            let report = run(Method::DistHungarian, &problem, &graph, 5000);
-            let name = format!("{} on {}", instance.name, graph.name());
+            let report = run(method, &problem, &graph, 200_000);
+            let name = format!("{} {} on {}", method.name(), instance.name, graph.name());
             assert_optimal(&report, &instance, &name, 1e-9);
             assert!(report.converged, "{name}: no stop");
             assert_eq!(
@@ -187,6 +196,7 @@ fn distributed_hungarian_reaches_every_optimum() {
                 graph.diameter().unwrap(),
                 "{name}"
             );
+            trace(&name, &report);
         }
     }
 }

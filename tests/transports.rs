@@ -178,6 +178,13 @@ fn baselines_agree_across_transports() {
         StopRule::Local,
         1000,
     );
+    all_transports_with(
+        Method::Market,
+        &problem(9, 6, 4),
+        &graph("random:0.3", 9, 4),
+        StopRule::Local,
+        5000,
+    );
 }
 
 #[test]

@@ -10,6 +10,7 @@ pub mod dual;
 pub mod general;
 pub mod local_stop;
 pub mod lsap;
+pub mod market;
 pub mod method;
 pub mod oracle;
 pub mod primal;

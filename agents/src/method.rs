@@ -14,6 +14,7 @@ use crate::agent::{ConsensusAgent, Inbox, StepReport};
 use crate::cbaa::CbaaAgent;
 use crate::dist_hungarian::DistHungarianAgent;
 use crate::dual::{DEFAULT_GAMMA_FACTOR, DualAgent, DualSettings, DualUpdate};
+use crate::market::MarketAgent;
 use crate::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
 use crate::problem::AssignmentCase;
 use crate::rho::RhoSchedule;
@@ -32,6 +33,8 @@ pub enum Method {
     InexactDual,
     /// Consensus-based auction algorithm (Choi, Brunet & How 2009): a greedy baseline.
     Cbaa,
+    /// Market with strategic pricing (Liu & Shell 2013), replicated over the graph: optimal.
+    Market,
     /// Distributed Hungarian as the paper runs it: flood the cost rows, solve locally.
     DistHungarian,
     /// The centralized optimum (one "round", no agents): the reference row.
@@ -42,11 +45,12 @@ impl Method {
     /// The consensus ADMM methods of the paper.
     pub const ADMM: [Method; 3] = [Method::Primal, Method::Dual, Method::InexactDual];
     /// Every method.
-    pub const ALL: [Method; 6] = [
+    pub const ALL: [Method; 7] = [
         Method::Primal,
         Method::Dual,
         Method::InexactDual,
         Method::Cbaa,
+        Method::Market,
         Method::DistHungarian,
         Method::Hungarian,
     ];
@@ -58,6 +62,7 @@ impl Method {
             Self::Dual => "dual",
             Self::InexactDual => "inexact-dual",
             Self::Cbaa => "cbaa",
+            Self::Market => "market",
             Self::DistHungarian => "dist-hungarian",
             Self::Hungarian => "hungarian",
         }
@@ -74,6 +79,7 @@ impl Method {
             Self::Primal | Self::DistHungarian => robots * tasks,
             Self::Dual | Self::InexactDual => robots + tasks,
             Self::Cbaa => 2 * tasks,
+            Self::Market => MarketAgent::payload_len_for(robots),
             Self::Hungarian => 0,
         }
     }
@@ -88,7 +94,7 @@ pub struct AgentSettings {
     pub projection: ProjectionPath,
     /// `g` of the inexact dual's `γ = g (m+1)/(2dρ)`.
     pub gamma_factor: f64,
-    /// Graph diameter (the dual methods' certificate needs it).
+    /// Graph diameter (the dual methods' certificate and the market's phases need it).
     pub diameter: usize,
     /// Total cost tolerance of the optimality certificate (the dual methods check their
     /// multipliers' agreement against it).
@@ -120,6 +126,7 @@ enum Algorithm {
     Primal(PrimalAgent),
     Dual(DualAgent),
     Cbaa(CbaaAgent),
+    Market(MarketAgent),
     DistHungarian(DistHungarianAgent),
 }
 
@@ -173,6 +180,13 @@ impl MethodAgent {
                 }),
             )),
             Method::Cbaa => Algorithm::Cbaa(CbaaAgent::new(index, costs)),
+            Method::Market => Algorithm::Market(MarketAgent::new(
+                index,
+                costs,
+                robots,
+                case,
+                settings.diameter,
+            )),
             Method::DistHungarian => {
                 Algorithm::DistHungarian(DistHungarianAgent::new(index, costs, robots, case))
             }
@@ -197,7 +211,7 @@ impl MethodAgent {
         match &mut self.algorithm {
             Algorithm::Primal(a) => a.set_rho(rho),
             Algorithm::Dual(a) => a.set_rho(rho),
-            Algorithm::Cbaa(_) | Algorithm::DistHungarian(_) => {}
+            Algorithm::Cbaa(_) | Algorithm::Market(_) | Algorithm::DistHungarian(_) => {}
         }
     }
 
@@ -205,7 +219,10 @@ impl MethodAgent {
     pub fn as_primal(&self) -> Option<&PrimalAgent> {
         match &self.algorithm {
             Algorithm::Primal(a) => Some(a),
-            Algorithm::Dual(_) | Algorithm::Cbaa(_) | Algorithm::DistHungarian(_) => None,
+            Algorithm::Dual(_)
+            | Algorithm::Cbaa(_)
+            | Algorithm::Market(_)
+            | Algorithm::DistHungarian(_) => None,
         }
     }
 
@@ -214,6 +231,7 @@ impl MethodAgent {
             Algorithm::Primal(a) => a,
             Algorithm::Dual(a) => a,
             Algorithm::Cbaa(a) => a,
+            Algorithm::Market(a) => a,
             Algorithm::DistHungarian(a) => a,
         }
     }
@@ -235,6 +253,7 @@ impl ConsensusAgent for MethodAgent {
             Algorithm::Primal(a) => a.step(inbox, out),
             Algorithm::Dual(a) => a.step(inbox, out),
             Algorithm::Cbaa(a) => a.step(inbox, out),
+            Algorithm::Market(a) => a.step(inbox, out),
             Algorithm::DistHungarian(a) => a.step(inbox, out),
         }
     }

@@ -48,7 +48,7 @@ pub fn default_rho_for(method: Method, costs: &CostMatrix, mean_degree: f64) -> 
         Method::Primal => default_rho(costs, mean_degree),
         Method::Dual => dual(DUAL_RHO_FACTOR),
         Method::InexactDual => dual(INEXACT_DUAL_RHO_FACTOR),
-        Method::Cbaa | Method::DistHungarian | Method::Hungarian => 0.0,
+        Method::Cbaa | Method::Market | Method::DistHungarian | Method::Hungarian => 0.0,
     }
 }
 

@@ -48,6 +48,9 @@ fn team_rounds(
         .collect();
     let len = method.payload_len(robots, tasks);
     let mut current = vec![0.0; len * robots];
+    for (i, agent) in agents.iter().enumerate() {
+        agent.write_initial_payload(&mut current[i * len..(i + 1) * len]);
+    }
     let mut next = vec![0.0; len * robots];
     let mut allocations_in_steps = 0;
     for round in 0..rounds {
@@ -76,6 +79,7 @@ fn every_method_steps_without_allocating_after_warm_up() {
         Method::Dual,
         Method::InexactDual,
         Method::Cbaa,
+        Method::Market,
     ] {
         assert_eq!(
             team_rounds(method, 12, 12, AssignmentCase::One, 40),

@@ -136,6 +136,7 @@ mod tests {
             methods: vec![
                 Method::Primal,
                 Method::Cbaa,
+                Method::Market,
                 Method::DistHungarian,
                 Method::Hungarian,
             ],
@@ -146,7 +147,7 @@ mod tests {
             agent_program: None,
         };
         let rows = run(&config, &|_| {}).unwrap();
-        assert_eq!(rows.len(), 4);
+        assert_eq!(rows.len(), 5);
         for row in &rows {
             assert_eq!(row.runs, 2);
             if row.method != Method::Cbaa {
