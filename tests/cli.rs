@@ -409,10 +409,10 @@ fn compare_experiment_prints_a_row_per_method_and_transport() {
         "sim,threads",
     ];
     let (table, v) = experiment(&args, "compare.json");
-    // 5 distributed methods × 2 transports + the centralized row, plus the header.
+    // 6 distributed methods × 2 transports + the centralized row.
     assert_eq!(
         table.lines().filter(|l| l.starts_with("| 4 |")).count(),
-        11,
+        13,
         "{table}"
     );
     for row in v.as_array().unwrap() {
