@@ -262,8 +262,14 @@ pub fn run(cli: Cli) -> Result<()> {
             run,
             index,
             scenario,
-        } => admm_ta_runtime::ipc::agent_process::run(&run, index, &scenario)
-            .map_err(|e| anyhow::anyhow!("agent {index}: {e}")),
+        } => admm_ta_runtime::ipc::agent_process::run(&run, index, &scenario).map_err(|e| {
+            // Exchange errors already start with "agent N:".
+            if e.starts_with(&format!("agent {index}:")) {
+                anyhow::anyhow!(e)
+            } else {
+                anyhow::anyhow!("agent {index}: {e}")
+            }
+        }),
         Command::Experiment { experiment } => run_experiment(experiment),
         Command::Topology { kind, robots, seed } => {
             let spec: TopologySpec = kind.parse()?;

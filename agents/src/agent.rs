@@ -46,12 +46,32 @@ pub struct StepReport {
     pub assignment_digest: u64,
 }
 
+/// `Err` unless `payload` has `expected` values.
+pub fn check_length(payload: &[f64], expected: usize) -> Result<(), String> {
+    if payload.len() == expected {
+        Ok(())
+    } else {
+        Err(format!("{} values, expected {expected}", payload.len()))
+    }
+}
+
 /// One robot's algorithm.
 pub trait ConsensusAgent {
     /// Length of the payload exchanged every round.
     fn payload_len(&self) -> usize;
     /// The round-0 payload.
     fn write_initial_payload(&self, out: &mut [f64]);
+    /// Checks a neighbour's payload before [`ConsensusAgent::step`] reads it: a corrupted
+    /// message (wrong length, NaN, a value outside what the method ever sends) is refused
+    /// with a one-line reason instead of flowing into the solution. The default accepts
+    /// `payload_len` finite numbers; methods with sentinels override it.
+    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+        check_length(payload, self.payload_len())?;
+        match payload.iter().position(|v| !v.is_finite()) {
+            Some(k) => Err(format!("value {k} is {}", payload[k])),
+            None => Ok(()),
+        }
+    }
     /// One iteration: read neighbours' round-`k` payloads, write the round-`k+1` payload.
     fn step(&mut self, inbox: &dyn Inbox, out: &mut [f64]) -> StepReport;
     /// The robot's own task, rounded from its current iterate so that robots holding the

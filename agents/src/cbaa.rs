@@ -103,6 +103,22 @@ impl ConsensusAgent for CbaaAgent {
         out.copy_from_slice(&self.lists);
     }
 
+    /// Bids finite or `−∞` (none yet); winners "nobody" or a robot index (an integer).
+    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+        let m = self.tasks;
+        crate::agent::check_length(payload, 2 * m)?;
+        for j in 0..m {
+            let (bid, winner) = (payload[j], payload[m + j]);
+            if bid.is_nan() || bid == f64::INFINITY {
+                return Err(format!("bid on task {j} is {bid}"));
+            }
+            if winner != NOBODY && !(winner >= 0.0 && winner.fract() == 0.0 && winner < 1e9) {
+                return Err(format!("winner of task {j} is {winner}"));
+            }
+        }
+        Ok(())
+    }
+
     fn step(&mut self, inbox: &dyn Inbox, out: &mut [f64]) -> StepReport {
         let m = self.tasks;
         out.copy_from_slice(&self.lists);

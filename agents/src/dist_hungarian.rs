@@ -82,6 +82,21 @@ impl ConsensusAgent for DistHungarianAgent {
         out.copy_from_slice(&self.known);
     }
 
+    /// Each row all `NaN` (unknown) or all finite.
+    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+        crate::agent::check_length(payload, self.known.len())?;
+        for (r, row) in payload.chunks(self.tasks).enumerate() {
+            let unknown = row[0].is_nan();
+            if row
+                .iter()
+                .any(|v| if unknown { !v.is_nan() } else { !v.is_finite() })
+            {
+                return Err(format!("cost row {r} is partly unknown or not finite"));
+            }
+        }
+        Ok(())
+    }
+
     fn step(&mut self, inbox: &dyn Inbox, out: &mut [f64]) -> StepReport {
         let m = self.tasks;
         let before = self.known_rows;

@@ -351,6 +351,27 @@ impl ConsensusAgent for MarketAgent {
         out.copy_from_slice(&self.payload);
     }
 
+    /// Row flags 0 or 1, packed words integers below `2⁴⁸`, the raise positive or `+∞`.
+    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+        let n = self.robots;
+        crate::agent::check_length(payload, self.payload.len())?;
+        if let Some(r) = payload[..n].iter().position(|&f| f != 0.0 && f != 1.0) {
+            return Err(format!("row flag {r} is {}", payload[r]));
+        }
+        let words = &payload[n..payload.len() - 1];
+        if let Some(w) = words
+            .iter()
+            .position(|&w| !(0.0..(1u64 << BITS_PER_WORD) as f64).contains(&w) || w.fract() != 0.0)
+        {
+            return Err(format!("demand word {w} is {}", words[w]));
+        }
+        let delta = payload[payload.len() - 1];
+        if delta.is_nan() || delta <= 0.0 {
+            return Err(format!("price raise is {delta}"));
+        }
+        Ok(())
+    }
+
     fn step(&mut self, inbox: &dyn Inbox, out: &mut [f64]) -> StepReport {
         let n = self.robots;
         let words = self.words();

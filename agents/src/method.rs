@@ -244,6 +244,9 @@ impl ConsensusAgent for MethodAgent {
     fn write_initial_payload(&self, out: &mut [f64]) {
         self.inner().write_initial_payload(out)
     }
+    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+        self.inner().check_payload(payload)
+    }
     fn step(&mut self, inbox: &dyn Inbox, out: &mut [f64]) -> StepReport {
         if let Some(schedule) = self.schedule {
             self.set_rho(schedule.rho(self.steps));

@@ -67,13 +67,32 @@ pub enum ExchangeError {
     /// Another agent of the run failed first.
     #[error("agent {agent}: stopped because another agent failed")]
     Aborted { agent: usize },
+    /// A neighbour's message failed the method's payload check (NaN, out-of-range value).
+    #[error("agent {agent}: rejected the round-{round} message of neighbour {neighbour}: {what}")]
+    BadPayload {
+        agent: usize,
+        neighbour: usize,
+        round: u64,
+        what: String,
+    },
+    /// Another agent of the run died (its process is gone); this one stopped cleanly.
+    #[error("agent {agent}: stopped at round {round} because agent {failed} {how}")]
+    PeerFailed {
+        agent: usize,
+        failed: usize,
+        round: u64,
+        how: String,
+    },
 }
 
 /// The error that ended a run: the first that is not a consequence of another.
 pub fn root_cause(errors: impl IntoIterator<Item = ExchangeError>) -> Option<ExchangeError> {
     let mut fallback = None;
     for e in errors {
-        if matches!(e, ExchangeError::Aborted { .. }) {
+        if matches!(
+            e,
+            ExchangeError::Aborted { .. } | ExchangeError::PeerFailed { .. }
+        ) {
             fallback.get_or_insert(e);
         } else {
             return Some(e);
@@ -96,6 +115,8 @@ pub trait Exchange {
     fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError>;
     /// Header of the `k`-th neighbour's gathered message.
     fn neighbour_header(&self, k: usize) -> &RoundHeader;
+    /// Payload of the `k`-th neighbour's gathered message.
+    fn neighbour_payload(&self, k: usize) -> &[f64];
     /// Runs `compute` on the gathered payloads and an outgoing buffer, then publishes that
     /// buffer with the header `compute` returns.
     fn compute_and_publish(
@@ -172,6 +193,16 @@ pub fn run_agent<A: ConsensusAgent + ?Sized>(
         let started = Instant::now();
         exchange.gather(round, started + plan.round_timeout)?;
         let gathered = Instant::now();
+        for k in 0..degree {
+            if let Err(what) = agent.check_payload(exchange.neighbour_payload(k)) {
+                return Err(ExchangeError::BadPayload {
+                    agent: plan.index,
+                    neighbour: exchange.neighbour_header(k).sender as usize,
+                    round,
+                    what,
+                });
+            }
+        }
         let verdict = match &mut stop {
             AgentStop::Local(rule) => {
                 let ex = &*exchange;

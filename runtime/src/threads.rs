@@ -177,6 +177,14 @@ impl Exchange for ThreadExchange<'_> {
         self.fabric_header(self.fabric.neighbours[self.index][k], self.gathered)
     }
 
+    fn neighbour_payload(&self, k: usize) -> &[f64] {
+        let j = self.fabric.neighbours[self.index][k];
+        let slot = &self.fabric.agents[j].slots[(self.gathered % 2) as usize];
+        // SAFETY: the neighbour published this slot (release) before we gathered it
+        // (acquire), and does not overwrite it before we publish our next round.
+        unsafe { &*slot.payload.get() }
+    }
+
     fn compute_and_publish(
         &mut self,
         compute: &mut dyn FnMut(&dyn Inbox, &mut [f64]) -> RoundHeader,

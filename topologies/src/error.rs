@@ -5,6 +5,15 @@ use std::path::PathBuf;
 pub enum TopologyError {
     #[error("a team needs at least one robot")]
     NoRobots,
+    #[error(
+        "a {what} graph of {robots} robots has {pairs} robot pairs to consider; the limit is {max} (about 6300 robots)",
+        max = crate::generate::MAX_PAIRS
+    )]
+    TooDense {
+        what: &'static str,
+        robots: usize,
+        pairs: u128,
+    },
     #[error("too many robots: {0} (the limit is {max})", max = crate::graph::MAX_ROBOTS)]
     TooManyRobots(usize),
     #[error("edge ({0}, {1}) names robot {2}, but robots are numbered 0..{3}")]

@@ -5,8 +5,26 @@ use crate::{Graph, TopologyError, rng::SeededRng};
 /// How many times a random family is redrawn before giving up on connectivity.
 pub const MAX_ATTEMPTS: usize = 10_000;
 
+/// Largest number of robot pairs a dense family (complete, random, geometric) considers:
+/// refused before any allocation, so a typo like `--robots 100000` fails at once instead of
+/// exhausting memory.
+pub const MAX_PAIRS: u128 = 20_000_000;
+
+fn check_pairs(what: &'static str, robots: usize) -> Result<(), TopologyError> {
+    let pairs = robots as u128 * (robots as u128).saturating_sub(1) / 2;
+    if pairs > MAX_PAIRS {
+        return Err(TopologyError::TooDense {
+            what,
+            robots,
+            pairs,
+        });
+    }
+    Ok(())
+}
+
 /// Every robot talks to every other robot.
 pub fn complete(n: usize) -> Result<Graph, TopologyError> {
+    check_pairs("complete", n)?;
     let edges: Vec<_> = (0..n)
         .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
         .collect();
@@ -62,6 +80,7 @@ pub fn random_connected(n: usize, p: f64, seed: u64) -> Result<Graph, TopologyEr
             reason: "the edge probability P must be in (0, 1]".into(),
         });
     }
+    check_pairs("random", n)?;
     let mut rng = SeededRng::for_stream(seed, 0x746f706f);
     for _ in 0..MAX_ATTEMPTS {
         let mut edges = Vec::new();
@@ -97,6 +116,7 @@ pub fn random_geometric(
             reason: "the radius R must be a positive number".into(),
         });
     }
+    check_pairs("geometric", n)?;
     let mut rng = SeededRng::for_stream(seed, 0x67656f6d);
     for _ in 0..MAX_ATTEMPTS {
         let points: Vec<[f64; 2]> = (0..n).map(|_| [rng.uniform(), rng.uniform()]).collect();

@@ -4,7 +4,7 @@
 //! round loop and writes its outcome as `result-I.json` into the run directory. It always
 //! returns (never `process::exit`), so iceoryx2's `Drop`s release its shared memory.
 
-use crate::exchange::{AgentOutcome, run_agent};
+use crate::exchange::{AgentOutcome, ExchangeError, run_agent};
 use crate::ipc::scenario::Scenario;
 use crate::ipc::transport::{IpcExchange, run_config};
 use serde::{Deserialize, Serialize};
@@ -31,6 +31,16 @@ pub fn log_path(run_dir: &Path, index: usize) -> PathBuf {
     run_dir.join(format!("agent-{index}.log"))
 }
 
+/// The neighbour an exchange error is the fault of, if any.
+fn culprit(error: &ExchangeError) -> Option<usize> {
+    match error {
+        ExchangeError::BadPayload { neighbour, .. }
+        | ExchangeError::WrongLength { neighbour, .. }
+        | ExchangeError::OutOfOrder { neighbour, .. } => Some(*neighbour),
+        _ => None,
+    }
+}
+
 fn unix_ns() -> u128 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
@@ -47,10 +57,23 @@ pub fn run(run_id: &str, index: usize, scenario_path: &Path) -> Result<(), Strin
     let plan = scenario.plan(index).map_err(|e| e.to_string())?;
     let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
-    let mut exchange = IpcExchange::connect(&scenario.endpoint(&graph, index), &config, deadline)
+    let fault = crate::ipc::fault::fault_for(index)?;
+    let exchange = IpcExchange::connect(&scenario.endpoint(&graph, index), &config, deadline)
         .map_err(|e| e.to_string())?;
+    let mut exchange = crate::ipc::fault::FaultyExchange::new(exchange, fault);
     let connected_unix_ns = unix_ns();
-    let outcome = run_agent(&mut agent, &mut exchange, &plan).map_err(|e| e.to_string())?;
+    let outcome = run_agent(&mut agent, &mut exchange, &plan).map_err(|e| {
+        // Point the launcher and the other agents at the agent that caused it.
+        let culprit = match &e {
+            // Blocked neighbours time out too: blame the agent everybody waits for.
+            ExchangeError::Timeout { .. } => Some(exchange.inner.laggard()),
+            e => culprit(e),
+        };
+        if let Some(culprit) = culprit {
+            exchange.inner.blame(culprit);
+        }
+        e.to_string()
+    })?;
     // Release the ports before reporting: once the launcher sees the result it may clean up.
     drop(exchange);
     let report = AgentReport {

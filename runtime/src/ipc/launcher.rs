@@ -1,21 +1,25 @@
 //! The launcher: writes the scenario, spawns one process per agent, supervises them, reaps
 //! every child and removes everything of the run.
 //!
-//! A failing agent (non-zero exit, crash, timeout) ends the run at once: the launcher kills
-//! the others, reaps all of them (`waitpid`: an unreaped child keeps its iceoryx2 locks), and
-//! reports the failing agent's last log line. Whatever happens, the run's namespace
-//! ([`RunNamespace`]) is removed when the launcher returns.
+//! A failing agent (non-zero exit, crash, `kill -9`, timeout) ends the run at once: the
+//! launcher marks it failed on the run's board, so every other agent stops cleanly at its
+//! next wait (within a 20 ms sleep slice) with an error naming the failed agent and its
+//! round, releasing its iceoryx2 ports; agents that have not exited after a grace period
+//! are killed. Every child is reaped (`waitpid`: an unreaped child keeps its iceoryx2 locks),
+//! the dead agents' iceoryx2 nodes are removed by iceoryx2's dead-node cleanup, and the error
+//! is one line: who failed, how, at which round, and what happened to the others. Whatever
+//! happens, the run's namespace ([`RunNamespace`]) is removed when the launcher returns.
 
 use crate::exchange::AgentOutcome;
 use crate::ipc::agent_process::{AgentReport, log_path, result_path};
 use crate::ipc::namespace::RunNamespace;
 use crate::ipc::scenario::Scenario;
-use crate::ipc::transport::board_size;
+use crate::ipc::transport::{Board, board_size, cleanup_dead_nodes, run_config};
 use crate::latency::RoundLatency;
 use iceoryx2::prelude::{FileName, SemanticString};
 use iceoryx2_bb_posix::creation_mode::CreationMode;
 use iceoryx2_bb_posix::permission::Permission;
-use iceoryx2_bb_posix::shared_memory::{SharedMemory, SharedMemoryBuilder};
+use iceoryx2_bb_posix::shared_memory::SharedMemoryBuilder;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
@@ -43,11 +47,21 @@ pub enum LaunchError {
         program: PathBuf,
         source: std::io::Error,
     },
-    #[error("agent {index} failed ({status}): {message}")]
+    #[error(
+        "agent {index} failed ({status}) after publishing round {round}: {message}; {survivors} other agent(s) stopped cleanly, {killed} had to be killed; {dead_nodes} dead iceoryx2 node(s) cleaned up"
+    )]
     AgentFailed {
         index: usize,
         status: String,
+        /// Last round the failed agent published.
+        round: u64,
         message: String,
+        /// Agents that stopped by themselves after the failure.
+        survivors: usize,
+        /// Agents killed after the grace period.
+        killed: usize,
+        /// Dead iceoryx2 nodes removed by the dead-node cleanup.
+        dead_nodes: usize,
     },
     #[error("agent {index} exited without a readable result: {message}")]
     MissingResult { index: usize, message: String },
@@ -65,12 +79,16 @@ pub struct IpcRun {
     pub leftovers: Vec<PathBuf>,
 }
 
+/// How long the other agents have to stop by themselves after a failure before they are
+/// killed (they notice within a 20 ms sleep slice, or after their current step).
+const FAILURE_GRACE: Duration = Duration::from_secs(2);
+
 /// Children and namespace of a run; dropping it kills and reaps every child still running,
 /// then removes the run's files.
 struct RunGuard {
     namespace: RunNamespace,
     children: Vec<Option<Child>>,
-    _board: Option<SharedMemory>,
+    _board: Option<Board>,
 }
 
 impl Drop for RunGuard {
@@ -111,13 +129,17 @@ fn last_log_line(run_dir: &Path, index: usize) -> String {
         .unwrap_or_else(|| "no message".into())
 }
 
-fn describe(status: ExitStatus) -> String {
+/// `None` for a successful exit, else how the process ended.
+fn describe_exit(status: ExitStatus) -> Option<String> {
     use std::os::unix::process::ExitStatusExt;
-    match (status.code(), status.signal()) {
+    if status.success() {
+        return None;
+    }
+    Some(match (status.code(), status.signal()) {
         (Some(code), _) => format!("exit code {code}"),
         (None, Some(signal)) => format!("killed by signal {signal}"),
         _ => status.to_string(),
-    }
+    })
 }
 
 /// Runs `scenario` (its run id, prefix and root are filled in here) with one process per
@@ -147,7 +169,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
         .has_ownership(true)
         .create()
         .map_err(|e| LaunchError::Board(format!("{e:?}")))?;
-    guard._board = Some(board);
+    guard._board = Some(Board::from_memory(board, scenario.robots));
     let run_dir = namespace.dir.clone();
     let scenario_path = run_dir.join("scenario.json");
     let text = serde_json::to_string(&scenario).expect("a scenario serialises");
@@ -178,38 +200,96 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
 
     // Supervise: reap children as they exit; the first failure ends the run.
     let mut running = scenario.robots;
+    // How each child ended: `Some(None)` success, `Some(Some(how))` failure.
+    let mut ended: Vec<Option<Option<String>>> = vec![None; scenario.robots];
+    // The agent that failed, and the agents that exited with a failure, in order.
+    let mut failed: Option<usize> = None;
+    let mut failure_order = Vec::new();
+    let mut grace_ends = None;
+    let mut killed = 0;
     while running > 0 {
         let mut progressed = false;
-        for index in 0..guard.children.len() {
-            let Some(child) = guard.children[index].as_mut() else {
+        for (index, slot) in guard.children.iter_mut().enumerate() {
+            let Some(child) = slot.as_mut() else {
                 continue;
             };
-            match child.try_wait() {
-                Ok(None) => {}
-                Ok(Some(status)) => {
-                    guard.children[index] = None;
-                    running -= 1;
-                    progressed = true;
-                    if !status.success() {
-                        return Err(LaunchError::AgentFailed {
-                            index,
-                            status: describe(status),
-                            message: last_log_line(&run_dir, index),
-                        });
-                    }
-                }
+            let how = match child.try_wait() {
+                Ok(None) => continue,
+                Ok(Some(status)) => describe_exit(status),
                 Err(e) => {
-                    return Err(LaunchError::AgentFailed {
-                        index,
-                        status: "unknown".into(),
-                        message: format!("cannot wait for the process: {e}"),
-                    });
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    Some(format!("cannot wait for the process: {e}"))
+                }
+            };
+            *slot = None;
+            running -= 1;
+            progressed = true;
+            if how.is_some() {
+                failure_order.push(index);
+            }
+            if how.is_some() && failed.is_none() {
+                let board = guard._board.as_ref().expect("the board exists");
+                // An agent may have found a dead or misbehaving peer first: then that peer
+                // is the one.
+                failed = Some(board.mark_failed(index).unwrap_or(index));
+                grace_ends = Some(std::time::Instant::now() + FAILURE_GRACE);
+            }
+            ended[index] = Some(how);
+        }
+        // The failed agent may still run (hung, or sending garbage): it is not waited for.
+        if let Some(culprit) = failed
+            && let Some(mut child) = guard.children[culprit].take()
+        {
+            let _ = child.kill();
+            let _ = child.wait();
+            ended[culprit] = Some(Some("killed by the launcher".into()));
+            running -= 1;
+        }
+        if let Some(ends) = grace_ends
+            && std::time::Instant::now() >= ends
+        {
+            for (index, slot) in guard.children.iter_mut().enumerate() {
+                if let Some(mut child) = slot.take() {
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    ended[index] = Some(Some("killed after the grace period".into()));
+                    killed += 1;
+                    running -= 1;
                 }
             }
         }
         if !progressed {
             std::thread::sleep(Duration::from_millis(2));
         }
+    }
+    if let Some(index) = failed {
+        let board = guard._board.as_ref().expect("the board exists");
+        // The reporter whose message says what went wrong (not "stopped because …").
+        let reporter = failure_order
+            .iter()
+            .copied()
+            .find(|&i| i == index || !last_log_line(&run_dir, i).contains("because agent"))
+            .unwrap_or(index);
+        let status = match ended[index].clone().flatten() {
+            Some(how) if index == reporter => how,
+            _ => format!("reported by agent {reporter}"),
+        };
+        let survivors = scenario.robots - 1 - killed.min(scenario.robots - 1);
+        let dead_nodes = run_config(&namespace.prefix, &namespace.iceoryx_root())
+            .map(|config| cleanup_dead_nodes(&config))
+            .unwrap_or(0);
+        return Err(LaunchError::AgentFailed {
+            index,
+            status,
+            round: board.published_round(index),
+            message: last_log_line(&run_dir, reporter)
+                .trim_start_matches("error: ")
+                .to_string(),
+            survivors,
+            killed,
+            dead_nodes,
+        });
     }
 
     let mut outcomes = Vec::with_capacity(scenario.robots);

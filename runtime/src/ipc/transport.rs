@@ -27,6 +27,7 @@ use crate::exchange::{Exchange, ExchangeError};
 use crate::header::RoundHeader;
 use crate::wait::{Arrival, CountingBarrier, WaitPolicy};
 use admm_ta_agents::agent::Inbox;
+use iceoryx2::node::NodeView;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
@@ -70,9 +71,25 @@ pub struct IpcEndpoint {
     pub global_barrier: bool,
 }
 
-/// Bytes of the board: the global barrier's line, then one line of two counters per agent.
+/// Bytes of the board: the global barrier's line, one line per agent (two arrival counters
+/// and the last round it published), then the failure line.
 pub fn board_size(agents: usize) -> usize {
-    LINE * (agents + 1)
+    LINE * (agents + 2)
+}
+
+/// How long a waiting agent sleeps before it looks for failed agents again.
+const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
+/// How often a waiting agent scans the run's iceoryx2 nodes for dead ones.
+const DEAD_NODE_SCAN_EVERY: Duration = Duration::from_millis(100);
+
+/// iceoryx2 node name of agent `i` (how others recognise it among dead nodes).
+pub fn node_name(i: usize) -> String {
+    format!("agent-{i}")
+}
+
+/// Agent index of an iceoryx2 node name made by [`node_name`].
+pub fn agent_of_node(name: &str) -> Option<usize> {
+    name.strip_prefix("agent-")?.parse().ok()
 }
 
 const LINE: usize = 64;
@@ -83,13 +100,70 @@ pub fn arrivals_target(degree: usize, round: u64) -> u64 {
     degree as u64 * (round / 2 + 1)
 }
 
-/// The run-wide shared memory of arrival counters and the global barrier.
-struct Board {
+/// The run-wide shared memory of arrival counters, published rounds, the global barrier and
+/// the failure mark.
+pub struct Board {
     memory: SharedMemory,
     agents: usize,
 }
 
 impl Board {
+    /// Opens the board `shm` of a run of `agents` (created by the launcher).
+    pub fn open(shm: &str, agents: usize) -> Result<Self, String> {
+        let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
+        let memory = SharedMemoryBuilder::new(&name)
+            .is_memory_locked(false)
+            .open_existing(iceoryx2_bb_posix::access_mode::AccessMode::ReadWrite)
+            .map_err(|e| format!("cannot open the run's board {shm}: {e:?}"))?;
+        if memory.size() < board_size(agents) {
+            return Err(format!("the run's board {shm} is too small"));
+        }
+        Ok(Self { memory, agents })
+    }
+
+    /// Wraps the board memory the launcher created.
+    pub fn from_memory(memory: SharedMemory, agents: usize) -> Self {
+        Self { memory, agents }
+    }
+
+    fn word(&self, offset: usize) -> &AtomicU64 {
+        debug_assert!(offset.is_multiple_of(8) && offset + 8 <= board_size(self.agents));
+        // SAFETY: the segment is zeroed, page-aligned and `board_size` large (checked on
+        // open); the offset is 8-aligned and inside it; every process only uses atomics.
+        unsafe { &*(self.memory.base_address().as_ptr().add(offset) as *const AtomicU64) }
+    }
+
+    /// Marks agent `failed` as failed (the first mark wins); every agent stops at its next
+    /// wait. Returns the agent already marked, if another was first.
+    pub fn mark_failed(&self, failed: usize) -> Option<usize> {
+        let line = LINE * (self.agents + 1);
+        match self.word(line).compare_exchange(
+            0,
+            failed as u64 + 1,
+            Ordering::AcqRel,
+            Ordering::Acquire,
+        ) {
+            Ok(_) => None,
+            Err(first) => Some(first as usize - 1),
+        }
+    }
+
+    /// The agent marked as failed, if any.
+    pub fn failed(&self) -> Option<usize> {
+        let marked = self.word(LINE * (self.agents + 1)).load(Ordering::Acquire);
+        (marked != 0).then(|| marked as usize - 1)
+    }
+
+    /// Last round agent `agent` published (0 before its first step).
+    pub fn published_round(&self, agent: usize) -> u64 {
+        self.word(LINE * (agent + 1) + 16).load(Ordering::Relaxed)
+    }
+
+    fn set_published_round(&self, agent: usize, round: u64) {
+        self.word(LINE * (agent + 1) + 16)
+            .store(round, Ordering::Relaxed);
+    }
+
     fn barrier(&self) -> &CountingBarrier {
         // SAFETY: the launcher created the segment zeroed and `board_size` large (checked on
         // open); the mapping is page-aligned, and every process only touches it through
@@ -100,9 +174,7 @@ impl Board {
     /// Agent `agent`'s arrival counter for rounds of parity `round % 2`.
     fn arrivals(&self, agent: usize, round: u64) -> &AtomicU64 {
         debug_assert!(agent < self.agents);
-        let offset = LINE * (agent + 1) + 8 * (round % 2) as usize;
-        // SAFETY: as in `barrier`; the offset is 8-aligned and inside the segment.
-        unsafe { &*(self.memory.base_address().as_ptr().add(offset) as *const AtomicU64) }
+        self.word(LINE * (agent + 1) + 8 * (round % 2) as usize)
     }
 }
 
@@ -127,6 +199,11 @@ pub struct IpcExchange {
     degrees: Vec<usize>,
     board: Board,
     barrier: Option<BarrierPorts>,
+    /// The run's iceoryx2 configuration (to scan its nodes for dead ones).
+    config: Config,
+    last_dead_node_scan: Instant,
+    /// Fault injection: publish the next payload one value short.
+    truncate_next: bool,
     // Ports first: they must drop before the node.
     _node: Node<Svc>,
 }
@@ -166,7 +243,10 @@ impl IpcExchange {
         let i = endpoint.index;
         let err = |what: String| transport(i, what);
         let t0 = Instant::now();
+        let name =
+            NodeName::new(&node_name(i)).map_err(|e| err(format!("bad node name: {e:?}")))?;
         let node = NodeBuilder::new()
+            .name(&name)
             .config(config)
             .create::<Svc>()
             .map_err(|e| err(format!("cannot create the iceoryx2 node: {e:?}")))?;
@@ -230,7 +310,7 @@ impl IpcExchange {
                     .map_err(|e| err(format!("cannot create a notifier for agent {j}: {e:?}")))?,
             );
         }
-        let board = open_board(&endpoint.board_shm, endpoint.degrees.len(), &err)?;
+        let board = Board::open(&endpoint.board_shm, endpoint.degrees.len()).map_err(err)?;
         let barrier = if endpoint.global_barrier {
             Some(open_barrier(&node, endpoint.degrees.len(), &err)?)
         } else {
@@ -240,7 +320,27 @@ impl IpcExchange {
         // Start-up rendezvous: all neighbours subscribed to us.
         let degree = endpoint.neighbours.len();
         let started = Instant::now();
+        let mut last_scan = Instant::now();
         while own_round.dynamic_config().number_of_subscribers() < degree {
+            if let Some(failed) = board.failed() {
+                return Err(ExchangeError::PeerFailed {
+                    agent: i,
+                    failed,
+                    round: 0,
+                    how: "failed during start-up".into(),
+                });
+            }
+            if last_scan.elapsed() >= DEAD_NODE_SCAN_EVERY {
+                last_scan = Instant::now();
+                if let Some(failed) = scan_dead_agents(config, i, &board) {
+                    return Err(ExchangeError::PeerFailed {
+                        agent: i,
+                        failed,
+                        round: 0,
+                        how: "died during start-up".into(),
+                    });
+                }
+            }
             if Instant::now() >= deadline {
                 return Err(err(format!(
                     "only {} of {degree} neighbours connected within {:?}",
@@ -274,8 +374,52 @@ impl IpcExchange {
             degrees: endpoint.degrees.clone(),
             board,
             barrier,
+            config: config.clone(),
+            last_dead_node_scan: Instant::now(),
+            truncate_next: false,
             _node: node,
         })
+    }
+
+    /// Marks agent `agent` as the one that failed (unless another was marked first), so that
+    /// the launcher and every agent blame it.
+    pub fn blame(&self, agent: usize) {
+        let _ = self.board.mark_failed(agent);
+    }
+
+    /// The agent that published the fewest rounds: after a timeout, the one everybody is
+    /// waiting for, directly or through a chain of blocked neighbours.
+    pub fn laggard(&self) -> usize {
+        (0..self.board.agents)
+            .min_by_key(|&a| (self.board.published_round(a), a))
+            .unwrap_or(self.index)
+    }
+
+    /// Fault injection: the next payload goes out one value short.
+    pub fn truncate_next_payload(&mut self) {
+        self.truncate_next = true;
+    }
+
+    /// Stops this agent if another agent failed: marked on the board (by the launcher or a
+    /// peer), or found dead among the run's iceoryx2 nodes (scanned at most every
+    /// [`DEAD_NODE_SCAN_EVERY`]; a dead node's stale resources are removed on the way).
+    fn check_peers(&mut self, round: u64, scan: bool) -> Result<(), ExchangeError> {
+        let failed = |failed, how: &str| ExchangeError::PeerFailed {
+            agent: self.index,
+            failed,
+            round,
+            how: how.into(),
+        };
+        if let Some(agent) = self.board.failed() {
+            return Err(failed(agent, "failed"));
+        }
+        if scan && self.last_dead_node_scan.elapsed() >= DEAD_NODE_SCAN_EVERY {
+            self.last_dead_node_scan = Instant::now();
+            if let Some(agent) = scan_dead_agents(&self.config, self.index, &self.board) {
+                return Err(failed(agent, "died (its iceoryx2 node is dead)"));
+            }
+        }
+        Ok(())
     }
 
     /// Moves neighbour `k`'s round-`round` message into `held[k]`; `false` if not there yet.
@@ -354,17 +498,28 @@ impl IpcExchange {
     ) -> Result<(), ExchangeError> {
         let i = self.index;
         // Zero-filled once (the loan is uninitialised memory), then written in place.
+        let len = self.payload_len - usize::from(std::mem::take(&mut self.truncate_next));
         let mut sample = self
             .publisher
-            .loan_slice_uninit(self.payload_len)
+            .loan_slice_uninit(len)
             .map_err(|e| transport(i, format!("cannot loan a sample: {e:?}")))?
             .write_from_fn(|_| 0.0);
-        let header = compute(sample.payload_mut());
+        let header = if len < self.payload_len {
+            // Fault injection only: compute in full, send one value short.
+            let mut full = vec![0.0; self.payload_len];
+            let header = compute(&mut full);
+            sample.payload_mut().copy_from_slice(&full[..len]);
+            header
+        } else {
+            compute(sample.payload_mut())
+        };
         *sample.user_header_mut() = header;
         let delivered = sample
             .send()
             .map_err(|e| transport(i, format!("send failed: {e:?}")))?;
         if delivered < self.subscribers.len() {
+            // A neighbour gone because another agent failed: that failure is the cause.
+            self.check_peers(header.round, true)?;
             return Err(transport(
                 i,
                 format!(
@@ -374,6 +529,7 @@ impl IpcExchange {
                 ),
             ));
         }
+        self.board.set_published_round(i, header.round);
         for (notifier, &j) in self.notifiers.iter().zip(&self.neighbours) {
             let arrived = self
                 .board
@@ -390,20 +546,41 @@ impl IpcExchange {
     }
 }
 
-fn open_board(
-    shm: &str,
-    agents: usize,
-    err: &dyn Fn(String) -> ExchangeError,
-) -> Result<Board, ExchangeError> {
-    let name = FileName::new(shm.as_bytes()).map_err(|e| err(format!("bad board name: {e:?}")))?;
-    let memory = SharedMemoryBuilder::new(&name)
-        .is_memory_locked(false)
-        .open_existing(iceoryx2_bb_posix::access_mode::AccessMode::ReadWrite)
-        .map_err(|e| err(format!("cannot open the run's board {shm}: {e:?}")))?;
-    if memory.size() < board_size(agents) {
-        return Err(err(format!("the run's board {shm} is too small")));
-    }
-    Ok(Board { memory, agents })
+/// Looks for a dead agent among the run's iceoryx2 nodes; marks the first found on the board
+/// and removes its stale resources. Returns its index.
+fn scan_dead_agents(config: &Config, me: usize, board: &Board) -> Option<usize> {
+    let mut dead = None;
+    let _ = Node::<Svc>::list(config, |state| {
+        if let NodeState::Dead(view) = state {
+            let agent = view
+                .details()
+                .as_ref()
+                .and_then(|d| agent_of_node(d.name().as_str()));
+            if let Some(agent) = agent.filter(|&a| a != me) {
+                // Whoever gets there first cleans up; the others find the node gone.
+                let _ = view.try_remove_stale_resources();
+                dead = Some(agent);
+                return CallbackProgression::Stop;
+            }
+        }
+        CallbackProgression::Continue
+    });
+    let agent = dead?;
+    Some(board.mark_failed(agent).unwrap_or(agent))
+}
+
+/// Removes the stale resources of every dead node of the run; returns how many it removed.
+pub fn cleanup_dead_nodes(config: &Config) -> usize {
+    let mut removed = 0;
+    let _ = Node::<Svc>::list(config, |state| {
+        if let NodeState::Dead(view) = state
+            && view.try_remove_stale_resources().is_ok()
+        {
+            removed += 1;
+        }
+        CallbackProgression::Continue
+    });
+    removed
 }
 
 fn open_barrier(
@@ -466,11 +643,20 @@ impl Exchange for IpcExchange {
 
     fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
         let started = Instant::now();
+        self.check_peers(round, false)?;
         let held = self.policy.wait_until(
             self,
             deadline,
             |s| s.all_held(round),
-            |s, deadline| Self::sleep_on(&s.listener, s.index, deadline),
+            |s, deadline| {
+                // Sleep in slices, looking for failed agents in between.
+                Self::sleep_on(
+                    &s.listener,
+                    s.index,
+                    deadline.min(Instant::now() + FAILURE_CHECK_SLICE),
+                )?;
+                s.check_peers(round, true)
+            },
         )?;
         if !held {
             let missing = (0..self.neighbours.len())
@@ -497,6 +683,13 @@ impl Exchange for IpcExchange {
             .as_ref()
             .expect("neighbour_header is called after a successful gather")
             .user_header()
+    }
+
+    fn neighbour_payload(&self, k: usize) -> &[f64] {
+        self.held[k]
+            .as_ref()
+            .expect("neighbour_payload is called after a successful gather")
+            .payload()
     }
 
     fn compute_and_publish(

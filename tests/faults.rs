@@ -1,0 +1,246 @@
+//! Agent failures with real processes: `kill -9` of an agent from outside, and every fault the
+//! hidden `ADMM_TA_FAULT` switch injects (exit, abort, hang, NaN payload, wrong round, wrong
+//! size). Each run must end with a non-zero exit and one line naming the failed agent, every
+//! other agent stopped, every child reaped and nothing of the run left in `/dev/shm` or the
+//! run directory.
+
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn solve(args: &[&str], fault: Option<&str>) -> Child {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_admm-ta"));
+    command
+        .arg("solve")
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    match fault {
+        Some(fault) => command.env("ADMM_TA_FAULT", fault),
+        None => command.env_remove("ADMM_TA_FAULT"),
+    };
+    command.spawn().expect("the admm-ta binary runs")
+}
+
+/// Child processes of `parent` and their command lines.
+fn children_of(parent: u32) -> Vec<(u32, String)> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = entry.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+            continue;
+        };
+        // The parent pid is the second field after the parenthesised command name.
+        let after = &stat[stat.rfind(')').unwrap_or(0) + 1..];
+        let ppid: u32 = after
+            .split_whitespace()
+            .nth(1)
+            .and_then(|p| p.parse().ok())
+            .unwrap_or(0);
+        if ppid == parent {
+            let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+            found.push((pid, String::from_utf8_lossy(&cmdline).replace('\0', " ")));
+        }
+    }
+    found
+}
+
+/// Files a run of launcher `pid` may leave: shared memory with its prefix, its run directory.
+fn leftovers_of(pid: u32) -> Vec<PathBuf> {
+    let prefix = format!("adta{pid:x}");
+    let mut found: Vec<PathBuf> = std::fs::read_dir("/dev/shm")
+        .map(|d| {
+            d.flatten()
+                .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
+                .map(|e| e.path())
+                .collect()
+        })
+        .unwrap_or_default();
+    let runs = std::env::temp_dir().join("admm-ta-runs");
+    if let Ok(dir) = std::fs::read_dir(runs) {
+        found.extend(
+            dir.flatten()
+                .filter(|e| {
+                    e.file_name()
+                        .to_string_lossy()
+                        .starts_with(&format!("{pid:x}"))
+                })
+                .map(|e| e.path()),
+        );
+    }
+    found
+}
+
+/// Waits for `child` with a deadline (the test itself must never hang).
+fn wait_with_deadline(child: &mut Child, limit: Duration) -> std::process::ExitStatus {
+    let started = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            return status;
+        }
+        if started.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("the launcher did not exit within {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
+fn stderr_of(child: &mut Child) -> String {
+    use std::io::Read;
+    let mut text = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut text)
+        .unwrap();
+    text
+}
+
+fn assert_failure_line(stderr: &str, needles: &[&str]) {
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    assert_eq!(
+        stderr.trim_end().lines().count(),
+        1,
+        "not one line: {stderr}"
+    );
+    for needle in needles {
+        assert!(stderr.contains(needle), "'{needle}' not in: {stderr}");
+    }
+}
+
+/// Long-running 20-agent team (runs until the round limit unless something fails).
+const LONG_RUN: [&str; 12] = [
+    "--robots",
+    "20",
+    "--tasks",
+    "20",
+    "--transport",
+    "ipc",
+    "--stop",
+    "max-iters",
+    "--max-iters",
+    "1000000",
+    "--round-timeout",
+    "5",
+];
+
+#[test]
+fn kill_9_of_an_agent_ends_the_run_within_a_second_and_leaves_nothing() {
+    let mut launcher = solve(&LONG_RUN, None);
+    let pid = launcher.id();
+    // Wait until all 20 agents run and have done some rounds.
+    let started = Instant::now();
+    let victim = loop {
+        let agents = children_of(pid);
+        if agents.len() == 20
+            && let Some((victim, _)) = agents.iter().find(|(_, c)| c.contains("--index 7 "))
+        {
+            break *victim;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "agents never started"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    std::thread::sleep(Duration::from_millis(800));
+    let killed = Instant::now();
+    let status = Command::new("kill")
+        .args(["-9", &victim.to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let exit = wait_with_deadline(&mut launcher, Duration::from_secs(30));
+    let detection = killed.elapsed();
+    eprintln!("kill -9 of agent 7 of 20 → launcher exit in {detection:?}");
+    assert!(!exit.success());
+    let stderr = stderr_of(&mut launcher);
+    assert_failure_line(
+        &stderr,
+        &["agent 7 failed", "killed by signal 9", "19 other"],
+    );
+    assert!(children_of(pid).is_empty(), "unreaped children");
+    assert!(leftovers_of(pid).is_empty(), "{:?}", leftovers_of(pid));
+    // Not a timing assertion on a noisy machine: the bound is 30× the target; the
+    // measured figure is printed above and in the issue note.
+    assert!(detection < Duration::from_secs(30));
+}
+
+#[test]
+fn every_injected_fault_is_reported_with_the_failed_agent() {
+    let cases = [
+        ("exit", vec!["agent 3 failed (exit code 3)"]),
+        ("abort", vec!["agent 3 failed (killed by signal 6)"]),
+        (
+            "hang",
+            vec![
+                "agent 3 failed",
+                "after publishing round 10",
+                "message from neighbour",
+            ],
+        ),
+        ("nan", vec!["agent 3 failed", "neighbour 3", "NaN"]),
+        (
+            "wrong-round",
+            vec!["agent 3 failed", "neighbour 3, got round 1011"],
+        ),
+        (
+            "wrong-size",
+            vec![
+                "agent 3 failed",
+                "neighbour 3 sent a payload of 63 values, expected 64",
+            ],
+        ),
+    ];
+    for (kind, needles) in cases {
+        let args = [
+            "--robots",
+            "8",
+            "--tasks",
+            "8",
+            "--transport",
+            "ipc",
+            "--topology",
+            "ring",
+            "--stop",
+            "max-iters",
+            "--max-iters",
+            "1000",
+            "--round-timeout",
+            "1",
+        ];
+        let mut launcher = solve(&args, Some(&format!("3:10:{kind}")));
+        let pid = launcher.id();
+        let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
+        assert!(!exit.success(), "{kind}: the run succeeded");
+        let stderr = stderr_of(&mut launcher);
+        assert_failure_line(&stderr, &needles);
+        assert!(
+            leftovers_of(pid).is_empty(),
+            "{kind}: {:?}",
+            leftovers_of(pid)
+        );
+    }
+}
+
+#[test]
+fn a_fault_switch_for_another_agent_changes_nothing() {
+    let args = [
+        "--robots",
+        "6",
+        "--tasks",
+        "6",
+        "--transport",
+        "ipc",
+        "--check",
+        "--json",
+    ];
+    let mut launcher = solve(&args, Some("99:1:exit"));
+    let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
+    assert!(exit.success(), "{}", stderr_of(&mut launcher));
+}
