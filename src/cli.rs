@@ -4,7 +4,7 @@ use crate::output;
 use admm_ta_agents::primal::ProjectionPath;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::ties::Perturbation;
-use admm_ta_runtime::solve::{self, Method, SolveConfig, StopRule, Transport};
+use admm_ta_runtime::solve::{self, Method, OnFailure, SolveConfig, StopRule, Transport};
 use admm_ta_topologies::{TopologySpec, file as topology_file};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -196,6 +196,18 @@ struct SolveArgs {
     /// Seconds all agent processes have to start and connect (ipc).
     #[arg(long, default_value_t = 60.0)]
     startup_timeout: f64,
+    /// When an agent process dies or misbehaves (ipc): abort (stop every agent, exit ≠ 0 with
+    /// one line naming it) or continue (the survivors drop that robot and re-solve without
+    /// it, if the graph stays connected and robots still cover the tasks; the report then
+    /// names the failed robot and maps the assignment to the survivors' original numbers).
+    #[arg(long, value_enum, default_value = "abort")]
+    on_failure: OnFailureArg,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum OnFailureArg {
+    Abort,
+    Continue,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -331,7 +343,15 @@ fn run_solve(args: SolveArgs) -> Result<()> {
         round_timeout: seconds("--round-timeout", args.round_timeout)?,
         startup_timeout: seconds("--startup-timeout", args.startup_timeout)?,
         agent_program: Some(agent_program()?),
+        on_failure: match args.on_failure {
+            OnFailureArg::Abort => OnFailure::Abort,
+            OnFailureArg::Continue => OnFailure::Continue,
+        },
+        fault_injection: true,
     };
+    if config.on_failure == OnFailure::Continue && config.transport != Transport::Ipc {
+        bail!("--on-failure continue applies to agent processes: use --transport ipc");
+    }
     let report = solve::solve(&problem, &graph, &config)?;
     output::print_report(&report, args.json)
 }

@@ -8,6 +8,14 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         println!("{}", serde_json::to_string(report)?);
         return Ok(());
     }
+    if let Some(d) = &report.degraded {
+        println!(
+            "degraded: {}; the {} survivors re-solved without robot {} (robots below by their original numbers)",
+            d.failure,
+            d.survivors.len(),
+            d.failed_robot
+        );
+    }
     println!(
         "method {}, transport {}: {} robots × {} tasks (Case {}), topology {}",
         report.method.name(),
@@ -58,7 +66,13 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         .assignment
         .iter()
         .enumerate()
-        .map(|(robot, task)| format!("{robot}→{task}"))
+        .map(|(robot, task)| {
+            let robot = report
+                .degraded
+                .as_ref()
+                .map_or(robot, |d| d.survivors[robot]);
+            format!("{robot}→{task}")
+        })
         .collect();
     println!("assignment (robot→task): {}", pairs.join(" "));
     println!(

@@ -262,6 +262,44 @@ fn bad_input_gives_one_clear_line() {
         ("--robots 3 --tasks 3 --perturb x".into(), "perturb"),
         ("--robots 5 --tasks 3 --case 1".into(), "Case 1"),
         (String::new(), "--costs"),
+        (
+            format!(
+                "--robots 3 --tasks 3 --topology {}",
+                file("dup.toml", "robots = 3\nedges = [[0, 1], [1, 0], [1, 2]]\n")
+            ),
+            "more than once",
+        ),
+        (
+            format!(
+                "--robots 3 --tasks 3 --topology {}",
+                file("range.toml", "robots = 3\nedges = [[0, 1], [1, 5]]\n")
+            ),
+            "numbered 0..3",
+        ),
+        (
+            format!(
+                "--robots 3 --tasks 3 --topology {}",
+                file("junk.toml", "robots = \"three\"\n")
+            ),
+            "junk.toml",
+        ),
+        ("--robots 0 --tasks 3".into(), "zero robots"),
+        ("--robots 3 --tasks 0".into(), "zero tasks"),
+        ("--robots 2 --tasks 3".into(), "n ≥ m"),
+        ("--robots 100000 --tasks 2".into(), "robot pairs"),
+        ("--robots 100000 --tasks 2 --topology chain".into(), "GiB"),
+        ("--robots 3 --tasks 3 --transport pigeon".into(), "pigeon"),
+        (
+            format!(
+                "--costs {} --transport ipc",
+                file("nan-ipc.csv", "1,2\nnan,3\n")
+            ),
+            "NaN",
+        ),
+        (
+            format!("--costs {}", file("crlf.csv", "1,2\r\n3,x\r\n")),
+            "not a number",
+        ),
     ];
     for (args, needle) in &cases {
         // Temporary paths contain no spaces, so splitting on whitespace is exact.
@@ -269,6 +307,26 @@ fn bad_input_gives_one_clear_line() {
             .chain(args.split_whitespace())
             .collect();
         assert_clear_error(&admm_ta(&all), needle);
+    }
+    eprintln!("bad-input corpus: {} cases", cases.len());
+}
+
+#[test]
+fn a_one_by_one_problem_solves_on_every_transport() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = write(dir.path(), "one.csv", "0.5\n");
+    for transport in ["sim", "threads", "ipc"] {
+        let report = json(&admm_ta(&[
+            "solve",
+            "--costs",
+            &one,
+            "--transport",
+            transport,
+            "--check",
+            "--json",
+        ]));
+        assert_eq!(report["assignment"], serde_json::json!([0]), "{transport}");
+        assert_eq!(report["check"]["optimal"], true);
     }
 }
 

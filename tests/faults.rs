@@ -244,3 +244,151 @@ fn a_fault_switch_for_another_agent_changes_nothing() {
     let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
     assert!(exit.success(), "{}", stderr_of(&mut launcher));
 }
+
+#[test]
+fn on_failure_continue_resolves_without_the_failed_robot_or_says_why_not() {
+    // Case 2 on a ring: the survivors (a chain) re-solve to their own optimum.
+    let args = [
+        "--robots",
+        "12",
+        "--tasks",
+        "8",
+        "--transport",
+        "ipc",
+        "--topology",
+        "ring",
+        "--on-failure",
+        "continue",
+        "--check",
+        "--json",
+    ];
+    for kind in ["exit", "nan", "hang"] {
+        let mut launcher = solve(&args, Some(&format!("3:10:{kind}")));
+        let pid = launcher.id();
+        let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
+        let stderr = stderr_of(&mut launcher);
+        assert!(exit.success(), "{kind}: {stderr}");
+        let mut stdout = String::new();
+        std::io::Read::read_to_string(&mut launcher.stdout.take().unwrap(), &mut stdout).unwrap();
+        let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+        let degraded = &report["degraded"];
+        assert_eq!(degraded["failed_robot"], 3, "{kind}");
+        assert_eq!(degraded["survivors"].as_array().unwrap().len(), 11);
+        assert_eq!(report["robots"], 11);
+        assert_eq!(report["check"]["optimal"], true, "{kind}");
+        assert!(
+            leftovers_of(pid).is_empty(),
+            "{kind}: {:?}",
+            leftovers_of(pid)
+        );
+    }
+    // Case 1 cannot lose a robot; a chain cannot lose an inner one.
+    for (args, needle) in [
+        (
+            vec!["--robots", "8", "--tasks", "8"],
+            "cannot cover the 8 tasks",
+        ),
+        (
+            vec!["--robots", "9", "--tasks", "8", "--topology", "chain"],
+            "disconnected",
+        ),
+    ] {
+        let mut all = args.clone();
+        all.extend(["--transport", "ipc", "--on-failure", "continue"]);
+        let mut launcher = solve(&all, Some("3:5:exit"));
+        let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
+        assert!(!exit.success());
+        assert_failure_line(&stderr_of(&mut launcher), &["agent 3 failed", needle]);
+    }
+}
+
+#[test]
+fn an_agent_with_another_team_shape_is_refused_and_the_team_runs_on() {
+    let args = [
+        "--robots",
+        "6",
+        "--tasks",
+        "6",
+        "--transport",
+        "ipc",
+        "--topology",
+        "ring",
+        "--stop",
+        "max-iters",
+        "--max-iters",
+        "100000000",
+        "--round-timeout",
+        "5",
+    ];
+    let mut launcher = solve(&args, None);
+    let pid = launcher.id();
+    // Whatever happens below, end the team through the launcher (so it cleans up).
+    struct EndTeam(u32);
+    impl Drop for EndTeam {
+        fn drop(&mut self) {
+            for (agent, _) in children_of(self.0) {
+                let _ = Command::new("kill")
+                    .args(["-9", &agent.to_string()])
+                    .status();
+            }
+        }
+    }
+    let _end_team = EndTeam(pid);
+    let runs = std::env::temp_dir().join("admm-ta-runs");
+    let started = Instant::now();
+    let scenario_path = loop {
+        let found = std::fs::read_dir(&runs).ok().and_then(|d| {
+            d.flatten()
+                .find(|e| {
+                    e.file_name()
+                        .to_string_lossy()
+                        .starts_with(&format!("{pid:x}"))
+                })
+                .map(|e| e.path().join("scenario.json"))
+                .filter(|p| p.exists())
+        });
+        if let Some(path) = found
+            && children_of(pid).len() == 6
+        {
+            break path;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "the team never started"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut scenario: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&scenario_path).unwrap()).unwrap();
+    let run_id = scenario["run_id"].as_str().unwrap().to_string();
+    // Same run and problem, another method: another payload (n + m values, not n·m).
+    scenario["method"] = "dual".into();
+    let dir = tempfile::tempdir().unwrap();
+    let rogue_path = dir.path().join("scenario.json");
+    std::fs::write(&rogue_path, scenario.to_string()).unwrap();
+    let rogue = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
+        .args(["agent", "--run", &run_id, "--index", "2", "--scenario"])
+        .arg(&rogue_path)
+        .output()
+        .unwrap();
+    assert!(!rogue.status.success());
+    assert_failure_line(
+        &String::from_utf8_lossy(&rogue.stderr),
+        &[
+            "agent 2",
+            "(payload 12)",
+            "running team is 6 robots × 6 tasks (payload 36)",
+        ],
+    );
+    // The team was not disturbed; end it by killing one of its agents.
+    assert!(launcher.try_wait().unwrap().is_none(), "the team stopped");
+    let (victim, _) = children_of(pid).into_iter().next().unwrap();
+    Command::new("kill")
+        .args(["-9", &victim.to_string()])
+        .status()
+        .unwrap();
+    let exit = wait_with_deadline(&mut launcher, Duration::from_secs(30));
+    assert!(!exit.success());
+    assert_failure_line(&stderr_of(&mut launcher), &["killed by signal 9"]);
+    assert!(leftovers_of(pid).is_empty(), "{:?}", leftovers_of(pid));
+}

@@ -115,6 +115,35 @@ pub struct SolveConfig {
     pub startup_timeout: Duration,
     /// The `admm-ta` binary that runs agent processes (ipc).
     pub agent_program: Option<PathBuf>,
+    /// What to do when an agent process fails (ipc).
+    pub on_failure: OnFailure,
+    /// Let agent processes honour the `ADMM_TA_FAULT` test switch (off for the survivors'
+    /// re-solve, whose indices differ).
+    pub fault_injection: bool,
+}
+
+/// What the team does when an agent fails.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OnFailure {
+    /// Stop every agent and report the failure (the default).
+    #[default]
+    Abort,
+    /// The survivors drop the failed robot and re-solve without it, if they still can
+    /// (connected graph, at least as many robots as tasks).
+    Continue,
+}
+
+/// A failed robot and how the survivors went on (`--on-failure continue`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Degraded {
+    /// The failure of the first run, as the launcher reported it.
+    pub failure: String,
+    pub failed_robot: usize,
+    /// Original index of each robot of `assignment` (the survivors, in order).
+    pub survivors: Vec<usize>,
+    /// Rounds of the first run lost to the failure (the failed robot's last published round).
+    pub lost_rounds: u64,
 }
 
 impl Default for SolveConfig {
@@ -136,6 +165,8 @@ impl Default for SolveConfig {
             round_timeout: Duration::from_secs(30),
             startup_timeout: Duration::from_secs(60),
             agent_program: None,
+            on_failure: OnFailure::Abort,
+            fault_injection: true,
         }
     }
 }
@@ -175,6 +206,26 @@ pub enum SolveError {
     PrimalOnlyStop { stop: &'static str },
     #[error("--max-iters must be at least 1")]
     NoIterations,
+    #[error(
+        "{first}; --on-failure continue: the {survivors} surviving robots cannot cover the {tasks} tasks (dropping a robot from Case 1 leaves fewer robots than tasks)"
+    )]
+    SurvivorsTooFew {
+        first: Box<SolveError>,
+        survivors: usize,
+        tasks: usize,
+    },
+    #[error(
+        "{first}; --on-failure continue: without robot {failed} the communication graph is disconnected"
+    )]
+    SurvivorsDisconnected {
+        first: Box<SolveError>,
+        failed: usize,
+    },
+    #[error("{first}; --on-failure continue: the survivors' re-solve failed too: {second}")]
+    ResolveFailed {
+        first: Box<SolveError>,
+        second: Box<SolveError>,
+    },
     #[error(
         "{robots} robots × {tasks} tasks need about {gib:.1} GiB of agent state (each robot holds an m×n matrix); the limit is 8 GiB"
     )]
@@ -250,10 +301,93 @@ pub struct SolveReport {
     pub iterate_digests: Vec<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub check: Option<OracleCheck>,
+    /// Set when a robot failed and the survivors re-solved without it: `assignment`,
+    /// `robots`, `cost` and `check` are then the survivors'.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub degraded: Option<Degraded>,
 }
 
-/// Solves `problem` on `graph` as `config` says.
+/// Solves `problem` on `graph` as `config` says; with [`OnFailure::Continue`], a failed
+/// agent process is dropped and the survivors re-solve without it (ipc).
 pub fn solve(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    config: &SolveConfig,
+) -> Result<SolveReport, SolveError> {
+    let first = match solve_once(problem, graph, config) {
+        Err(error @ SolveError::Launch(LaunchError::AgentFailed { .. }))
+            if config.on_failure == OnFailure::Continue =>
+        {
+            error
+        }
+        other => return other,
+    };
+    let SolveError::Launch(LaunchError::AgentFailed {
+        index: failed,
+        round: lost_rounds,
+        ..
+    }) = first
+    else {
+        unreachable!("matched above")
+    };
+    let failure = first.to_string();
+    let first = std::cell::Cell::new(Some(first));
+    // The error we report if the survivors cannot go on.
+    let first_error = || Box::new(first.take().expect("reported once"));
+    let survivors: Vec<usize> = (0..problem.robots()).filter(|&r| r != failed).collect();
+    let (n, m) = (survivors.len(), problem.tasks());
+    if n < m {
+        return Err(SolveError::SurvivorsTooFew {
+            first: first_error(),
+            survivors: n,
+            tasks: m,
+        });
+    }
+    let values = survivors
+        .iter()
+        .flat_map(|&r| problem.costs().row(r).iter().copied())
+        .collect();
+    let costs = admm_ta_agents::problem::CostMatrix::new(n, m, values)
+        .expect("rows of a valid matrix form a valid matrix");
+    let reduced = TaskAssignmentProblem::new(costs, admm_ta_agents::problem::CaseChoice::Auto)
+        .expect("n ≥ m survivors form a valid problem");
+    let new_index = |r: usize| if r > failed { r - 1 } else { r };
+    let edges: Vec<(usize, usize)> = graph
+        .edges()
+        .filter(|&(a, b)| a != failed && b != failed)
+        .map(|(a, b)| (new_index(a), new_index(b)))
+        .collect();
+    let subgraph = Graph::from_edges(
+        n,
+        &edges,
+        format!("{} without robot {failed}", graph.name()),
+    )
+    .ok()
+    .filter(Graph::is_connected)
+    .ok_or_else(|| SolveError::SurvivorsDisconnected {
+        first: first_error(),
+        failed,
+    })?;
+    let again = SolveConfig {
+        on_failure: OnFailure::Abort,
+        fault_injection: false,
+        ..config.clone()
+    };
+    let mut report =
+        solve_once(&reduced, &subgraph, &again).map_err(|second| SolveError::ResolveFailed {
+            first: first_error(),
+            second: Box::new(second),
+        })?;
+    report.degraded = Some(Degraded {
+        failure,
+        failed_robot: failed,
+        survivors,
+        lost_rounds,
+    });
+    Ok(report)
+}
+
+fn solve_once(
     problem: &TaskAssignmentProblem,
     graph: &Graph,
     config: &SolveConfig,
@@ -374,6 +508,7 @@ pub fn solve(
         (None, None) => None,
     };
     Ok(SolveReport {
+        degraded: None,
         assignment,
         cost,
         iterations: run.rounds,
@@ -544,6 +679,7 @@ fn run_agents(
                     round_timeout: config.round_timeout,
                     startup_timeout: config.startup_timeout,
                     global_barrier: config.global_barrier,
+                    fault_injection: config.fault_injection,
                 },
             )?;
             if !run.leftovers.is_empty() {

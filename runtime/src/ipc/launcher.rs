@@ -32,6 +32,8 @@ pub struct IpcOptions {
     pub round_timeout: Duration,
     pub startup_timeout: Duration,
     pub global_barrier: bool,
+    /// Pass the `ADMM_TA_FAULT` test switch on to the agents.
+    pub fault_injection: bool,
 }
 
 /// Failures of a multi-process run.
@@ -169,7 +171,12 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
         .has_ownership(true)
         .create()
         .map_err(|e| LaunchError::Board(format!("{e:?}")))?;
-    guard._board = Some(Board::from_memory(board, scenario.robots));
+    let board = Board::from_memory(board, scenario.robots);
+    board.set_shape(
+        scenario.tasks,
+        scenario.method.payload_len(scenario.robots, scenario.tasks),
+    );
+    guard._board = Some(board);
     let run_dir = namespace.dir.clone();
     let scenario_path = run_dir.join("scenario.json");
     let text = serde_json::to_string(&scenario).expect("a scenario serialises");
@@ -180,7 +187,11 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
     for index in 0..scenario.robots {
         let log =
             std::fs::File::create(log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
-        let child = Command::new(&options.agent_program)
+        let mut command = Command::new(&options.agent_program);
+        if !options.fault_injection {
+            command.env_remove(crate::ipc::fault::FAULT_ENV);
+        }
+        let child = command
             .arg("agent")
             .args(["--run", &namespace.id])
             .args(["--index", &index.to_string()])

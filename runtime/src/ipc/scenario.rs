@@ -164,6 +164,7 @@ impl Scenario {
             neighbours: graph.neighbours(index).to_vec(),
             degrees: (0..graph.robots()).map(|j| graph.degree(j)).collect(),
             payload_len: self.method.payload_len(self.robots, self.tasks),
+            tasks: self.tasks,
             policy: WaitPolicy::for_team(self.robots),
             board_shm: self.board_shm.clone(),
             global_barrier: self.global_barrier,

@@ -65,6 +65,8 @@ pub struct IpcEndpoint {
     /// Degree of every agent of the run (service limits are sized from them).
     pub degrees: Vec<usize>,
     pub payload_len: usize,
+    /// Tasks of the team (checked against the running team's on the board).
+    pub tasks: usize,
     pub policy: WaitPolicy,
     /// Name of the run's board (shared memory created by the launcher, [`board_size`]).
     pub board_shm: String,
@@ -79,8 +81,12 @@ pub fn board_size(agents: usize) -> usize {
 
 /// How long a waiting agent sleeps before it looks for failed agents again.
 const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
-/// How often a waiting agent scans the run's iceoryx2 nodes for dead ones.
-const DEAD_NODE_SCAN_EVERY: Duration = Duration::from_millis(100);
+/// A waiting agent scans the run's iceoryx2 nodes for dead ones once it has waited this
+/// long for a round, and again at this interval. Scans read every node of the run, so they
+/// are kept off the normal path: with 100 agents on 2 cores, scanning after 100 ms slowed
+/// rounds a hundredfold. (Under the launcher a dead agent is found within milliseconds by
+/// `waitpid` anyway; the scan is for agents started without one.)
+const DEAD_NODE_SCAN_EVERY: Duration = Duration::from_millis(500);
 
 /// iceoryx2 node name of agent `i` (how others recognise it among dead nodes).
 pub fn node_name(i: usize) -> String {
@@ -154,6 +160,30 @@ impl Board {
         (marked != 0).then(|| marked as usize - 1)
     }
 
+    /// Records the team's shape `(robots, tasks, payload length)` (the launcher, at creation).
+    pub fn set_shape(&self, tasks: usize, payload_len: usize) {
+        let line = LINE * (self.agents + 1);
+        self.word(line + 8).store(tasks as u64, Ordering::Relaxed);
+        self.word(line + 16)
+            .store(payload_len as u64, Ordering::Release);
+    }
+
+    /// Refuses an agent whose scenario does not match the running team's shape.
+    fn check_shape(&self, tasks: usize, payload_len: usize) -> Result<(), String> {
+        let line = LINE * (self.agents + 1);
+        let running = (
+            self.word(line + 8).load(Ordering::Relaxed),
+            self.word(line + 16).load(Ordering::Acquire),
+        );
+        if running != (tasks as u64, payload_len as u64) {
+            return Err(format!(
+                "this agent's scenario is {} robots × {tasks} tasks (payload {payload_len}) but the running team is {} robots × {} tasks (payload {})",
+                self.agents, self.agents, running.0, running.1
+            ));
+        }
+        Ok(())
+    }
+
     /// Last round agent `agent` published (0 before its first step).
     pub fn published_round(&self, agent: usize) -> u64 {
         self.word(LINE * (agent + 1) + 16).load(Ordering::Relaxed)
@@ -204,6 +234,8 @@ pub struct IpcExchange {
     last_dead_node_scan: Instant,
     /// Fault injection: publish the next payload one value short.
     truncate_next: bool,
+    /// The launcher's pid: if this process is orphaned (the launcher died), it stops.
+    launcher: u32,
     // Ports first: they must drop before the node.
     _node: Node<Svc>,
 }
@@ -243,6 +275,11 @@ impl IpcExchange {
         let i = endpoint.index;
         let err = |what: String| transport(i, what);
         let t0 = Instant::now();
+        // The run's board first: an agent of another team shape must not touch its services.
+        let board = Board::open(&endpoint.board_shm, endpoint.degrees.len()).map_err(err)?;
+        board
+            .check_shape(endpoint.tasks, endpoint.payload_len)
+            .map_err(err)?;
         let name =
             NodeName::new(&node_name(i)).map_err(|e| err(format!("bad node name: {e:?}")))?;
         let node = NodeBuilder::new()
@@ -310,7 +347,6 @@ impl IpcExchange {
                     .map_err(|e| err(format!("cannot create a notifier for agent {j}: {e:?}")))?,
             );
         }
-        let board = Board::open(&endpoint.board_shm, endpoint.degrees.len()).map_err(err)?;
         let barrier = if endpoint.global_barrier {
             Some(open_barrier(&node, endpoint.degrees.len(), &err)?)
         } else {
@@ -377,6 +413,7 @@ impl IpcExchange {
             config: config.clone(),
             last_dead_node_scan: Instant::now(),
             truncate_next: false,
+            launcher: std::os::unix::process::parent_id(),
             _node: node,
         })
     }
@@ -403,7 +440,7 @@ impl IpcExchange {
     /// Stops this agent if another agent failed: marked on the board (by the launcher or a
     /// peer), or found dead among the run's iceoryx2 nodes (scanned at most every
     /// [`DEAD_NODE_SCAN_EVERY`]; a dead node's stale resources are removed on the way).
-    fn check_peers(&mut self, round: u64, scan: bool) -> Result<(), ExchangeError> {
+    fn check_peers(&mut self, round: u64, waited: Duration) -> Result<(), ExchangeError> {
         let failed = |failed, how: &str| ExchangeError::PeerFailed {
             agent: self.index,
             failed,
@@ -413,7 +450,18 @@ impl IpcExchange {
         if let Some(agent) = self.board.failed() {
             return Err(failed(agent, "failed"));
         }
-        if scan && self.last_dead_node_scan.elapsed() >= DEAD_NODE_SCAN_EVERY {
+        if std::os::unix::process::parent_id() != self.launcher {
+            return Err(transport(
+                self.index,
+                format!(
+                    "stopped at round {round}: its launcher (pid {}) is gone",
+                    self.launcher
+                ),
+            ));
+        }
+        if waited >= DEAD_NODE_SCAN_EVERY
+            && self.last_dead_node_scan.elapsed() >= DEAD_NODE_SCAN_EVERY
+        {
             self.last_dead_node_scan = Instant::now();
             if let Some(agent) = scan_dead_agents(&self.config, self.index, &self.board) {
                 return Err(failed(agent, "died (its iceoryx2 node is dead)"));
@@ -519,7 +567,7 @@ impl IpcExchange {
             .map_err(|e| transport(i, format!("send failed: {e:?}")))?;
         if delivered < self.subscribers.len() {
             // A neighbour gone because another agent failed: that failure is the cause.
-            self.check_peers(header.round, true)?;
+            self.check_peers(header.round, DEAD_NODE_SCAN_EVERY)?;
             return Err(transport(
                 i,
                 format!(
@@ -643,7 +691,7 @@ impl Exchange for IpcExchange {
 
     fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
         let started = Instant::now();
-        self.check_peers(round, false)?;
+        self.check_peers(round, Duration::ZERO)?;
         let held = self.policy.wait_until(
             self,
             deadline,
@@ -655,7 +703,7 @@ impl Exchange for IpcExchange {
                     s.index,
                     deadline.min(Instant::now() + FAILURE_CHECK_SLICE),
                 )?;
-                s.check_peers(round, true)
+                s.check_peers(round, started.elapsed())
             },
         )?;
         if !held {
