@@ -62,6 +62,14 @@ pub enum ExchangeError {
         expected: usize,
         got: usize,
     },
+    #[error(
+        "agent {agent}: the message on neighbour {neighbour}'s service claims to come from agent {got}"
+    )]
+    WrongSender {
+        agent: usize,
+        neighbour: usize,
+        got: u32,
+    },
     #[error("agent {agent}: {what}")]
     Transport { agent: usize, what: String },
     /// Another agent of the run failed first.

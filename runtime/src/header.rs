@@ -36,3 +36,46 @@ impl RoundHeader {
         }
     }
 }
+
+/// Where a received message belongs, once it passed [`check_message`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Placement {
+    /// The round being gathered.
+    Current,
+    /// The next round (a neighbour may be one round ahead).
+    Next,
+}
+
+/// Why a received message is refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MessageFault {
+    WrongLength { got: usize },
+    WrongSender { got: u32 },
+    OutOfOrder { got: u64 },
+}
+
+/// Checks a message received from `neighbour` while gathering `round`: its payload length,
+/// its sender and its round (this round, or the next one if no next-round message is held
+/// yet: a neighbour is never further ahead).
+pub fn check_message(
+    header: &RoundHeader,
+    payload_len: usize,
+    expected_len: usize,
+    neighbour: usize,
+    round: u64,
+    next_is_free: bool,
+) -> Result<Placement, MessageFault> {
+    if payload_len != expected_len {
+        return Err(MessageFault::WrongLength { got: payload_len });
+    }
+    if header.sender as usize != neighbour {
+        return Err(MessageFault::WrongSender { got: header.sender });
+    }
+    if header.round == round {
+        Ok(Placement::Current)
+    } else if round.checked_add(1) == Some(header.round) && next_is_free {
+        Ok(Placement::Next)
+    } else {
+        Err(MessageFault::OutOfOrder { got: header.round })
+    }
+}

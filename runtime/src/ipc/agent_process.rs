@@ -36,7 +36,8 @@ fn culprit(error: &ExchangeError) -> Option<usize> {
     match error {
         ExchangeError::BadPayload { neighbour, .. }
         | ExchangeError::WrongLength { neighbour, .. }
-        | ExchangeError::OutOfOrder { neighbour, .. } => Some(*neighbour),
+        | ExchangeError::OutOfOrder { neighbour, .. }
+        | ExchangeError::WrongSender { neighbour, .. } => Some(*neighbour),
         _ => None,
     }
 }

@@ -31,8 +31,11 @@ impl RunNamespace {
             nanos >> 12,
             COUNTER.fetch_add(1, Ordering::Relaxed)
         );
-        let dir = std::env::temp_dir().join("admm-ta-runs").join(&id);
+        let runs = std::env::temp_dir().join("admm-ta-runs");
+        sweep_abandoned(&runs);
+        let dir = runs.join(&id);
         std::fs::create_dir_all(&dir)?;
+        std::fs::write(dir.join(LAUNCHER_PID), std::process::id().to_string())?;
         Ok(Self {
             prefix: format!("adta{id}_"),
             id,
@@ -74,6 +77,36 @@ impl RunNamespace {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(e),
             _ => Ok(()),
         }
+    }
+}
+
+/// File of a run directory holding the launcher's pid.
+const LAUNCHER_PID: &str = "launcher.pid";
+
+/// Removes the runs whose launcher died without cleaning up (killed with SIGKILL: nothing
+/// can clean up after that but the next run). A run whose directory has no pid file yet is
+/// being created and is left alone.
+fn sweep_abandoned(runs: &Path) {
+    let Ok(entries) = std::fs::read_dir(runs) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let dir = entry.path();
+        let Some(pid) = std::fs::read_to_string(dir.join(LAUNCHER_PID))
+            .ok()
+            .and_then(|p| p.trim().parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if Path::new(&format!("/proc/{pid}")).exists() {
+            continue;
+        }
+        let abandoned = RunNamespace {
+            prefix: format!("adta{}_", entry.file_name().to_string_lossy()),
+            id: entry.file_name().to_string_lossy().into_owned(),
+            dir,
+        };
+        let _ = abandoned.cleanup();
     }
 }
 
@@ -120,5 +153,20 @@ mod tests {
         b.cleanup().unwrap();
         assert!(a.leftovers().is_empty(), "{:?}", a.leftovers());
         assert!(b.leftovers().is_empty());
+    }
+
+    #[test]
+    fn runs_of_dead_launchers_are_swept_by_the_next_run() {
+        let dead = RunNamespace::create().unwrap();
+        // No process has pid 0x7fff_fff0 (beyond Linux's pid_max).
+        std::fs::write(dead.dir.join(LAUNCHER_PID), "2147483632").unwrap();
+        let shm = PathBuf::from(SHM_DIR).join(format!("{}board", dead.prefix));
+        if PathBuf::from(SHM_DIR).is_dir() {
+            std::fs::write(&shm, b"x").unwrap();
+        }
+        let live = RunNamespace::create().unwrap();
+        assert!(dead.leftovers().is_empty(), "{:?}", dead.leftovers());
+        assert!(live.dir.exists(), "a live run was swept");
+        live.cleanup().unwrap();
     }
 }

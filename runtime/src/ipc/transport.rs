@@ -24,7 +24,7 @@
 //! sample that does not reach every subscriber is an error, never a silently lost round.
 
 use crate::exchange::{Exchange, ExchangeError};
-use crate::header::RoundHeader;
+use crate::header::{MessageFault, Placement, RoundHeader, check_message};
 use crate::wait::{Arrival, CountingBarrier, WaitPolicy};
 use admm_ta_agents::agent::Inbox;
 use iceoryx2::node::NodeView;
@@ -492,27 +492,40 @@ impl IpcExchange {
             let Some(sample) = sample else {
                 return Ok(false);
             };
-            let got = sample.user_header().round;
-            if sample.payload().len() != self.payload_len {
-                return Err(ExchangeError::WrongLength {
-                    agent: self.index,
-                    neighbour: self.neighbours[k],
+            let (agent, neighbour) = (self.index, self.neighbours[k]);
+            let placement = check_message(
+                sample.user_header(),
+                sample.payload().len(),
+                self.payload_len,
+                neighbour,
+                round,
+                self.pending[k].is_none(),
+            )
+            .map_err(|fault| match fault {
+                MessageFault::WrongLength { got } => ExchangeError::WrongLength {
+                    agent,
+                    neighbour,
                     expected: self.payload_len,
-                    got: sample.payload().len(),
-                });
-            }
-            if got == round {
-                self.held[k] = Some(sample);
-                return Ok(true);
-            } else if got == round + 1 && self.pending[k].is_none() {
-                self.pending[k] = Some(sample);
-            } else {
-                return Err(ExchangeError::OutOfOrder {
-                    agent: self.index,
-                    neighbour: self.neighbours[k],
+                    got,
+                },
+                MessageFault::WrongSender { got } => ExchangeError::WrongSender {
+                    agent,
+                    neighbour,
+                    got,
+                },
+                MessageFault::OutOfOrder { got } => ExchangeError::OutOfOrder {
+                    agent,
+                    neighbour,
                     expected: round,
                     got,
-                });
+                },
+            })?;
+            match placement {
+                Placement::Current => {
+                    self.held[k] = Some(sample);
+                    return Ok(true);
+                }
+                Placement::Next => self.pending[k] = Some(sample),
             }
         }
     }
