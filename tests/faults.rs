@@ -4,7 +4,9 @@
 //! other agent stopped, every child reaped and nothing of the run left in `/dev/shm` or the
 //! run directory.
 
-use std::path::PathBuf;
+mod common;
+
+use common::leftovers_of;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -43,32 +45,6 @@ fn children_of(parent: u32) -> Vec<(u32, String)> {
             let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
             found.push((pid, String::from_utf8_lossy(&cmdline).replace('\0', " ")));
         }
-    }
-    found
-}
-
-/// Files a run of launcher `pid` may leave: shared memory with its prefix, its run directory.
-fn leftovers_of(pid: u32) -> Vec<PathBuf> {
-    let prefix = format!("adta{pid:x}");
-    let mut found: Vec<PathBuf> = std::fs::read_dir("/dev/shm")
-        .map(|d| {
-            d.flatten()
-                .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
-                .map(|e| e.path())
-                .collect()
-        })
-        .unwrap_or_default();
-    let runs = std::env::temp_dir().join("admm-ta-runs");
-    if let Ok(dir) = std::fs::read_dir(runs) {
-        found.extend(
-            dir.flatten()
-                .filter(|e| {
-                    e.file_name()
-                        .to_string_lossy()
-                        .starts_with(&format!("{pid:x}"))
-                })
-                .map(|e| e.path()),
-        );
     }
     found
 }

@@ -3,7 +3,9 @@
 //! and leave nothing in `/dev/shm` or the run directory. Longer soaks are `#[ignore]`d
 //! (`cargo test --release --test stress -- --ignored`).
 
-use std::path::PathBuf;
+mod common;
+
+use common::leftovers_of;
 use std::process::{Child, Command, Stdio};
 
 fn spawn_solve(args: &[&str]) -> Child {
@@ -34,29 +36,6 @@ fn finish(child: Child) -> serde_json::Value {
     let leftovers = leftovers_of(pid);
     assert!(leftovers.is_empty(), "left behind: {leftovers:?}");
     serde_json::from_slice(&output.stdout).expect("stdout is one JSON object")
-}
-
-/// Shared memory with the run's prefix and its run directory (named after the launcher pid).
-fn leftovers_of(pid: u32) -> Vec<PathBuf> {
-    let mut found = Vec::new();
-    let prefix = format!("adta{pid:x}");
-    for (dir, start) in [
-        (PathBuf::from("/dev/shm"), prefix),
-        (
-            std::env::temp_dir().join("admm-ta-runs"),
-            format!("{pid:x}"),
-        ),
-    ] {
-        if let Ok(entries) = std::fs::read_dir(dir) {
-            found.extend(
-                entries
-                    .flatten()
-                    .filter(|e| e.file_name().to_string_lossy().starts_with(&start))
-                    .map(|e| e.path()),
-            );
-        }
-    }
-    found
 }
 
 fn rounds(topology: &str, robots: usize, rounds: usize) -> serde_json::Value {

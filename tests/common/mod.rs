@@ -51,3 +51,26 @@ pub fn oracle_instances() -> Vec<OracleInstance> {
 pub fn relative_gap(cost: f64, optimum: f64) -> f64 {
     (cost - optimum).abs() / optimum.abs().max(1e-12)
 }
+
+/// Files a multi-process run of launcher `pid` may leave behind: shared memory with its
+/// prefix (`adta<pid in hex>…`) and its run directory (`<tmp>/admm-ta-runs/<pid in hex>…`).
+pub fn leftovers_of(pid: u32) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for (dir, start) in [
+        (PathBuf::from("/dev/shm"), format!("adta{pid:x}")),
+        (
+            std::env::temp_dir().join("admm-ta-runs"),
+            format!("{pid:x}"),
+        ),
+    ] {
+        if let Ok(entries) = std::fs::read_dir(dir) {
+            found.extend(
+                entries
+                    .flatten()
+                    .filter(|e| e.file_name().to_string_lossy().starts_with(&start))
+                    .map(|e| e.path()),
+            );
+        }
+    }
+    found
+}
