@@ -55,7 +55,6 @@
 //! that.
 
 use crate::agent::{ConsensusAgent, Inbox, StepReport};
-use crate::problem::AssignmentCase;
 
 /// Demand bits per payload number: integers up to `2⁴⁸` are exact in an `f64`.
 const BITS_PER_WORD: usize = 48;
@@ -100,23 +99,17 @@ pub struct MarketAgent {
     queue: Vec<usize>,
     /// Own relaxed column (indicator of the task it would do now).
     column: Vec<f64>,
-    raises: u64,
 }
 
 impl MarketAgent {
     /// Robot `index` of `robots` with its own `costs` (one per task) on a graph of diameter
     /// `diameter` (at least 1 when `robots > 1`).
-    pub fn new(
-        index: usize,
-        costs: Vec<f64>,
-        robots: usize,
-        case: AssignmentCase,
-        diameter: usize,
-    ) -> Self {
+    /// Case 1 and 2 need no distinction: both are the same square market (spare columns when
+    /// `n > m`).
+    pub fn new(index: usize, costs: Vec<f64>, robots: usize, diameter: usize) -> Self {
         let tasks = costs.len();
         assert!(index < robots && tasks >= 1 && tasks <= robots);
         assert!(robots == 1 || diameter >= 1, "a team needs a diameter ≥ 1");
-        let _ = case; // Case 1 and 2 are the same square market (spare columns when n > m).
         let cheapest = costs.iter().copied().fold(f64::INFINITY, f64::min);
         let dearest = costs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let mut extended = costs;
@@ -142,7 +135,6 @@ impl MarketAgent {
             stack: Vec::with_capacity(2 * robots),
             queue: Vec::with_capacity(robots),
             column: vec![0.0; tasks],
-            raises: 0,
         };
         agent.start_flood();
         if robots == 1 {
@@ -156,11 +148,6 @@ impl MarketAgent {
     /// Payload length for a team of `robots`.
     pub fn payload_len_for(robots: usize) -> usize {
         robots + robots * robots.div_ceil(BITS_PER_WORD) + 1
-    }
-
-    /// Price raises so far.
-    pub fn raises(&self) -> u64 {
-        self.raises
     }
 
     /// Whether the market has cleared (the assignment is optimal).
@@ -421,7 +408,6 @@ impl ConsensusAgent for MarketAgent {
                             self.prices[c] += delta;
                         }
                     }
-                    self.raises += 1;
                     self.start_flood();
                     changed = true;
                 } else {
@@ -470,30 +456,26 @@ impl ConsensusAgent for MarketAgent {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::CostMatrix;
+    use crate::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 
-    /// Runs a team in lockstep on `neighbours` until every robot's market clears.
-    fn run(costs: &CostMatrix, neighbours: &[Vec<usize>], diameter: usize) -> (Vec<usize>, u64) {
-        let (n, m) = (costs.robots(), costs.tasks());
-        let case = if n == m {
-            AssignmentCase::One
-        } else {
-            AssignmentCase::Two
-        };
+    /// Runs a team in lockstep on `neighbours` until every robot's market clears; returns
+    /// each robot's task.
+    fn run(
+        problem: &TaskAssignmentProblem,
+        neighbours: &[Vec<usize>],
+        diameter: usize,
+    ) -> Vec<usize> {
+        let n = problem.robots();
         let mut agents: Vec<MarketAgent> = (0..n)
-            .map(|i| MarketAgent::new(i, costs.row(i).to_vec(), n, case, diameter))
+            .map(|i| MarketAgent::new(i, problem.costs().row(i).to_vec(), n, diameter))
             .collect();
         let len = agents[0].payload_len();
-        let mut payloads: Vec<Vec<f64>> = agents
-            .iter()
-            .map(|a| {
-                let mut p = vec![0.0; len];
-                a.write_initial_payload(&mut p);
-                p
-            })
-            .collect();
+        let mut payloads = vec![vec![0.0; len]; n];
+        for (agent, payload) in agents.iter().zip(&mut payloads) {
+            agent.write_initial_payload(payload);
+        }
         let mut rounds = 0;
-        while !agents.iter().all(MarketAgent::cleared) {
+        while !agents.iter().any(MarketAgent::cleared) {
             assert!(rounds < 100_000, "the market did not clear");
             let mut next = vec![vec![0.0; len]; n];
             for (i, agent) in agents.iter_mut().enumerate() {
@@ -503,12 +485,11 @@ mod tests {
             payloads = next;
             rounds += 1;
         }
-        let clears: Vec<bool> = agents.iter().map(MarketAgent::cleared).collect();
         assert!(
-            clears.iter().all(|&c| c),
+            agents.iter().all(MarketAgent::cleared),
             "robots cleared at different rounds"
         );
-        (agents.iter().map(MarketAgent::decide).collect(), rounds)
+        agents.iter().map(MarketAgent::decide).collect()
     }
 
     fn complete(n: usize) -> Vec<Vec<usize>> {
@@ -528,55 +509,20 @@ mod tests {
             .collect()
     }
 
-    fn random_costs(n: usize, m: usize, seed: u64) -> CostMatrix {
-        let mut state = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let values = (0..n * m)
-            .map(|_| {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (state >> 11) as f64 / (1u64 << 53) as f64
-            })
-            .collect();
-        CostMatrix::new(n, m, values).unwrap()
-    }
-
-    fn cost_of(costs: &CostMatrix, tasks: &[usize]) -> f64 {
-        tasks
-            .iter()
-            .enumerate()
-            .map(|(i, &t)| costs.get(i, t))
-            .sum()
-    }
-
     #[test]
     fn clears_at_the_optimum_on_complete_and_chain_graphs_case_1_and_2() {
         for seed in 0..20 {
             for (n, m) in [(6, 6), (9, 5), (12, 12)] {
-                let costs = random_costs(n, m, seed);
-                let case = if n == m {
-                    AssignmentCase::One
-                } else {
-                    AssignmentCase::Two
-                };
-                let optimum = crate::oracle::solve_costs(&costs, case).unwrap();
-                let best = cost_of(&costs, &optimum);
+                let costs = CostMatrix::uniform(n, m, seed).unwrap();
+                let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
+                let best = crate::oracle::solve(&problem).unwrap().cost;
                 for (graph, diameter) in [(complete(n), 1), (chain(n), n - 1)] {
-                    let (tasks, _) = run(&costs, &graph, diameter);
-                    let mut covered = vec![false; m];
-                    for &t in &tasks {
-                        covered[t] = true;
-                    }
-                    assert!(covered.iter().all(|&c| c), "a task is uncovered");
-                    if n == m {
-                        let mut sorted = tasks.clone();
-                        sorted.sort_unstable();
-                        sorted.dedup();
-                        assert_eq!(sorted.len(), n, "two robots on one task");
-                    }
-                    let cost = cost_of(&costs, &tasks);
+                    let tasks = run(&problem, &graph, diameter);
+                    assert!(
+                        problem.is_feasible(&tasks),
+                        "seed {seed} {n}x{m}: {tasks:?}"
+                    );
+                    let cost = problem.cost_of(&tasks).unwrap();
                     assert!(
                         (cost - best).abs() <= 1e-9,
                         "seed {seed} {n}x{m}: cost {cost} vs optimum {best}"
@@ -592,23 +538,21 @@ mod tests {
         let n = 7;
         let row: Vec<f64> = (0..n).map(|t| t as f64).collect();
         let costs = CostMatrix::new(n, n, row.repeat(n)).unwrap();
-        let (tasks, rounds) = run(&costs, &complete(n), 1);
-        let mut sorted = tasks;
-        sorted.sort_unstable();
-        assert_eq!(sorted, (0..n).collect::<Vec<_>>());
-        assert!(rounds > 0);
+        let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
+        let tasks = run(&problem, &complete(n), 1);
+        assert!(problem.is_feasible(&tasks), "{tasks:?}");
     }
 
     #[test]
     fn a_lone_robot_takes_its_cheapest_task_at_once() {
-        let agent = MarketAgent::new(0, vec![3.0], 1, AssignmentCase::One, 0);
+        let agent = MarketAgent::new(0, vec![3.0], 1, 0);
         assert!(agent.cleared());
         assert_eq!(agent.decide(), 0);
     }
 
     #[test]
     fn payload_packs_demand_rows() {
-        let agent = MarketAgent::new(0, vec![0.5; 50], 50, AssignmentCase::One, 1);
+        let agent = MarketAgent::new(0, vec![0.5; 50], 50, 1);
         assert_eq!(agent.payload_len(), 50 + 50 * 2 + 1);
     }
 }

@@ -180,13 +180,9 @@ impl MethodAgent {
                 }),
             )),
             Method::Cbaa => Algorithm::Cbaa(CbaaAgent::new(index, costs)),
-            Method::Market => Algorithm::Market(MarketAgent::new(
-                index,
-                costs,
-                robots,
-                case,
-                settings.diameter,
-            )),
+            Method::Market => {
+                Algorithm::Market(MarketAgent::new(index, costs, robots, settings.diameter))
+            }
             Method::DistHungarian => {
                 Algorithm::DistHungarian(DistHungarianAgent::new(index, costs, robots, case))
             }
