@@ -134,6 +134,19 @@ pub enum OnFailure {
     Continue,
 }
 
+/// Why the survivors of a failure could not re-solve (`--on-failure continue`).
+#[derive(Debug, thiserror::Error)]
+pub enum CannotContinue {
+    #[error(
+        "the {survivors} surviving robots cannot cover the {tasks} tasks (dropping a robot from Case 1 leaves fewer robots than tasks)"
+    )]
+    TooFewRobots { survivors: usize, tasks: usize },
+    #[error("without robot {failed} the communication graph is disconnected")]
+    Disconnected { failed: usize },
+    #[error("the survivors' re-solve failed too: {0}")]
+    ResolveFailed(Box<SolveError>),
+}
+
 /// A failed robot and how the survivors went on (`--on-failure continue`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Degraded {
@@ -206,25 +219,11 @@ pub enum SolveError {
     PrimalOnlyStop { stop: &'static str },
     #[error("--max-iters must be at least 1")]
     NoIterations,
-    #[error(
-        "{first}; --on-failure continue: the {survivors} surviving robots cannot cover the {tasks} tasks (dropping a robot from Case 1 leaves fewer robots than tasks)"
-    )]
-    SurvivorsTooFew {
+    /// An agent failed and, with `--on-failure continue`, the survivors could not go on.
+    #[error("{first}; --on-failure continue: {reason}")]
+    CannotContinue {
         first: Box<SolveError>,
-        survivors: usize,
-        tasks: usize,
-    },
-    #[error(
-        "{first}; --on-failure continue: without robot {failed} the communication graph is disconnected"
-    )]
-    SurvivorsDisconnected {
-        first: Box<SolveError>,
-        failed: usize,
-    },
-    #[error("{first}; --on-failure continue: the survivors' re-solve failed too: {second}")]
-    ResolveFailed {
-        first: Box<SolveError>,
-        second: Box<SolveError>,
+        reason: CannotContinue,
     },
     #[error(
         "{robots} robots × {tasks} tasks need about {gib:.1} GiB of agent state (each robot holds an m×n matrix); the limit is 8 GiB"
@@ -314,31 +313,43 @@ pub fn solve(
     graph: &Graph,
     config: &SolveConfig,
 ) -> Result<SolveReport, SolveError> {
-    let first = match solve_once(problem, graph, config) {
-        Err(error @ SolveError::Launch(LaunchError::AgentFailed { .. }))
+    let (first, failed, lost_rounds) = match solve_once(problem, graph, config) {
+        Err(first @ SolveError::Launch(LaunchError::AgentFailed { index, round, .. }))
             if config.on_failure == OnFailure::Continue =>
         {
-            error
+            (first, index, round)
         }
         other => return other,
     };
-    let SolveError::Launch(LaunchError::AgentFailed {
-        index: failed,
-        round: lost_rounds,
-        ..
-    }) = first
-    else {
-        unreachable!("matched above")
-    };
-    let failure = first.to_string();
-    let first = std::cell::Cell::new(Some(first));
-    // The error we report if the survivors cannot go on.
-    let first_error = || Box::new(first.take().expect("reported once"));
+    match solve_without(problem, graph, config, failed) {
+        Ok((survivors, mut report)) => {
+            report.degraded = Some(Degraded {
+                failure: first.to_string(),
+                failed_robot: failed,
+                survivors,
+                lost_rounds,
+            });
+            Ok(report)
+        }
+        Err(reason) => Err(SolveError::CannotContinue {
+            first: Box::new(first),
+            reason,
+        }),
+    }
+}
+
+/// Re-solves without robot `failed` (fresh agents, cold start); returns the survivors'
+/// original indices and their report.
+fn solve_without(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    config: &SolveConfig,
+    failed: usize,
+) -> Result<(Vec<usize>, SolveReport), CannotContinue> {
     let survivors: Vec<usize> = (0..problem.robots()).filter(|&r| r != failed).collect();
     let (n, m) = (survivors.len(), problem.tasks());
     if n < m {
-        return Err(SolveError::SurvivorsTooFew {
-            first: first_error(),
+        return Err(CannotContinue::TooFewRobots {
             survivors: n,
             tasks: m,
         });
@@ -364,27 +375,15 @@ pub fn solve(
     )
     .ok()
     .filter(Graph::is_connected)
-    .ok_or_else(|| SolveError::SurvivorsDisconnected {
-        first: first_error(),
-        failed,
-    })?;
+    .ok_or(CannotContinue::Disconnected { failed })?;
     let again = SolveConfig {
         on_failure: OnFailure::Abort,
         fault_injection: false,
         ..config.clone()
     };
-    let mut report =
-        solve_once(&reduced, &subgraph, &again).map_err(|second| SolveError::ResolveFailed {
-            first: first_error(),
-            second: Box::new(second),
-        })?;
-    report.degraded = Some(Degraded {
-        failure,
-        failed_robot: failed,
-        survivors,
-        lost_rounds,
-    });
-    Ok(report)
+    let report = solve_once(&reduced, &subgraph, &again)
+        .map_err(|second| CannotContinue::ResolveFailed(Box::new(second)))?;
+    Ok((survivors, report))
 }
 
 fn solve_once(
