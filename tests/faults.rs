@@ -10,11 +10,12 @@ use common::leftovers_of;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn solve(args: &[&str], fault: Option<&str>) -> Child {
+/// `admm-ta solve --transport ipc ARGS` (whitespace-separated) with an optional fault.
+fn solve(args: &str, fault: Option<&str>) -> Child {
     let mut command = Command::new(env!("CARGO_BIN_EXE_admm-ta"));
     command
-        .arg("solve")
-        .args(args)
+        .args(["solve", "--transport", "ipc"])
+        .args(args.split_whitespace())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     match fault {
@@ -90,24 +91,12 @@ fn assert_failure_line(stderr: &str, needles: &[&str]) {
 }
 
 /// Long-running 20-agent team (runs until the round limit unless something fails).
-const LONG_RUN: [&str; 12] = [
-    "--robots",
-    "20",
-    "--tasks",
-    "20",
-    "--transport",
-    "ipc",
-    "--stop",
-    "max-iters",
-    "--max-iters",
-    "1000000",
-    "--round-timeout",
-    "5",
-];
+const LONG_RUN: &str =
+    "--robots 20 --tasks 20 --stop max-iters --max-iters 1000000 --round-timeout 5";
 
 #[test]
 fn kill_9_of_an_agent_ends_the_run_within_a_second_and_leaves_nothing() {
-    let mut launcher = solve(&LONG_RUN, None);
+    let mut launcher = solve(LONG_RUN, None);
     let pid = launcher.id();
     // Wait until all 20 agents run and have done some rounds.
     let started = Instant::now();
@@ -174,23 +163,8 @@ fn every_injected_fault_is_reported_with_the_failed_agent() {
         ),
     ];
     for (kind, needles) in cases {
-        let args = [
-            "--robots",
-            "8",
-            "--tasks",
-            "8",
-            "--transport",
-            "ipc",
-            "--topology",
-            "ring",
-            "--stop",
-            "max-iters",
-            "--max-iters",
-            "1000",
-            "--round-timeout",
-            "1",
-        ];
-        let mut launcher = solve(&args, Some(&format!("3:10:{kind}")));
+        let args = "--robots 8 --tasks 8 --topology ring --stop max-iters --max-iters 1000 --round-timeout 1";
+        let mut launcher = solve(args, Some(&format!("3:10:{kind}")));
         let pid = launcher.id();
         let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
         assert!(!exit.success(), "{kind}: the run succeeded");
@@ -206,17 +180,8 @@ fn every_injected_fault_is_reported_with_the_failed_agent() {
 
 #[test]
 fn a_fault_switch_for_another_agent_changes_nothing() {
-    let args = [
-        "--robots",
-        "6",
-        "--tasks",
-        "6",
-        "--transport",
-        "ipc",
-        "--check",
-        "--json",
-    ];
-    let mut launcher = solve(&args, Some("99:1:exit"));
+    let args = "--robots 6 --tasks 6 --check --json";
+    let mut launcher = solve(args, Some("99:1:exit"));
     let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
     assert!(exit.success(), "{}", stderr_of(&mut launcher));
 }
@@ -224,22 +189,9 @@ fn a_fault_switch_for_another_agent_changes_nothing() {
 #[test]
 fn on_failure_continue_resolves_without_the_failed_robot_or_says_why_not() {
     // Case 2 on a ring: the survivors (a chain) re-solve to their own optimum.
-    let args = [
-        "--robots",
-        "12",
-        "--tasks",
-        "8",
-        "--transport",
-        "ipc",
-        "--topology",
-        "ring",
-        "--on-failure",
-        "continue",
-        "--check",
-        "--json",
-    ];
+    let args = "--robots 12 --tasks 8 --topology ring --on-failure continue --check --json --round-timeout 1";
     for kind in ["exit", "nan", "hang"] {
-        let mut launcher = solve(&args, Some(&format!("3:10:{kind}")));
+        let mut launcher = solve(args, Some(&format!("3:10:{kind}")));
         let pid = launcher.id();
         let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
         let stderr = stderr_of(&mut launcher);
@@ -260,18 +212,11 @@ fn on_failure_continue_resolves_without_the_failed_robot_or_says_why_not() {
     }
     // Case 1 cannot lose a robot; a chain cannot lose an inner one.
     for (args, needle) in [
-        (
-            vec!["--robots", "8", "--tasks", "8"],
-            "cannot cover the 8 tasks",
-        ),
-        (
-            vec!["--robots", "9", "--tasks", "8", "--topology", "chain"],
-            "disconnected",
-        ),
+        ("--robots 8 --tasks 8", "cannot cover the 8 tasks"),
+        ("--robots 9 --tasks 8 --topology chain", "disconnected"),
     ] {
-        let mut all = args.clone();
-        all.extend(["--transport", "ipc", "--on-failure", "continue"]);
-        let mut launcher = solve(&all, Some("3:5:exit"));
+        let args = format!("{args} --on-failure continue");
+        let mut launcher = solve(&args, Some("3:5:exit"));
         let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
         assert!(!exit.success());
         assert_failure_line(&stderr_of(&mut launcher), &["agent 3 failed", needle]);
@@ -280,23 +225,8 @@ fn on_failure_continue_resolves_without_the_failed_robot_or_says_why_not() {
 
 #[test]
 fn an_agent_with_another_team_shape_is_refused_and_the_team_runs_on() {
-    let args = [
-        "--robots",
-        "6",
-        "--tasks",
-        "6",
-        "--transport",
-        "ipc",
-        "--topology",
-        "ring",
-        "--stop",
-        "max-iters",
-        "--max-iters",
-        "100000000",
-        "--round-timeout",
-        "5",
-    ];
-    let mut launcher = solve(&args, None);
+    let args = "--robots 6 --tasks 6 --topology ring --stop max-iters --max-iters 100000000 --round-timeout 5";
+    let mut launcher = solve(args, None);
     let pid = launcher.id();
     // Whatever happens below, end the team through the launcher (so it cleans up).
     struct EndTeam(u32);
