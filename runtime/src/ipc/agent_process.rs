@@ -59,19 +59,19 @@ pub fn run(run_id: &str, index: usize, scenario_path: &Path) -> Result<(), Strin
     let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
     let fault = crate::ipc::fault::fault_for(index)?;
-    let exchange = IpcExchange::connect(&scenario.endpoint(&graph, index), &config, deadline)
+    let mut exchange = IpcExchange::connect(&scenario.endpoint(&graph, index), &config, deadline)
         .map_err(|e| e.to_string())?;
-    let mut exchange = crate::ipc::fault::FaultyExchange::new(exchange, fault);
+    exchange.inject(fault);
     let connected_unix_ns = unix_ns();
     let outcome = run_agent(&mut agent, &mut exchange, &plan).map_err(|e| {
         // Point the launcher and the other agents at the agent that caused it.
         let culprit = match &e {
             // Blocked neighbours time out too: blame the agent everybody waits for.
-            ExchangeError::Timeout { .. } => Some(exchange.inner.laggard()),
+            ExchangeError::Timeout { .. } => Some(exchange.laggard()),
             e => culprit(e),
         };
         if let Some(culprit) = culprit {
-            exchange.inner.blame(culprit);
+            exchange.blame(culprit);
         }
         e.to_string()
     })?;

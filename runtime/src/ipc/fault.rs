@@ -9,13 +9,11 @@
 //! * `wrong-round`: publishes a header with a round number far ahead;
 //! * `wrong-size`: publishes a payload one value short.
 //!
-//! The launcher passes the environment to its agents, so a test sets it on `admm-ta solve`.
+//! The launcher passes the environment to its agents, so a test sets it on `admm-ta solve`;
+//! the agent's [`crate::ipc::transport::IpcExchange`] applies it when it publishes.
 
-use crate::exchange::{Exchange, ExchangeError};
 use crate::header::RoundHeader;
-use crate::ipc::transport::IpcExchange;
-use admm_ta_agents::agent::Inbox;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// The environment variable that injects a fault.
 pub const FAULT_ENV: &str = "ADMM_TA_FAULT";
@@ -77,80 +75,41 @@ pub fn fault_for(index: usize) -> Result<Option<Fault>, String> {
     }
 }
 
-/// An [`IpcExchange`] that misbehaves as told at one round.
-pub struct FaultyExchange {
-    pub inner: IpcExchange,
-    pub fault: Option<Fault>,
-    gathered: u64,
-}
-
-impl FaultyExchange {
-    pub fn new(inner: IpcExchange, fault: Option<Fault>) -> Self {
-        Self {
-            inner,
-            fault,
-            gathered: 0,
-        }
-    }
-}
-
-impl Exchange for FaultyExchange {
-    fn degree(&self) -> usize {
-        self.inner.degree()
-    }
-    fn publish_initial(
-        &mut self,
-        header: RoundHeader,
-        write: &mut dyn FnMut(&mut [f64]),
-    ) -> Result<(), ExchangeError> {
-        self.inner.publish_initial(header, write)
-    }
-    fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
-        self.gathered = round;
-        self.inner.gather(round, deadline)
-    }
-    fn neighbour_header(&self, k: usize) -> &RoundHeader {
-        self.inner.neighbour_header(k)
-    }
-    fn neighbour_payload(&self, k: usize) -> &[f64] {
-        self.inner.neighbour_payload(k)
-    }
-    fn compute_and_publish(
-        &mut self,
-        compute: &mut dyn FnMut(&dyn Inbox, &mut [f64]) -> RoundHeader,
-    ) -> Result<(), ExchangeError> {
-        let Some(fault) = self.fault.filter(|f| f.round == self.gathered) else {
-            return self.inner.compute_and_publish(compute);
-        };
+impl Fault {
+    /// Strikes when agent `fault.agent` is about to publish after gathering `fault.round`:
+    /// `exit`, `abort` and `hang` end here (no return); the others return, and the sender
+    /// then applies [`Fault::corrupt`] and sends [`Fault::payload_len`] values.
+    pub fn strike(&self) {
         eprintln!(
             "fault injection: agent {} does {:?} at round {}",
-            fault.agent, fault.kind, fault.round
+            self.agent, self.kind, self.round
         );
-        match fault.kind {
+        match self.kind {
             FaultKind::Exit => std::process::exit(3),
             FaultKind::Abort => std::process::abort(),
             FaultKind::Hang => loop {
                 std::thread::sleep(Duration::from_secs(3600));
             },
-            FaultKind::Nan => self.inner.compute_and_publish(&mut |inbox, out| {
-                let header = compute(inbox, out);
-                let middle = out.len() / 2;
-                out[middle] = f64::NAN;
-                header
-            }),
-            FaultKind::WrongRound => self.inner.compute_and_publish(&mut |inbox, out| {
-                let mut header = compute(inbox, out);
-                header.round += 1000;
-                header
-            }),
-            FaultKind::WrongSize => {
-                self.inner.truncate_next_payload();
-                self.inner.compute_and_publish(compute)
-            }
+            FaultKind::Nan | FaultKind::WrongRound | FaultKind::WrongSize => {}
         }
     }
-    fn global_barrier(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
-        self.inner.global_barrier(round, deadline)
+
+    /// Corrupts the outgoing payload or header as the fault says.
+    pub fn corrupt(&self, payload: &mut [f64], header: &mut RoundHeader) {
+        match self.kind {
+            FaultKind::Nan => payload[payload.len() / 2] = f64::NAN,
+            FaultKind::WrongRound => header.round += 1000,
+            _ => {}
+        }
+    }
+
+    /// Values actually sent instead of `len`.
+    pub fn payload_len(&self, len: usize) -> usize {
+        if self.kind == FaultKind::WrongSize {
+            len.saturating_sub(1)
+        } else {
+            len
+        }
     }
 }
 

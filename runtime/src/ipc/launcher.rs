@@ -14,12 +14,8 @@ use crate::exchange::AgentOutcome;
 use crate::ipc::agent_process::{AgentReport, log_path, result_path};
 use crate::ipc::namespace::RunNamespace;
 use crate::ipc::scenario::Scenario;
-use crate::ipc::transport::{Board, board_size, cleanup_dead_nodes, run_config};
+use crate::ipc::transport::{Board, cleanup_dead_nodes, run_config};
 use crate::latency::RoundLatency;
-use iceoryx2::prelude::{FileName, SemanticString};
-use iceoryx2_bb_posix::creation_mode::CreationMode;
-use iceoryx2_bb_posix::permission::Permission;
-use iceoryx2_bb_posix::shared_memory::SharedMemoryBuilder;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
@@ -90,7 +86,7 @@ const FAILURE_GRACE: Duration = Duration::from_secs(2);
 struct RunGuard {
     namespace: RunNamespace,
     children: Vec<Option<Child>>,
-    _board: Option<Board>,
+    board: Option<Board>,
 }
 
 impl Drop for RunGuard {
@@ -103,7 +99,7 @@ impl Drop for RunGuard {
                 let _ = c.wait();
             }
         }
-        self._board = None;
+        self.board = None;
         if std::env::var_os("ADMM_TA_STARTUP_TRACE").is_some() {
             for i in 0..self.children.len() {
                 eprintln!("{}", last_log_line(&self.namespace.dir, i));
@@ -151,7 +147,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
     let mut guard = RunGuard {
         namespace: namespace.clone(),
         children: Vec::new(),
-        _board: None,
+        board: None,
     };
     scenario.run_id = namespace.id.clone();
     scenario.iceoryx_prefix = namespace.prefix.clone();
@@ -160,23 +156,15 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
     scenario.startup_timeout_ms = options.startup_timeout.as_millis() as u64;
     scenario.global_barrier = options.global_barrier;
     scenario.board_shm = namespace.board_shm();
-    let file = FileName::new(scenario.board_shm.as_bytes())
-        .map_err(|e| LaunchError::Board(format!("{e:?}")))?;
-    let board = SharedMemoryBuilder::new(&file)
-        .is_memory_locked(false)
-        .creation_mode(CreationMode::PurgeAndCreate)
-        .size(board_size(scenario.robots))
-        .permission(Permission::OWNER_READ_WRITE)
-        .zero_memory(true)
-        .has_ownership(true)
-        .create()
-        .map_err(|e| LaunchError::Board(format!("{e:?}")))?;
-    let board = Board::from_memory(board, scenario.robots);
-    board.set_shape(
-        scenario.tasks,
-        scenario.method.payload_len(scenario.robots, scenario.tasks),
+    guard.board = Some(
+        Board::create(
+            &scenario.board_shm,
+            scenario.robots,
+            scenario.tasks,
+            scenario.method.payload_len(scenario.robots, scenario.tasks),
+        )
+        .map_err(LaunchError::Board)?,
     );
-    guard._board = Some(board);
     let run_dir = namespace.dir.clone();
     let scenario_path = run_dir.join("scenario.json");
     let text = serde_json::to_string(&scenario).expect("a scenario serialises");
@@ -240,7 +228,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
                 failure_order.push(index);
             }
             if how.is_some() && failed.is_none() {
-                let board = guard._board.as_ref().expect("the board exists");
+                let board = guard.board.as_ref().expect("the board exists");
                 // An agent may have found a dead or misbehaving peer first: then that peer
                 // is the one.
                 failed = Some(board.mark_failed(index).unwrap_or(index));
@@ -275,7 +263,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
         }
     }
     if let Some(index) = failed {
-        let board = guard._board.as_ref().expect("the board exists");
+        let board = guard.board.as_ref().expect("the board exists");
         // The reporter whose message says what went wrong (not "stopped because …").
         let reporter = failure_order
             .iter()

@@ -25,6 +25,7 @@
 
 use crate::exchange::{Exchange, ExchangeError};
 use crate::header::{MessageFault, Placement, RoundHeader, check_message};
+use crate::ipc::fault::Fault;
 use crate::wait::{Arrival, CountingBarrier, WaitPolicy};
 use admm_ta_agents::agent::Inbox;
 use iceoryx2::node::NodeView;
@@ -74,8 +75,8 @@ pub struct IpcEndpoint {
 }
 
 /// Bytes of the board: the global barrier's line, one line per agent (two arrival counters
-/// and the last round it published), then the failure line.
-pub fn board_size(agents: usize) -> usize {
+/// and the last round it published), then the failure line (failed agent, team shape).
+fn board_size(agents: usize) -> usize {
     LINE * (agents + 2)
 }
 
@@ -127,9 +128,32 @@ impl Board {
         Ok(Self { memory, agents })
     }
 
-    /// Wraps the board memory the launcher created.
-    pub fn from_memory(memory: SharedMemory, agents: usize) -> Self {
-        Self { memory, agents }
+    /// Creates the board of a run (the launcher, which owns it: it is removed when dropped),
+    /// zeroed, with the team's shape `(agents, tasks, payload length)` recorded so that an
+    /// agent of another shape is refused.
+    pub fn create(
+        shm: &str,
+        agents: usize,
+        tasks: usize,
+        payload_len: usize,
+    ) -> Result<Self, String> {
+        let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
+        let memory = SharedMemoryBuilder::new(&name)
+            .is_memory_locked(false)
+            .creation_mode(iceoryx2_bb_posix::creation_mode::CreationMode::PurgeAndCreate)
+            .size(board_size(agents))
+            .permission(iceoryx2_bb_posix::permission::Permission::OWNER_READ_WRITE)
+            .zero_memory(true)
+            .has_ownership(true)
+            .create()
+            .map_err(|e| format!("{e:?}"))?;
+        let board = Self { memory, agents };
+        let line = LINE * (agents + 1);
+        board.word(line + 8).store(tasks as u64, Ordering::Relaxed);
+        board
+            .word(line + 16)
+            .store(payload_len as u64, Ordering::Release);
+        Ok(board)
     }
 
     fn word(&self, offset: usize) -> &AtomicU64 {
@@ -158,14 +182,6 @@ impl Board {
     pub fn failed(&self) -> Option<usize> {
         let marked = self.word(LINE * (self.agents + 1)).load(Ordering::Acquire);
         (marked != 0).then(|| marked as usize - 1)
-    }
-
-    /// Records the team's shape `(robots, tasks, payload length)` (the launcher, at creation).
-    pub fn set_shape(&self, tasks: usize, payload_len: usize) {
-        let line = LINE * (self.agents + 1);
-        self.word(line + 8).store(tasks as u64, Ordering::Relaxed);
-        self.word(line + 16)
-            .store(payload_len as u64, Ordering::Release);
     }
 
     /// Refuses an agent whose scenario does not match the running team's shape.
@@ -232,8 +248,8 @@ pub struct IpcExchange {
     /// The run's iceoryx2 configuration (to scan its nodes for dead ones).
     config: Config,
     last_dead_node_scan: Instant,
-    /// Fault injection: publish the next payload one value short.
-    truncate_next: bool,
+    /// Fault injection (tests): misbehave when publishing after gathering its round.
+    fault: Option<Fault>,
     /// The launcher's pid: if this process is orphaned (the launcher died), it stops.
     launcher: u32,
     // Ports first: they must drop before the node.
@@ -412,7 +428,7 @@ impl IpcExchange {
             barrier,
             config: config.clone(),
             last_dead_node_scan: Instant::now(),
-            truncate_next: false,
+            fault: None,
             launcher: std::os::unix::process::parent_id(),
             _node: node,
         })
@@ -432,9 +448,9 @@ impl IpcExchange {
             .unwrap_or(self.index)
     }
 
-    /// Fault injection: the next payload goes out one value short.
-    pub fn truncate_next_payload(&mut self) {
-        self.truncate_next = true;
+    /// Fault injection (tests, [`crate::ipc::fault`]).
+    pub fn inject(&mut self, fault: Option<Fault>) {
+        self.fault = fault;
     }
 
     /// Stops this agent if another agent failed: marked on the board (by the launcher or a
@@ -553,26 +569,30 @@ impl IpcExchange {
         Ok(())
     }
 
+    /// Publishes the payload `compute` writes in place, as `fault` (tests) says if any.
     fn send(
         &mut self,
+        fault: Option<Fault>,
         compute: &mut dyn FnMut(&mut [f64]) -> RoundHeader,
     ) -> Result<(), ExchangeError> {
         let i = self.index;
+        let len = fault.map_or(self.payload_len, |f| f.payload_len(self.payload_len));
         // Zero-filled once (the loan is uninitialised memory), then written in place.
-        let len = self.payload_len - usize::from(std::mem::take(&mut self.truncate_next));
         let mut sample = self
             .publisher
             .loan_slice_uninit(len)
             .map_err(|e| transport(i, format!("cannot loan a sample: {e:?}")))?
             .write_from_fn(|_| 0.0);
-        let header = if len < self.payload_len {
-            // Fault injection only: compute in full, send one value short.
-            let mut full = vec![0.0; self.payload_len];
-            let header = compute(&mut full);
-            sample.payload_mut().copy_from_slice(&full[..len]);
-            header
-        } else {
-            compute(sample.payload_mut())
+        let header = match fault {
+            None => compute(sample.payload_mut()),
+            Some(fault) => {
+                // Fault injection only: compute in full, then corrupt and cut.
+                let mut full = vec![0.0; self.payload_len];
+                let mut header = compute(&mut full);
+                fault.corrupt(&mut full, &mut header);
+                sample.payload_mut().copy_from_slice(&full[..len]);
+                header
+            }
         };
         *sample.user_header_mut() = header;
         let delivered = sample
@@ -696,7 +716,7 @@ impl Exchange for IpcExchange {
         header: RoundHeader,
         write: &mut dyn FnMut(&mut [f64]),
     ) -> Result<(), ExchangeError> {
-        self.send(&mut |out| {
+        self.send(None, &mut |out| {
             write(out);
             header
         })
@@ -757,8 +777,12 @@ impl Exchange for IpcExchange {
         &mut self,
         compute: &mut dyn FnMut(&dyn Inbox, &mut [f64]) -> RoundHeader,
     ) -> Result<(), ExchangeError> {
+        let fault = self.fault.filter(|f| f.round == self.gathered);
+        if let Some(fault) = fault {
+            fault.strike();
+        }
         let held = std::mem::take(&mut self.held);
-        let result = self.send(&mut |out| compute(&SampleInbox { held: &held }, out));
+        let result = self.send(fault, &mut |out| compute(&SampleInbox { held: &held }, out));
         self.held = held;
         result
     }
