@@ -98,7 +98,7 @@ fn sweep_abandoned(runs: &Path) {
         else {
             continue;
         };
-        if Path::new(&format!("/proc/{pid}")).exists() {
+        if launcher_alive(pid) {
             continue;
         }
         let abandoned = RunNamespace {
@@ -108,6 +108,17 @@ fn sweep_abandoned(runs: &Path) {
         };
         let _ = abandoned.cleanup();
     }
+}
+
+/// Whether process `pid` runs (a zombie, killed but not yet reaped, does not).
+fn launcher_alive(pid: u32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
+        // The state is the first field after the parenthesised command name.
+        let state = stat[stat.rfind(')').map_or(0, |i| i + 1)..]
+            .split_whitespace()
+            .next();
+        state != Some("Z")
+    })
 }
 
 fn shm_objects(prefix: &str) -> Vec<PathBuf> {
