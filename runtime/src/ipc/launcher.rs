@@ -198,15 +198,14 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
     }
 
     // Supervise: reap children as they exit; the first failure ends the run.
-    let mut running = scenario.robots;
-    // How each child ended: `Some(None)` success, `Some(Some(how))` failure.
-    let mut ended: Vec<Option<Option<String>>> = vec![None; scenario.robots];
+    // How each child that failed ended.
+    let mut failures: Vec<Option<String>> = vec![None; scenario.robots];
     // The agent that failed, and the agents that exited with a failure, in order.
     let mut failed: Option<usize> = None;
     let mut failure_order = Vec::new();
     let mut grace_ends = None;
     let mut killed = 0;
-    while running > 0 {
+    while guard.children.iter().any(Option::is_some) {
         let mut progressed = false;
         for (index, slot) in guard.children.iter_mut().enumerate() {
             let Some(child) = slot.as_mut() else {
@@ -222,7 +221,6 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
                 }
             };
             *slot = None;
-            running -= 1;
             progressed = true;
             if how.is_some() {
                 failure_order.push(index);
@@ -234,7 +232,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
                 failed = Some(board.mark_failed(index).unwrap_or(index));
                 grace_ends = Some(std::time::Instant::now() + FAILURE_GRACE);
             }
-            ended[index] = Some(how);
+            failures[index] = how;
         }
         // The failed agent may still run (hung, or sending garbage): it is not waited for.
         if let Some(culprit) = failed
@@ -242,8 +240,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
         {
             let _ = child.kill();
             let _ = child.wait();
-            ended[culprit] = Some(Some("killed by the launcher".into()));
-            running -= 1;
+            failures[culprit] = Some("killed by the launcher".into());
         }
         if let Some(ends) = grace_ends
             && std::time::Instant::now() >= ends
@@ -252,9 +249,8 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
                 if let Some(mut child) = slot.take() {
                     let _ = child.kill();
                     let _ = child.wait();
-                    ended[index] = Some(Some("killed after the grace period".into()));
+                    failures[index] = Some("killed after the grace period".into());
                     killed += 1;
-                    running -= 1;
                 }
             }
         }
@@ -268,13 +264,14 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
         let reporter = failure_order
             .iter()
             .copied()
-            .find(|&i| i == index || !last_log_line(&run_dir, i).contains("because agent"))
+            .find(|&i| !last_log_line(&run_dir, i).contains("because agent"))
             .unwrap_or(index);
-        let status = match ended[index].clone().flatten() {
+        let status = match failures[index].take() {
             Some(how) if index == reporter => how,
             _ => format!("reported by agent {reporter}"),
         };
-        let survivors = scenario.robots - 1 - killed.min(scenario.robots - 1);
+        // `killed` never counts the failed agent itself.
+        let survivors = scenario.robots - 1 - killed;
         let dead_nodes = run_config(&namespace.prefix, &namespace.iceoryx_root())
             .map(|config| cleanup_dead_nodes(&config))
             .unwrap_or(0);

@@ -464,7 +464,12 @@ impl IpcExchange {
             how: how.into(),
         };
         if let Some(agent) = self.board.failed() {
-            return Err(failed(agent, "failed"));
+            let how = if agent == self.index {
+                "was reported failed by a neighbour"
+            } else {
+                "failed"
+            };
+            return Err(failed(agent, how));
         }
         // A system call: every 64 rounds and in long waits, not in every round.
         let look_for_launcher = round.is_multiple_of(64) || !waited.is_zero();
