@@ -164,27 +164,19 @@ fn dual_methods_agree_across_transports() {
 
 #[test]
 fn baselines_agree_across_transports() {
-    all_transports_with(
-        Method::Cbaa,
-        &problem(9, 9, 2),
-        &graph("ring", 9, 0),
-        StopRule::Local,
-        1000,
-    );
-    all_transports_with(
-        Method::DistHungarian,
-        &problem(10, 6, 7),
-        &graph("chain", 10, 0),
-        StopRule::Local,
-        1000,
-    );
-    all_transports_with(
-        Method::Market,
-        &problem(9, 6, 4),
-        &graph("random:0.3", 9, 4),
-        StopRule::Local,
-        5000,
-    );
+    for (method, (robots, tasks, seed), topology) in [
+        (Method::Cbaa, (9, 9, 2), "ring"),
+        (Method::DistHungarian, (10, 6, 7), "chain"),
+        (Method::Market, (9, 6, 4), "random:0.3"),
+    ] {
+        all_transports_with(
+            method,
+            &problem(robots, tasks, seed),
+            &graph(topology, robots, seed),
+            StopRule::Local,
+            5000,
+        );
+    }
 }
 
 #[test]
