@@ -1,7 +1,7 @@
-//! The three transports drive the same agent step: for the same seed they must produce the
+//! The four transports drive the same agent step: for the same seed they must produce the
 //! same iterates (bit for bit), stop at the same round and assign the same tasks. The ipc
-//! runs use real agent processes and real shared memory, each in its own namespace, and
-//! must leave nothing behind.
+//! and uds runs use real agent processes (and real shared memory, or real sockets), each in
+//! its own namespace, and must leave nothing behind.
 
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::solve::{
@@ -89,14 +89,17 @@ fn all_transports_with(
         };
         solve(problem, graph, &config).unwrap()
     };
-    let (sim, threads, ipc) = (
+    let (sim, threads, ipc, uds) = (
         run(Transport::Sim),
         run(Transport::Threads),
         run(Transport::Ipc),
+        run(Transport::Uds),
     );
     assert_same(&sim, &threads);
     assert_same(&sim, &ipc);
+    assert_same(&sim, &uds);
     assert_clean(&ipc);
+    assert_clean(&uds);
     if stop == StopRule::Local {
         assert!(sim.converged, "{}: no certified stop", graph.name());
         // CBAA is greedy: conflict-free, not necessarily optimal.
@@ -112,8 +115,10 @@ fn all_transports_with(
             graph.diameter().unwrap()
         );
     }
-    for r in [&threads, &ipc] {
+    for r in [&threads, &ipc, &uds] {
         let latency = r.round_latency_us.expect("distributed runs record latency");
+        let usage = r.agent_usage.expect("distributed runs record CPU usage");
+        assert!(usage.voluntary_switches + usage.involuntary_switches > 0);
         assert_eq!(
             latency.round.count,
             (problem.robots() * r.iterations) as u64
@@ -121,6 +126,7 @@ fn all_transports_with(
         assert!(latency.round.p50 > 0.0 && latency.round.p99 >= latency.round.p50);
     }
     assert!(ipc.startup_ms.unwrap() > 0.0);
+    assert!(uds.startup_ms.unwrap() > 0.0);
 }
 
 #[test]
@@ -303,4 +309,69 @@ fn central_stop_rules_are_refused_on_distributed_transports() {
     )
     .unwrap_err();
     assert!(err.to_string().contains("threads or ipc"), "{err}");
+}
+
+#[test]
+fn every_wait_strategy_gives_the_same_iterates_on_every_distributed_transport() {
+    use admm_ta_runtime::wait::WaitStrategy;
+    let (p, g) = (problem(6, 6, 9), graph("ring", 6, 0));
+    let reference = solve(&p, &g, &config(Transport::Sim, StopRule::MaxIters, 40)).unwrap();
+    for wait in [
+        WaitStrategy::Block,
+        WaitStrategy::SpinThenBlock,
+        WaitStrategy::Spin,
+    ] {
+        for transport in [Transport::Threads, Transport::Ipc, Transport::Uds] {
+            let report = solve(
+                &p,
+                &g,
+                &SolveConfig {
+                    wait,
+                    warmup_rounds: 10,
+                    ..config(transport, StopRule::MaxIters, 40)
+                },
+            )
+            .unwrap();
+            assert_same(&reference, &report);
+            // Warm-up rounds are not recorded.
+            let latency = report.round_latency_us.unwrap();
+            assert_eq!(latency.round.count, 6 * 30, "{wait:?} {transport:?}");
+            assert_eq!(latency.overhead.count, latency.round.count);
+            assert!(latency.overhead.p50 <= latency.round.p50);
+            if transport != Transport::Threads {
+                assert_clean(&report);
+            }
+        }
+    }
+}
+
+#[test]
+fn the_socket_baseline_moves_payloads_larger_than_the_socket_buffers() {
+    // 200×200 payload: 320 KB per message, more than a socket buffer holds: sends that the
+    // kernel cannot take at once must not deadlock two agents sending to each other.
+    use admm_ta_agents::probe::ProbeStep;
+    use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
+    let g = graph("complete", 6, 0);
+    for transport in [Transport::Threads, Transport::Ipc, Transport::Uds] {
+        let run = ProbeRun {
+            transport,
+            rounds: 30,
+            warmup_rounds: 5,
+            round_timeout: Duration::from_secs(20),
+            agent_program: Some(PathBuf::from(env!("CARGO_BIN_EXE_admm-ta"))),
+            ..ProbeRun::new(200 * 200, ProbeStep::Average)
+        };
+        let report = run_probe(&g, &run).unwrap();
+        assert_eq!(report.latency.round.count, 6 * 25, "{transport:?}");
+        assert!(report.usage.cpu_ns > 0);
+    }
+    let refused = run_probe(
+        &g,
+        &ProbeRun {
+            transport: Transport::Uds,
+            global_barrier: true,
+            ..ProbeRun::new(4, ProbeStep::Touch)
+        },
+    );
+    assert!(matches!(refused, Err(SolveError::BarrierNeedsAgents)));
 }

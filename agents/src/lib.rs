@@ -14,6 +14,7 @@ pub mod market;
 pub mod method;
 pub mod oracle;
 pub mod primal;
+pub mod probe;
 pub mod problem;
 pub mod projection;
 pub mod rho;

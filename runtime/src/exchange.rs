@@ -19,6 +19,7 @@
 
 use crate::header::RoundHeader;
 use crate::latency::{Component, LatencyBuckets, RoundLatency};
+use crate::usage::ThreadUsage;
 use admm_ta_agents::agent::{ConsensusAgent, Inbox};
 use admm_ta_agents::local_stop::{LocalCertifiedStop, Verdict};
 use serde::{Deserialize, Serialize};
@@ -153,6 +154,8 @@ pub struct AgentPlan {
     /// Deadline of every wait (neighbour messages, global barrier).
     pub round_timeout: Duration,
     pub global_barrier: bool,
+    /// Rounds run before latency and resource usage are recorded (benchmarks).
+    pub warmup_rounds: u64,
 }
 
 /// What one agent reports at the end of a run.
@@ -171,6 +174,9 @@ pub struct AgentOutcome {
     pub iterate_digest: u64,
     pub projection_steps: u64,
     pub latency: LatencyBuckets,
+    /// CPU time and context switches of the agent's thread over the recorded rounds.
+    #[serde(default)]
+    pub usage: ThreadUsage,
 }
 
 /// FNV-1a over the bits of a payload.
@@ -197,7 +203,11 @@ pub fn run_agent<A: ConsensusAgent + ?Sized>(
     let mut round = 0u64;
     let mut projection_steps = 0u64;
     let degree = exchange.degree();
+    let mut usage_from = ThreadUsage::now();
     loop {
+        if round == plan.warmup_rounds && round > 0 {
+            usage_from = ThreadUsage::now();
+        }
         let started = Instant::now();
         exchange.gather(round, started + plan.round_timeout)?;
         let gathered = Instant::now();
@@ -242,6 +252,7 @@ pub fn run_agent<A: ConsensusAgent + ?Sized>(
                 iterate_digest,
                 projection_steps,
                 latency: latency.to_buckets(),
+                usage: ThreadUsage::now().since(&usage_from),
             });
         }
         let next_window = match &stop {
@@ -268,13 +279,19 @@ pub fn run_agent<A: ConsensusAgent + ?Sized>(
             exchange.global_barrier(round + 1, published + plan.round_timeout)?;
         }
         let done = Instant::now();
-        latency.record(Component::Wait, gathered - started);
-        latency.record(Component::Compute, computed - gathered);
-        latency.record(Component::Publish, published - computed);
-        if plan.global_barrier {
-            latency.record(Component::Barrier, done - published);
+        if round >= plan.warmup_rounds {
+            latency.record(Component::Wait, gathered - started);
+            latency.record(Component::Compute, computed - gathered);
+            latency.record(Component::Publish, published - computed);
+            if plan.global_barrier {
+                latency.record(Component::Barrier, done - published);
+            }
+            latency.record(Component::Round, done - started);
+            latency.record(
+                Component::Overhead,
+                (done - started) - (computed - gathered),
+            );
         }
-        latency.record(Component::Round, done - started);
         round += 1;
     }
 }

@@ -28,14 +28,17 @@ pub enum Component {
     Publish,
     Barrier,
     Round,
+    /// Round time minus compute time.
+    Overhead,
 }
 
-const COMPONENTS: [Component; 5] = [
+const COMPONENTS: [Component; 6] = [
     Component::Wait,
     Component::Compute,
     Component::Publish,
     Component::Barrier,
     Component::Round,
+    Component::Overhead,
 ];
 
 /// Longest duration a histogram holds (longer ones are clamped to it).
@@ -44,7 +47,7 @@ const MAX_NANOS: u64 = 600_000_000_000;
 /// Histograms (nanoseconds, 3 significant digits) of each round component.
 #[derive(Debug, Clone)]
 pub struct RoundLatency {
-    histograms: [Histogram<u64>; 5],
+    histograms: [Histogram<u64>; COMPONENTS.len()],
 }
 
 /// A histogram as `(value in ns, count)` pairs: how agents ship theirs to the runner.
@@ -59,6 +62,7 @@ pub struct Percentiles {
     pub p50: f64,
     pub p90: f64,
     pub p99: f64,
+    pub p999: f64,
     pub max: f64,
     pub mean: f64,
     pub count: u64,
@@ -72,11 +76,12 @@ pub struct LatencySummary {
     pub compute: Percentiles,
     pub publish: Percentiles,
     pub barrier: Percentiles,
+    pub overhead: Percentiles,
 }
 
 /// A shipped histogram that does not fit.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("latency histogram has {0} components, expected 5")]
+#[error("latency histogram has {0} components, expected {expected}", expected = COMPONENTS.len())]
 pub struct BucketsMismatch(usize);
 
 impl Default for RoundLatency {
@@ -89,7 +94,7 @@ impl RoundLatency {
     pub fn new() -> Self {
         let make = || Histogram::new_with_bounds(1, MAX_NANOS, 3).expect("valid histogram bounds");
         Self {
-            histograms: [make(), make(), make(), make(), make()],
+            histograms: COMPONENTS.map(|_| make()),
         }
     }
 
@@ -148,6 +153,7 @@ impl RoundLatency {
             p50: micros(h.value_at_quantile(0.5)),
             p90: micros(h.value_at_quantile(0.9)),
             p99: micros(h.value_at_quantile(0.99)),
+            p999: micros(h.value_at_quantile(0.999)),
             max: micros(h.max()),
             mean: h.mean() / 1e3,
             count: h.len(),
@@ -161,6 +167,7 @@ impl RoundLatency {
             compute: self.percentiles(Component::Compute),
             publish: self.percentiles(Component::Publish),
             barrier: self.percentiles(Component::Barrier),
+            overhead: self.percentiles(Component::Overhead),
         }
     }
 }

@@ -273,6 +273,11 @@ impl<A: ConsensusAgent + Send> LockstepSim<A> {
         &mut self.agents
     }
 
+    /// The agents, in their current state (e.g. to time one of them on its own).
+    pub fn into_agents(self) -> Vec<A> {
+        self.agents
+    }
+
     /// Agent `i`'s latest payload.
     pub fn payload(&self, i: usize) -> &[f64] {
         &self.current[i * self.len..(i + 1) * self.len]

@@ -2,11 +2,13 @@
 
 use crate::exchange::{AgentOutcome, AgentPlan, AgentStop, ExchangeError, payload_digest};
 use crate::ipc::launcher::{self, IpcOptions, LaunchError};
-use crate::ipc::scenario::{Scenario, ScenarioStop};
+use crate::ipc::scenario::{ProcessTransport, Scenario, ScenarioStop};
 use crate::latency::LatencySummary;
 use crate::sim::{LockstepSim, RoundView, SimOutcome};
 use crate::team::Team;
 use crate::threads;
+use crate::usage::ThreadUsage;
+use crate::wait::WaitStrategy;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::local_stop::{LocalCertifiedStop, LocalStopError};
 use admm_ta_agents::method::{AgentSettings, MethodAgent};
@@ -37,6 +39,9 @@ pub enum Transport {
     Threads,
     /// One OS process per agent, iceoryx2 zero-copy publish-subscribe.
     Ipc,
+    /// One OS process per agent, every payload copied through Unix-domain sockets: the
+    /// baseline that shows what zero-copy saves ([`crate::uds`]).
+    Uds,
 }
 
 impl Transport {
@@ -46,6 +51,7 @@ impl Transport {
             Self::Sim => "sim",
             Self::Threads => "threads",
             Self::Ipc => "ipc",
+            Self::Uds => "uds",
         }
     }
 }
@@ -107,6 +113,9 @@ pub struct SolveConfig {
     pub projection: ProjectionPath,
     /// Compare with the centralized optimum and trace convergence.
     pub check: bool,
+    /// With `check` on the sim transport: record every round's objective in
+    /// [`OracleCheck::trace`] (for convergence plots).
+    pub trace: bool,
     /// Add a global barrier to every round (threads and ipc; for lockstep benchmarks).
     pub global_barrier: bool,
     /// Deadline of every wait for a neighbour or barrier (threads and ipc).
@@ -120,6 +129,10 @@ pub struct SolveConfig {
     /// Let agent processes honour the `ADMM_TA_FAULT` test switch (off for the survivors'
     /// re-solve, whose indices differ).
     pub fault_injection: bool,
+    /// How agents wait for their neighbours (threads, ipc, uds).
+    pub wait: WaitStrategy,
+    /// Rounds run before latency and CPU usage are recorded (benchmarks).
+    pub warmup_rounds: u64,
 }
 
 /// What the team does when an agent fails.
@@ -174,12 +187,15 @@ impl Default for SolveConfig {
             perturbation: ties::Perturbation::Auto,
             projection: ProjectionPath::Fast,
             check: false,
+            trace: false,
             global_barrier: false,
             round_timeout: Duration::from_secs(30),
             startup_timeout: Duration::from_secs(60),
             agent_program: None,
             on_failure: OnFailure::Abort,
             fault_injection: true,
+            wait: WaitStrategy::Auto,
+            warmup_rounds: 0,
         }
     }
 }
@@ -191,9 +207,11 @@ pub enum SolveError {
         "--stop {stop} needs the whole team's state: it runs on the sim transport only (use --stop local or max-iters)"
     )]
     CentralStop { stop: &'static str },
-    #[error("--global-barrier needs the threads or ipc transport")]
+    #[error("--global-barrier needs the threads or ipc transport (sim and uds have none)")]
     BarrierNeedsAgents,
-    #[error("the ipc transport needs the admm-ta binary to start agents from")]
+    #[error("round latency is measured on a distributed transport: threads, ipc or uds")]
+    NotDistributed,
+    #[error("the ipc and uds transports need the admm-ta binary to start agents from")]
     NoAgentProgram,
     #[error(transparent)]
     LocalStop(#[from] LocalStopError),
@@ -250,6 +268,19 @@ pub struct OracleCheck {
     /// Round from which every robot's own argmax is an optimal assignment until the end
     /// (shift-invariant).
     pub rounds_to_optimal_assignment: Option<usize>,
+    /// Every round's objectives, when [`SolveConfig::trace`] asked for them (sim only).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub trace: Vec<TracePoint>,
+}
+
+/// The team's objectives after one round.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TracePoint {
+    pub round: usize,
+    /// `Σ_i α_iᵀ x_i` over the robots' own relaxed columns (the paper's Fig. 1 quantity).
+    pub relaxed_cost: f64,
+    /// Cost of the robots' own rounded choices, when they form a feasible assignment.
+    pub assignment_cost: Option<f64>,
 }
 
 /// The outcome of a solve.
@@ -288,6 +319,10 @@ pub struct SolveReport {
     /// Per-round latency percentiles of the agents (threads and ipc), in microseconds.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub round_latency_us: Option<LatencySummary>,
+    /// CPU time and context switches of all agents together over the recorded rounds
+    /// (threads, ipc, uds).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub agent_usage: Option<ThreadUsage>,
     /// Time for all agent processes to start and connect (ipc).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub startup_ms: Option<f64>,
@@ -449,7 +484,7 @@ fn solve_once(
     };
     let optimum = (config.check || config.stop == StopRule::Oracle)
         .then(|| oracle::solve(problem).expect("validated costs have an optimum"));
-    if config.global_barrier && config.transport == Transport::Sim {
+    if config.global_barrier && matches!(config.transport, Transport::Sim | Transport::Uds) {
         return Err(SolveError::BarrierNeedsAgents);
     }
     if config.transport != Transport::Sim
@@ -471,6 +506,9 @@ fn solve_once(
     }
     let started = Instant::now();
     let mut tracer = optimum.as_ref().map(|o| Tracer::new(problem, o));
+    if let Some(t) = tracer.as_mut() {
+        t.record = config.trace;
+    }
     let run = if config.method == Method::Hungarian {
         tracer = None;
         let optimum = optimum
@@ -530,6 +568,7 @@ fn solve_once(
         certified_round: run.certified_round,
         global_barrier: config.global_barrier,
         round_latency_us: run.latency,
+        agent_usage: run.usage,
         startup_ms: run.startup_ms,
         run_id: run.run_id,
         iterate_digests: run.iterate_digests,
@@ -601,6 +640,7 @@ fn run_agents(
                 certified_round: certified.map(|(r, _)| r),
                 projection_steps,
                 latency: None,
+                usage: None,
                 startup_ms: None,
                 run_id: None,
                 iterate_digests: (0..n).map(|i| payload_digest(sim.payload(i))).collect(),
@@ -618,10 +658,11 @@ fn run_agents(
                     stop: stop.clone(),
                     round_timeout: config.round_timeout,
                     global_barrier: config.global_barrier,
+                    warmup_rounds: config.warmup_rounds,
                 })
                 .collect();
             let mut agents = team.agents();
-            let outcomes = threads::run_threads(&mut agents, graph, &plans)?;
+            let outcomes = threads::run_threads_waiting(&mut agents, graph, &plans, config.wait)?;
             let mut latency = crate::latency::RoundLatency::new();
             for o in &outcomes {
                 latency
@@ -630,7 +671,7 @@ fn run_agents(
             }
             RunResult::from_outcomes(&outcomes, Some(latency.summary()), None)
         }
-        Transport::Ipc => {
+        Transport::Ipc | Transport::Uds => {
             local_stop()?;
             let program = config
                 .agent_program
@@ -670,6 +711,14 @@ fn run_agents(
                 startup_timeout_ms: 0,
                 board_shm: String::new(),
                 global_barrier: config.global_barrier,
+                workload: Default::default(),
+                transport: if config.transport == Transport::Uds {
+                    ProcessTransport::Uds
+                } else {
+                    ProcessTransport::Iceoryx2
+                },
+                wait: config.wait,
+                warmup_rounds: config.warmup_rounds,
             };
             let run = launcher::launch(
                 scenario,
@@ -705,6 +754,7 @@ struct RunResult {
     certified_round: Option<usize>,
     projection_steps: usize,
     latency: Option<LatencySummary>,
+    usage: Option<ThreadUsage>,
     startup_ms: Option<f64>,
     run_id: Option<String>,
     iterate_digests: Vec<u64>,
@@ -720,6 +770,7 @@ impl RunResult {
             certified_round: None,
             projection_steps: 0,
             latency: None,
+            usage: None,
             startup_ms: None,
             run_id: None,
             iterate_digests: Vec::new(),
@@ -739,6 +790,11 @@ impl RunResult {
             certified_round: first.certified_round.map(|r| r as usize),
             projection_steps: outcomes.iter().map(|o| o.projection_steps as usize).sum(),
             latency,
+            usage: Some(
+                outcomes
+                    .iter()
+                    .fold(ThreadUsage::default(), |sum, o| sum.plus(&o.usage)),
+            ),
             startup_ms,
             run_id: None,
             iterate_digests: outcomes.iter().map(|o| o.iterate_digest).collect(),
@@ -836,6 +892,8 @@ struct Tracer<'p> {
     settled_within: Option<usize>,
     optimal_since: Option<usize>,
     decisions: Vec<usize>,
+    record: bool,
+    trace: Vec<TracePoint>,
 }
 
 impl<'p> Tracer<'p> {
@@ -847,6 +905,8 @@ impl<'p> Tracer<'p> {
             settled_within: None,
             optimal_since: None,
             decisions: vec![0; problem.robots()],
+            record: false,
+            trace: Vec::new(),
         }
     }
 
@@ -858,18 +918,26 @@ impl<'p> Tracer<'p> {
         for i in 0..self.problem.robots() {
             self.decisions[i] = rounding::argmax(view.columns.own_column(i));
         }
-        if within_0_1pct(relaxed_objective(self.problem, view), self.optimal_cost) {
+        let relaxed_cost = relaxed_objective(self.problem, view);
+        if within_0_1pct(relaxed_cost, self.optimal_cost) {
             self.first_within.get_or_insert(view.round);
             self.settled_within.get_or_insert(view.round);
         } else {
             self.settled_within = None;
         }
-        let optimal = self.problem.is_feasible(&self.decisions)
-            && self.relative_gap(
-                self.problem
-                    .cost_of(&self.decisions)
-                    .unwrap_or(f64::INFINITY),
-            ) <= 1e-9;
+        let assignment_cost = self
+            .problem
+            .is_feasible(&self.decisions)
+            .then(|| self.problem.cost_of(&self.decisions).ok())
+            .flatten();
+        if self.record {
+            self.trace.push(TracePoint {
+                round: view.round,
+                relaxed_cost,
+                assignment_cost,
+            });
+        }
+        let optimal = self.relative_gap(assignment_cost.unwrap_or(f64::INFINITY)) <= 1e-9;
         if optimal {
             self.optimal_since.get_or_insert(view.round);
         } else {
@@ -886,6 +954,7 @@ impl<'p> Tracer<'p> {
             rounds_within_0_1pct: self.first_within,
             rounds_settled_0_1pct: self.settled_within,
             rounds_to_optimal_assignment: self.optimal_since,
+            trace: self.trace,
         }
     }
 }

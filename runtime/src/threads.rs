@@ -9,7 +9,7 @@
 use crate::exchange::{AgentOutcome, AgentPlan, Exchange, ExchangeError, root_cause, run_agent};
 use crate::header::RoundHeader;
 use crate::ipc::transport::arrivals_target;
-use crate::wait::{Arrival, CountingBarrier, WaitPolicy};
+use crate::wait::{Arrival, CountingBarrier, WaitPolicy, WaitStrategy};
 use admm_ta_agents::agent::{ConsensusAgent, Inbox};
 use admm_ta_topologies::Graph;
 use crossbeam::sync::{Parker, Unparker};
@@ -263,6 +263,16 @@ pub fn run_threads<A: ConsensusAgent + Send>(
     graph: &Graph,
     plans: &[AgentPlan],
 ) -> Result<Vec<AgentOutcome>, ExchangeError> {
+    run_threads_waiting(agents, graph, plans, WaitStrategy::Auto)
+}
+
+/// [`run_threads`] with agents waiting by `wait`.
+pub fn run_threads_waiting<A: ConsensusAgent + Send>(
+    agents: &mut [A],
+    graph: &Graph,
+    plans: &[AgentPlan],
+    wait: WaitStrategy,
+) -> Result<Vec<AgentOutcome>, ExchangeError> {
     let n = agents.len();
     assert_eq!(n, graph.robots(), "one agent per robot");
     assert_eq!(n, plans.len(), "one plan per agent");
@@ -284,7 +294,7 @@ pub fn run_threads<A: ConsensusAgent + Send>(
         barrier: CachePadded::new(CountingBarrier::default()),
         aborted: AtomicBool::new(false),
     };
-    let policy = WaitPolicy::for_team(n);
+    let policy = WaitPolicy::new(wait, n);
     let results: Vec<Result<AgentOutcome, ExchangeError>> = std::thread::scope(|scope| {
         let fabric = &fabric;
         let handles: Vec<_> = agents

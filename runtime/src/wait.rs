@@ -5,25 +5,71 @@
 //! So agents spin only when there are at least as many cores as agents, and only briefly;
 //! otherwise they go to sleep on the transport's wake-up mechanism at once.
 
+use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-/// How long a waiter spins before it sleeps.
+/// How a waiting agent passes the time: the choice a latency benchmark sweeps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum WaitStrategy {
+    /// Spin-then-block when every agent can have a core of its own, else block at once
+    /// (the default of every run).
+    #[default]
+    Auto,
+    /// Sleep on the transport's wake-up mechanism at once.
+    Block,
+    /// Spin for [`SPIN_BEFORE_BLOCKING`], then sleep.
+    SpinThenBlock,
+    /// Never sleep: poll until the deadline, yielding the core between polls so that a team
+    /// larger than the machine still makes progress (a pure busy loop would hold the core for
+    /// a whole scheduler time slice while the message it waits for cannot be produced).
+    Spin,
+}
+
+impl WaitStrategy {
+    pub const ALL: [WaitStrategy; 4] = [Self::Auto, Self::Block, Self::SpinThenBlock, Self::Spin];
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Block => "block",
+            Self::SpinThenBlock => "spin-then-block",
+            Self::Spin => "spin",
+        }
+    }
+}
+
+/// How long [`WaitStrategy::SpinThenBlock`] spins.
+pub const SPIN_BEFORE_BLOCKING: Duration = Duration::from_micros(20);
+
+/// How long a waiter spins before it sleeps, and whether it yields while spinning.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct WaitPolicy {
     pub spin: Duration,
+    /// Yield the core between polls (the [`WaitStrategy::Spin`] strategy).
+    pub yield_between_polls: bool,
 }
 
 impl WaitPolicy {
     /// Spin up to 20 µs when every agent can have a core of its own, else not at all.
     pub fn for_team(agents: usize) -> Self {
+        Self::new(WaitStrategy::Auto, agents)
+    }
+
+    /// The policy of `strategy` for a team of `agents` on this machine.
+    pub fn new(strategy: WaitStrategy, agents: usize) -> Self {
         let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        let (spin, yield_between_polls) = match strategy {
+            WaitStrategy::Auto if agents <= cores => (SPIN_BEFORE_BLOCKING, false),
+            WaitStrategy::Auto | WaitStrategy::Block => (Duration::ZERO, false),
+            WaitStrategy::SpinThenBlock => (SPIN_BEFORE_BLOCKING, false),
+            WaitStrategy::Spin => (Duration::MAX, true),
+        };
         Self {
-            spin: if agents <= cores {
-                Duration::from_micros(20)
-            } else {
-                Duration::ZERO
-            },
+            spin,
+            yield_between_polls,
         }
     }
 }
@@ -39,7 +85,8 @@ impl WaitPolicy {
         mut ready: impl FnMut(&mut S) -> Result<bool, E>,
         mut sleep: impl FnMut(&mut S, Instant) -> Result<(), E>,
     ) -> Result<bool, E> {
-        let spin_until = Instant::now() + self.spin;
+        let now = Instant::now();
+        let spin_until = now.checked_add(self.spin).unwrap_or(deadline);
         loop {
             if ready(state)? {
                 return Ok(true);
@@ -49,7 +96,11 @@ impl WaitPolicy {
                 return Ok(false);
             }
             if now < spin_until {
-                std::hint::spin_loop();
+                if self.yield_between_polls {
+                    std::thread::yield_now();
+                } else {
+                    std::hint::spin_loop();
+                }
             } else {
                 sleep(state, deadline)?;
             }

@@ -5,8 +5,9 @@
 //! returns (never `process::exit`), so iceoryx2's `Drop`s release its shared memory.
 
 use crate::exchange::{AgentOutcome, ExchangeError, run_agent};
-use crate::ipc::scenario::Scenario;
+use crate::ipc::scenario::{ProcessTransport, Scenario};
 use crate::ipc::transport::{IpcExchange, run_config};
+use crate::uds::UdsExchange;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -54,35 +55,49 @@ pub fn run(run_id: &str, index: usize, scenario_path: &Path) -> Result<(), Strin
     let started = Instant::now();
     let scenario = Scenario::read(scenario_path, run_id).map_err(|e| e.to_string())?;
     let graph = scenario.graph().map_err(|e| e.to_string())?;
-    let mut agent = scenario.agent(index).map_err(|e| e.to_string())?;
+    let mut agent = scenario.workload_agent(index).map_err(|e| e.to_string())?;
     let plan = scenario.plan(index).map_err(|e| e.to_string())?;
-    let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
-    let fault = crate::ipc::fault::fault_for(index)?;
-    let mut exchange = IpcExchange::connect(&scenario.endpoint(&graph, index), &config, deadline)
-        .map_err(|e| e.to_string())?;
-    exchange.inject(fault);
-    let connected_unix_ns = unix_ns();
-    let outcome = run_agent(&mut agent, &mut exchange, &plan).map_err(|e| {
-        // Point the launcher and the other agents at the agent that caused it.
-        let culprit = match &e {
-            // Blocked neighbours time out too: blame the agent everybody waits for.
-            ExchangeError::Timeout { .. } => Some(exchange.laggard()),
-            e => culprit(e),
-        };
-        if let Some(culprit) = culprit {
-            exchange.blame(culprit);
+    let run_dir = scenario_path.parent().unwrap_or(Path::new("."));
+    let (outcome, connected_unix_ns) = match scenario.transport {
+        ProcessTransport::Iceoryx2 => {
+            let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
+            let fault = crate::ipc::fault::fault_for(index)?;
+            let mut exchange =
+                IpcExchange::connect(&scenario.endpoint(&graph, index), &config, deadline)
+                    .map_err(|e| e.to_string())?;
+            exchange.inject(fault);
+            let connected_unix_ns = unix_ns();
+            let outcome = run_agent(&mut *agent, &mut exchange, &plan).map_err(|e| {
+                // Point the launcher and the other agents at the agent that caused it.
+                let culprit = match &e {
+                    // Blocked neighbours time out too: blame the agent everybody waits for.
+                    ExchangeError::Timeout { .. } => Some(exchange.laggard()),
+                    e => culprit(e),
+                };
+                if let Some(culprit) = culprit {
+                    exchange.blame(culprit);
+                }
+                e.to_string()
+            })?;
+            (outcome, connected_unix_ns)
         }
-        e.to_string()
-    })?;
-    // Release the ports before reporting: once the launcher sees the result it may clean up.
-    drop(exchange);
+        ProcessTransport::Uds => {
+            let mut exchange =
+                UdsExchange::connect(&scenario.uds_endpoint(&graph, index, run_dir), deadline)?;
+            let connected_unix_ns = unix_ns();
+            let outcome =
+                run_agent(&mut *agent, &mut exchange, &plan).map_err(|e| e.to_string())?;
+            (outcome, connected_unix_ns)
+        }
+    };
+    // The ports were released when the exchange went out of scope: once the launcher sees
+    // the result it may clean up.
     let report = AgentReport {
         outcome,
         connected_unix_ns,
         started_unix_ns,
     };
-    let run_dir = scenario_path.parent().unwrap_or(Path::new("."));
     let path = result_path(run_dir, index);
     let partial = path.with_extension("json.partial");
     let text = serde_json::to_string(&report).map_err(|e| e.to_string())?;

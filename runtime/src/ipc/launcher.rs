@@ -161,7 +161,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
             &scenario.board_shm,
             scenario.robots,
             scenario.tasks,
-            scenario.method.payload_len(scenario.robots, scenario.tasks),
+            scenario.payload_len(),
         )
         .map_err(LaunchError::Board)?,
     );

@@ -6,10 +6,13 @@
 use crate::exchange::{AgentPlan, AgentStop};
 use crate::ipc::transport::IpcEndpoint;
 use crate::team::Team;
-use crate::wait::WaitPolicy;
+use crate::uds::UdsEndpoint;
+use crate::wait::{WaitPolicy, WaitStrategy};
+use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::local_stop::LocalCertifiedStop;
 use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
 use admm_ta_agents::primal::ProjectionPath;
+use admm_ta_agents::probe::{ProbeAgent, ProbeStep};
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rho::RhoSchedule;
 use admm_ta_topologies::Graph;
@@ -26,6 +29,28 @@ pub enum ScenarioStop {
         tolerance_bits: u64,
     },
     MaxIters,
+}
+
+/// What the agents compute.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Workload {
+    /// The scenario's method on its problem.
+    #[default]
+    Method,
+    /// A benchmark probe ([`ProbeAgent`]) with a payload of `payload_len` values.
+    Probe { payload_len: usize, step: ProbeStep },
+}
+
+/// What carries the messages between the agent processes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ProcessTransport {
+    /// iceoryx2 zero-copy publish-subscribe.
+    #[default]
+    Iceoryx2,
+    /// Unix-domain sockets that copy every payload (a benchmark baseline, [`crate::uds`]).
+    Uds,
 }
 
 /// One run, as the agents see it.
@@ -57,6 +82,15 @@ pub struct Scenario {
     /// Shared memory of the run's board (arrival counters, global barrier).
     pub board_shm: String,
     pub global_barrier: bool,
+    #[serde(default)]
+    pub workload: Workload,
+    #[serde(default)]
+    pub transport: ProcessTransport,
+    #[serde(default)]
+    pub wait: WaitStrategy,
+    /// Rounds before latency is recorded.
+    #[serde(default)]
+    pub warmup_rounds: u64,
 }
 
 /// A scenario that cannot be used.
@@ -154,7 +188,43 @@ impl Scenario {
             stop,
             round_timeout: Duration::from_millis(self.round_timeout_ms),
             global_barrier: self.global_barrier,
+            warmup_rounds: self.warmup_rounds,
         })
+    }
+
+    /// Values of every round message's payload.
+    pub fn payload_len(&self) -> usize {
+        match self.workload {
+            Workload::Method => self.method.payload_len(self.robots, self.tasks),
+            Workload::Probe { payload_len, .. } => payload_len.max(1),
+        }
+    }
+
+    /// Agent `index`'s Unix-domain socket endpoint (the `uds` baseline).
+    pub fn uds_endpoint(&self, graph: &Graph, index: usize, run_dir: &Path) -> UdsEndpoint {
+        UdsEndpoint {
+            index,
+            neighbours: graph.neighbours(index).to_vec(),
+            payload_len: self.payload_len(),
+            policy: WaitPolicy::new(self.wait, self.robots),
+            socket_dir: run_dir.to_path_buf(),
+            board_shm: self.board_shm.clone(),
+            agents: self.robots,
+        }
+    }
+
+    /// Agent `index` of the scenario's workload: the method's agent or a benchmark probe.
+    pub fn workload_agent(&self, index: usize) -> Result<Box<dyn ConsensusAgent>, ScenarioError> {
+        match self.workload {
+            Workload::Method => Ok(Box::new(self.agent(index)?)),
+            Workload::Probe { payload_len, step } if index < self.robots => {
+                Ok(Box::new(ProbeAgent::new(index, payload_len, step)))
+            }
+            Workload::Probe { .. } => Err(ScenarioError::BadIndex {
+                index,
+                robots: self.robots,
+            }),
+        }
     }
 
     /// Agent `index`'s iceoryx2 endpoint.
@@ -163,9 +233,9 @@ impl Scenario {
             index,
             neighbours: graph.neighbours(index).to_vec(),
             degrees: (0..graph.robots()).map(|j| graph.degree(j)).collect(),
-            payload_len: self.method.payload_len(self.robots, self.tasks),
+            payload_len: self.payload_len(),
             tasks: self.tasks,
-            policy: WaitPolicy::for_team(self.robots),
+            policy: WaitPolicy::new(self.wait, self.robots),
             board_shm: self.board_shm.clone(),
             global_barrier: self.global_barrier,
         }

@@ -205,7 +205,7 @@ impl Board {
         self.word(LINE * (agent + 1) + 16).load(Ordering::Relaxed)
     }
 
-    fn set_published_round(&self, agent: usize, round: u64) {
+    pub(crate) fn set_published_round(&self, agent: usize, round: u64) {
         self.word(LINE * (agent + 1) + 16)
             .store(round, Ordering::Relaxed);
     }
