@@ -5,6 +5,7 @@ use admm_ta_agents::primal::ProjectionPath;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::ties::Perturbation;
 use admm_ta_runtime::solve::{self, Method, OnFailure, SolveConfig, StopRule, Transport};
+use admm_ta_runtime::wait::WaitStrategy;
 use admm_ta_topologies::{TopologySpec, file as topology_file};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -47,6 +48,11 @@ enum Command {
         #[arg(long)]
         scenario: PathBuf,
     },
+    /// Benchmarks: consensus-round latency per transport.
+    Bench {
+        #[command(subcommand)]
+        bench: Bench,
+    },
     /// Reproduce an experiment of the paper.
     Experiment {
         #[command(subcommand)]
@@ -65,7 +71,127 @@ enum Command {
 }
 
 #[derive(Subcommand, Debug)]
+enum Bench {
+    /// Round latency of teams exchanging payloads on threads, ipc (iceoryx2 zero-copy) and
+    /// uds (Unix-domain sockets, copying) in one run: p50/p90/p99/p99.9/max of the round
+    /// time and of the exchange overhead (round − compute), CPU time and context switches
+    /// per agent-round. Without axis options it sweeps one axis at a time around 10 agents,
+    /// complete graph, 10×10 payload; with any axis option, the cross product of the lists
+    /// given. Writes rounds.json, rounds.csv and SVG plots into --out.
+    Rounds {
+        /// A small sweep that finishes within a minute on 2 cores.
+        #[arg(long)]
+        quick: bool,
+        /// Team sizes, comma-separated.
+        #[arg(long, value_delimiter = ',')]
+        agents: Option<Vec<usize>>,
+        /// Topologies, comma-separated (complete, chain, ring, star, grid, random:P, geometric:R).
+        #[arg(long, value_delimiter = ',')]
+        topologies: Option<Vec<String>>,
+        /// Payload shapes ROWSxCOLS of f64, comma-separated (e.g. 1x1,10x10,200x200).
+        #[arg(long, value_delimiter = ',')]
+        payloads: Option<Vec<String>>,
+        /// Transports, comma-separated: threads, ipc, uds (default: all three).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        transports: Option<Vec<TransportArg>>,
+        /// Wait strategies, comma-separated: auto, block, spin-then-block, spin.
+        #[arg(long, value_enum, value_delimiter = ',')]
+        waits: Option<Vec<WaitArg>>,
+        /// Barrier kinds, comma-separated: neighbour, global (uds has no global barrier).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        barriers: Option<Vec<BarrierArg>>,
+        /// What agents compute per round: touch (one value per neighbour: the exchange
+        /// alone), average (every value of every neighbour) or primal (the ADMM step on
+        /// uniform n×n costs; the payload is then n×n).
+        #[arg(long, value_enum, default_value = "touch")]
+        step: StepArg,
+        /// Recorded rounds per case (default 1000, --quick 400).
+        #[arg(long)]
+        rounds: Option<u64>,
+        /// Rounds before recording starts (default 100, --quick 50).
+        #[arg(long)]
+        warmup: Option<u64>,
+        /// Directory for rounds.json, rounds.csv and the plots (created if missing).
+        #[arg(long, default_value = "bench-results")]
+        out: PathBuf,
+        /// Print the JSON report on stdout instead of the tables.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum BarrierArg {
+    Neighbour,
+    Global,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum StepArg {
+    Touch,
+    Average,
+    Primal,
+}
+
+/// Options shared by the figure experiments.
+#[derive(Args, Debug)]
+struct FigureArgs {
+    /// Seeds (cost matrices and random graphs) per point.
+    #[arg(long, default_value_t = 3)]
+    trials: u64,
+    /// Directory for the JSON and SVG files (created if missing).
+    #[arg(long, default_value = "experiment-results")]
+    out: PathBuf,
+    /// Run the ADMM methods with --adaptive-rho.
+    #[arg(long)]
+    adaptive_rho: bool,
+    #[arg(long, default_value_t = 5000)]
+    max_iters: usize,
+    /// Print the JSON instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Subcommand, Debug)]
 enum Experiment {
+    /// Fig. 1 (left): the team's relaxed cost per iteration against the Hungarian optimum,
+    /// 50×50 complete graph, primal / dual / inexact dual (paper: primal within ~50).
+    #[command(name = "fig1-convergence")]
+    Fig1Convergence {
+        #[command(flatten)]
+        figure: FigureArgs,
+    },
+    /// Fig. 1 (right): primal ADMM-TA on 50 robots × 30 tasks over complete, random (p = 0.1)
+    /// and chain graphs (paper: chain slowest, ~200 iterations).
+    #[command(name = "fig1-topologies")]
+    Fig1Topologies {
+        #[command(flatten)]
+        figure: FigureArgs,
+    },
+    /// Fig. 2: iterations vs team size for ADMM-TA (paper's 0.1% criterion and the
+    /// decentralized stop), CBAA, market and distributed Hungarian on the complete graph, and
+    /// ADMM-TA vs distributed Hungarian on random graphs.
+    #[command(name = "fig2-scaling")]
+    Fig2Scaling {
+        #[command(flatten)]
+        figure: FigureArgs,
+        /// Team sizes (robots = tasks), comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = [10usize, 20, 30, 40, 50, 60, 70, 80, 90, 100])]
+        sizes: Vec<usize>,
+        /// Largest team run to the decentralized stop with ADMM (slow beyond ~50 on 2 cores).
+        #[arg(long, default_value_t = 50)]
+        decentralized_up_to: usize,
+    },
+    /// Beyond the paper: wall time to the assignment and round latency with one process per
+    /// robot (iceoryx2), per method and team size, complete graph.
+    #[command(name = "ipc-scaling")]
+    IpcScaling {
+        #[command(flatten)]
+        figure: FigureArgs,
+        /// Team sizes (robots = tasks), comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = [10usize, 20, 50])]
+        sizes: Vec<usize>,
+    },
     /// Every method side by side (rounds to its own stop, optimality, bytes per agent, wall
     /// time) on uniform square problems, per team size and transport; prints a Markdown table.
     Compare {
@@ -146,6 +272,9 @@ struct SolveArgs {
     /// hungarian (the centralized optimum, one round, sim only).
     #[arg(long, value_enum, default_value = "primal")]
     method: MethodArg,
+    /// sim (one thread, lockstep), threads (a thread per agent), ipc (a process per agent,
+    /// iceoryx2 zero-copy) or uds (a process per agent, payloads copied through Unix-domain
+    /// sockets: a baseline).
     #[arg(long, value_enum, default_value = "sim")]
     transport: TransportArg,
     /// ADMM penalty ρ: auto (scale-free rule from the cost spread and the graph's mean
@@ -183,6 +312,10 @@ struct SolveArgs {
     /// Compare with the centralized optimum (adds optimal_cost and gap).
     #[arg(long)]
     check: bool,
+    /// With --check on the sim transport: every round's relaxed and rounded cost in the
+    /// JSON report (`check.trace`), for convergence plots.
+    #[arg(long, requires = "check")]
+    trace: bool,
     /// Print one JSON object on stdout.
     #[arg(long)]
     json: bool,
@@ -202,6 +335,11 @@ struct SolveArgs {
     /// names the failed robot and maps the assignment to the survivors' original numbers).
     #[arg(long, value_enum, default_value = "abort")]
     on_failure: OnFailureArg,
+    /// How agents wait for their neighbours (threads, ipc, uds): auto (spin 20 µs then
+    /// sleep when every agent has a core, else sleep at once), block, spin-then-block, or
+    /// spin (poll and yield, never sleep).
+    #[arg(long, value_enum, default_value = "auto")]
+    wait: WaitArg,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -249,6 +387,27 @@ enum TransportArg {
     Sim,
     Threads,
     Ipc,
+    /// Agent processes copying payloads through Unix-domain sockets (benchmark baseline).
+    Uds,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum WaitArg {
+    Auto,
+    Block,
+    SpinThenBlock,
+    Spin,
+}
+
+impl WaitArg {
+    fn strategy(self) -> WaitStrategy {
+        match self {
+            Self::Auto => WaitStrategy::Auto,
+            Self::Block => WaitStrategy::Block,
+            Self::SpinThenBlock => WaitStrategy::SpinThenBlock,
+            Self::Spin => WaitStrategy::Spin,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -283,6 +442,7 @@ pub fn run(cli: Cli) -> Result<()> {
             }
         }),
         Command::Experiment { experiment } => run_experiment(experiment),
+        Command::Bench { bench } => run_bench(bench),
         Command::Topology { kind, robots, seed } => {
             let spec: TopologySpec = kind.parse()?;
             print!("{}", topology_file::to_toml(&spec.build(robots, seed)?));
@@ -339,6 +499,7 @@ fn run_solve(args: SolveArgs) -> Result<()> {
             ProjectionArg::Qp => ProjectionPath::Qp,
         },
         check: args.check,
+        trace: args.trace,
         global_barrier: args.global_barrier,
         round_timeout: seconds("--round-timeout", args.round_timeout)?,
         startup_timeout: seconds("--startup-timeout", args.startup_timeout)?,
@@ -348,6 +509,8 @@ fn run_solve(args: SolveArgs) -> Result<()> {
             OnFailureArg::Continue => OnFailure::Continue,
         },
         fault_injection: true,
+        wait: args.wait.strategy(),
+        warmup_rounds: 0,
     };
     if config.on_failure == OnFailure::Continue && config.transport != Transport::Ipc {
         bail!("--on-failure continue applies to agent processes: use --transport ipc");
@@ -361,6 +524,7 @@ fn transport(arg: TransportArg) -> Transport {
         TransportArg::Sim => Transport::Sim,
         TransportArg::Threads => Transport::Threads,
         TransportArg::Ipc => Transport::Ipc,
+        TransportArg::Uds => Transport::Uds,
     }
 }
 
@@ -406,8 +570,223 @@ fn run_demo(json: bool, transport_arg: TransportArg) -> Result<()> {
     output::print_report(&report, json)
 }
 
+fn run_bench(bench: Bench) -> Result<()> {
+    use admm_ta_bench::rounds::{self, RoundsConfig, StepKind, SweepSpec};
+    let Bench::Rounds {
+        quick,
+        agents,
+        topologies,
+        payloads,
+        transports,
+        waits,
+        barriers,
+        step,
+        rounds: recorded,
+        warmup,
+        out,
+        json,
+    } = bench;
+    if agents.as_ref().is_some_and(|a| a.contains(&0)) {
+        bail!("--agents: every team needs at least 1 agent");
+    }
+    if let Some(t) = &topologies {
+        for topology in t {
+            topology
+                .parse::<TopologySpec>()
+                .with_context(|| format!("--topologies '{topology}'"))?;
+        }
+    }
+    let payloads = payloads
+        .map(|list| {
+            list.iter()
+                .map(|p| p.parse().map_err(anyhow::Error::msg))
+                .collect::<Result<Vec<_>>>()
+        })
+        .transpose()?;
+    let transports: Option<Vec<Transport>> =
+        transports.map(|t| t.into_iter().map(transport).collect());
+    if transports
+        .as_ref()
+        .is_some_and(|t| t.contains(&Transport::Sim))
+    {
+        bail!(
+            "--transports: round latency needs agents that run concurrently: threads, ipc or uds"
+        );
+    }
+    let mut config = RoundsConfig::new(quick);
+    config.sweep = SweepSpec {
+        agents,
+        topologies,
+        payloads,
+        transports,
+        waits: waits.map(|w| w.into_iter().map(WaitArg::strategy).collect()),
+        barriers: barriers.map(|b| {
+            b.into_iter()
+                .map(|b| matches!(b, BarrierArg::Global))
+                .collect()
+        }),
+    };
+    config.step = match step {
+        StepArg::Touch => StepKind::Touch,
+        StepArg::Average => StepKind::Average,
+        StepArg::Primal => StepKind::Primal,
+    };
+    config.rounds = recorded.unwrap_or(config.rounds);
+    config.warmup = warmup.unwrap_or(config.warmup);
+    if config.rounds == 0 {
+        bail!("--rounds must be at least 1");
+    }
+    config.agent_program = Some(agent_program()?);
+    let cases = rounds::cases(&config);
+    if cases.is_empty() {
+        bail!("no case to measure (a global barrier needs threads or ipc)");
+    }
+    let bar = indicatif::ProgressBar::new(cases.len() as u64).with_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} cases, {elapsed} elapsed, ~{eta} left  {msg}",
+        )
+        .expect("valid template"),
+    );
+    if !json {
+        println!(
+            "{} recorded rounds per case after {} of warm-up, step {}; latencies in µs over all agents' rounds
+",
+            config.rounds,
+            config.warmup,
+            config.step.name()
+        );
+        println!("{}", rounds::TABLE_HEADER);
+    }
+    let report = rounds::run(&config, &mut |case, result| {
+        bar.inc(1);
+        bar.set_message(format!(
+            "{} agents {} {} {}",
+            case.agents,
+            case.topology,
+            case.payload,
+            case.transport.name()
+        ));
+        if json {
+            return;
+        }
+        bar.suspend(|| match result {
+            Ok(r) => println!("{}", rounds::render_row(r)),
+            Err(e) => println!(
+                "| {} | {} | {} | {} | {} | {} | failed: {e} |",
+                case.agents,
+                case.topology,
+                case.payload,
+                case.transport.name(),
+                case.wait.name(),
+                if case.global_barrier {
+                    "global"
+                } else {
+                    "neighbour"
+                }
+            ),
+        });
+    });
+    bar.finish_and_clear();
+    let written = rounds::write_outputs(&report, &out).map_err(anyhow::Error::msg)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "
+Ratios on equal cases (round time):
+
+{}",
+            rounds::render_ratios(&report)
+        );
+    }
+    for path in written {
+        eprintln!("wrote {}", path.display());
+    }
+    if !report.failures.is_empty() {
+        bail!(
+            "{} of {} cases failed (see above and rounds.json)",
+            report.failures.len(),
+            report.failures.len() + report.results.len()
+        );
+    }
+    Ok(())
+}
+
+fn check_sizes(sizes: &[usize]) -> Result<()> {
+    if sizes.is_empty() || sizes.iter().any(|n| !(2..=500).contains(n)) {
+        bail!("--sizes: every team size must be 2…500");
+    }
+    Ok(())
+}
+
+type FigureOutput = (String, String, Vec<PathBuf>);
+
+fn run_figure(
+    args: FigureArgs,
+    body: impl FnOnce(
+        &admm_ta_bench::figures::FigureConfig,
+        &std::path::Path,
+        &indicatif::ProgressBar,
+    ) -> Result<FigureOutput>,
+) -> Result<()> {
+    run_figure_with(args, Vec::new(), 0, 0, body)
+}
+
+/// Runs a figure experiment with a progress bar of `steps` steps (a spinner when 0).
+fn run_figure_with(
+    args: FigureArgs,
+    sizes: Vec<usize>,
+    decentralized_up_to: usize,
+    steps: usize,
+    body: impl FnOnce(
+        &admm_ta_bench::figures::FigureConfig,
+        &std::path::Path,
+        &indicatif::ProgressBar,
+    ) -> Result<FigureOutput>,
+) -> Result<()> {
+    use admm_ta_bench::figures::FigureConfig;
+    if args.trials == 0 || args.max_iters == 0 {
+        bail!("--trials and --max-iters must be at least 1");
+    }
+    let mut config = FigureConfig {
+        trials: args.trials,
+        adaptive_rho: args.adaptive_rho,
+        max_iters: args.max_iters,
+        agent_program: Some(agent_program()?),
+        ..FigureConfig::default()
+    };
+    if !sizes.is_empty() {
+        config.sizes = sizes;
+        config.decentralized_up_to = decentralized_up_to;
+    }
+    let bar = if steps > 0 {
+        indicatif::ProgressBar::new(steps as u64).with_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:30} {pos}/{len}, {elapsed} elapsed, ~{eta} left  {msg}",
+            )
+            .expect("valid template"),
+        )
+    } else {
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.enable_steady_tick(Duration::from_millis(200));
+        bar
+    };
+    let result = body(&config, &args.out, &bar);
+    bar.finish_and_clear();
+    let (json, table, written) = result?;
+    if args.json {
+        println!("{json}");
+    } else {
+        print!("{table}");
+    }
+    for path in written {
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
 fn run_experiment(experiment: Experiment) -> Result<()> {
-    use admm_ta_bench::{compare, table1};
+    use admm_ta_bench::{compare, figures, table1};
     match experiment {
         Experiment::Compare {
             robots,
@@ -448,6 +827,68 @@ fn run_experiment(experiment: Experiment) -> Result<()> {
                 eprintln!("wrote {}", path.display());
             }
             Ok(())
+        }
+        Experiment::Fig1Convergence { figure } => run_figure(figure, |config, out, bar| {
+            let (fig, written) =
+                figures::fig1_convergence(config, out, &|m| bar.set_message(m.to_string()))?;
+            Ok((
+                serde_json::to_string_pretty(&fig)?,
+                figures::render_summaries(&fig.summaries),
+                written,
+            ))
+        }),
+        Experiment::Fig1Topologies { figure } => run_figure(figure, |config, out, bar| {
+            let (fig, written) =
+                figures::fig1_topologies(config, out, &|m| bar.set_message(m.to_string()))?;
+            Ok((
+                serde_json::to_string_pretty(&fig)?,
+                figures::render_summaries(&fig.summaries),
+                written,
+            ))
+        }),
+        Experiment::Fig2Scaling {
+            figure,
+            sizes,
+            decentralized_up_to,
+        } => {
+            check_sizes(&sizes)?;
+            let steps = figures::fig2_points(&figures::FigureConfig {
+                sizes: sizes.clone(),
+                decentralized_up_to,
+                ..figures::FigureConfig::default()
+            });
+            run_figure_with(
+                figure,
+                sizes,
+                decentralized_up_to,
+                steps,
+                |config, out, bar| {
+                    let (fig, written) = figures::fig2_scaling(config, out, &|p| {
+                        bar.inc(1);
+                        bar.set_message(format!("{} {} robots {}", p.topology, p.robots, p.series));
+                    })?;
+                    Ok((
+                        serde_json::to_string_pretty(&fig)?,
+                        figures::render_scaling(&fig.points),
+                        written,
+                    ))
+                },
+            )
+        }
+        Experiment::IpcScaling { figure, sizes } => {
+            check_sizes(&sizes)?;
+            let steps = sizes.len() * figures::IPC_METHODS.len();
+            run_figure_with(figure, sizes, 0, steps, |config, out, bar| {
+                let (fig, written) = figures::ipc_scaling(config, out, &|p| {
+                    bar.inc(1);
+                    bar.set_message(format!("{} robots {}", p.robots, p.method.name()));
+                })?;
+                Ok((
+                    serde_json::to_string_pretty(&fig)?,
+                    figures::render_ipc(&fig.points),
+                    written,
+                ))
+            })
         }
         Experiment::Table1 {
             trials,

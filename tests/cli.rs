@@ -315,7 +315,7 @@ fn bad_input_gives_one_clear_line() {
 fn a_one_by_one_problem_solves_on_every_transport() {
     let dir = tempfile::tempdir().unwrap();
     let one = write(dir.path(), "one.csv", "0.5\n");
-    for transport in ["sim", "threads", "ipc"] {
+    for transport in ["sim", "threads", "ipc", "uds"] {
         let report = json(&admm_ta(&[
             "solve",
             "--costs",
@@ -477,5 +477,121 @@ fn compare_experiment_prints_a_row_per_method_and_transport() {
         if row["method"] != "cbaa" {
             assert_eq!(row["optimal_runs"], 1, "{row}");
         }
+    }
+}
+
+#[test]
+fn bench_rounds_measures_every_transport_and_writes_json_csv_and_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = admm_ta(&[
+        "bench",
+        "rounds",
+        "--agents",
+        "2,4",
+        "--payloads",
+        "1x1,20x20,100x100",
+        "--rounds",
+        "30",
+        "--warmup",
+        "5",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "| threads |",
+        "| ipc |",
+        "| uds |",
+        "ipc / threads p50",
+        "p99.9",
+    ] {
+        assert!(table.contains(needle), "{needle} not in:\n{table}");
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("rounds.json")).unwrap())
+            .unwrap();
+    let results = v["results"].as_array().unwrap();
+    assert_eq!(results.len(), 2 * 3 * 3, "agents × payloads × transports");
+    assert!(v["failures"].as_array().unwrap().is_empty());
+    for r in results {
+        let agents = r["agents"].as_u64().unwrap();
+        assert_eq!(r["recorded"].as_u64().unwrap(), agents * 30);
+        let round = &r["round_us"];
+        for (lo, hi) in [
+            ("p50", "p90"),
+            ("p90", "p99"),
+            ("p99", "p999"),
+            ("p999", "max"),
+        ] {
+            assert!(
+                round[lo].as_f64().unwrap() <= round[hi].as_f64().unwrap(),
+                "{r}"
+            );
+        }
+        assert!(r["overhead_us"]["p50"].as_f64().unwrap() <= round["p50"].as_f64().unwrap());
+        assert!(r["cpu_us_per_round"].as_f64().unwrap() > 0.0);
+    }
+    let csv = std::fs::read_to_string(dir.path().join("rounds.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + results.len());
+    for svg in ["rounds-payload-2-agents.svg", "rounds-payload-4-agents.svg"] {
+        let text = std::fs::read_to_string(dir.path().join(svg)).unwrap();
+        assert!(text.contains("<svg") && text.contains("uds p50"), "{svg}");
+    }
+    // The wrong settings are refused with one line.
+    for (args, needle) in [
+        (vec!["--payloads", "0x3"], "1…2000"),
+        (vec!["--transports", "sim"], "threads, ipc or uds"),
+        (
+            vec!["--transports", "uds", "--barriers", "global"],
+            "no case",
+        ),
+        (vec!["--topologies", "moebius"], "moebius"),
+        (vec!["--agents", "0"], "at least 1 agent"),
+    ] {
+        let mut all = vec!["bench", "rounds", "--rounds", "5"];
+        all.extend(args);
+        all.extend(["--out", dir.path().to_str().unwrap()]);
+        assert_clear_error(&admm_ta(&all), needle);
+    }
+}
+
+#[test]
+fn figure_experiments_write_json_and_svg() {
+    let (table, v) = experiment(
+        &["fig2-scaling", "--sizes", "6,10", "--trials", "1"],
+        "fig2-scaling.json",
+    );
+    assert!(
+        table.contains("market") && table.contains("distributed Hungarian"),
+        "{table}"
+    );
+    let points = v["points"].as_array().unwrap();
+    // 4 complete-graph series with 2 sizes each, ADMM's two stops; 3 on random graphs.
+    assert_eq!(points.len(), 5 * 2 + 3 * 2);
+    for p in points {
+        let series = p["series"].as_str().unwrap();
+        if !series.starts_with("CBAA") {
+            assert_eq!(p["optimal_runs"], 1, "{p}");
+        }
+        assert!(p["mean_iterations"].as_f64().unwrap() >= 1.0);
+        if series == "distributed Hungarian" && p["topology"] == "complete" {
+            // Flooding takes one round on the complete graph, plus the stop protocol.
+            assert!(p["mean_iterations"].as_f64().unwrap() <= 6.0, "{p}");
+        }
+    }
+    let (table, v) = experiment(
+        &["fig1-topologies", "--trials", "1"],
+        "fig1-topologies.json",
+    );
+    assert!(table.contains("chain"), "{table}");
+    for run in v["runs"].as_array().unwrap() {
+        assert_eq!(run["optimal"], true);
+        let trace = run["trace"].as_array().unwrap();
+        assert_eq!(trace.len() as u64, run["stop_round"].as_u64().unwrap());
     }
 }

@@ -5,6 +5,9 @@
 //! `admm-ta experiment NAME` reproduces ([`table1`], [`compare`]).
 
 pub mod compare;
+pub mod figures;
+pub mod plot;
+pub mod rounds;
 pub mod table1;
 
 use admm_ta_topologies::rng::SeededRng;
