@@ -36,17 +36,37 @@ enum Command {
         #[arg(long, value_enum, default_value = "ipc")]
         transport: TransportArg,
     },
-    /// Run one agent process of an ipc run (started by `solve --transport ipc`).
+    /// Run one agent: of a team started independently (`--team FILE --id I`: any order, any
+    /// supervisor; see the README), or of a launcher's run (`--run --index --scenario`, started
+    /// by `solve --transport ipc`).
     Agent {
-        /// The run's id (it must match the scenario's).
+        /// The team file (TOML) naming the run, the robots, the topology and the costs.
+        #[arg(long, conflicts_with_all = ["run", "index", "scenario"], requires = "id")]
+        team: Option<PathBuf>,
+        /// This agent's robot number in the team (0-based).
         #[arg(long)]
-        run: String,
+        id: Option<usize>,
+        /// The run's id (it must match the scenario's).
+        #[arg(long, requires_all = ["index", "scenario"])]
+        run: Option<String>,
         /// This agent's robot index.
         #[arg(long)]
-        index: usize,
+        index: Option<usize>,
         /// The scenario file the launcher wrote.
         #[arg(long)]
-        scenario: PathBuf,
+        scenario: Option<PathBuf>,
+    },
+    /// Assemble the assignment of an independently started team from its agents' results.
+    Collect {
+        /// The team file the agents were started with.
+        #[arg(long)]
+        team: PathBuf,
+        /// Compare with the centralized optimum.
+        #[arg(long)]
+        check: bool,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
     },
     /// Benchmarks: consensus-round latency per transport.
     Bench {
@@ -218,6 +238,33 @@ enum Experiment {
         /// Directory for compare.json (created if missing).
         #[arg(long)]
         out: Option<PathBuf>,
+    },
+    /// The persistent-surveillance case study (paper Section 4.4, Fig. 3): one team alive for
+    /// every episode, each robot computing its own costs from its battery and position, each
+    /// episode warm-started from the last; compared per episode with the Hungarian optimum
+    /// and with a cold start. Writes surveillance.json and SVG plots into --out.
+    Surveillance {
+        #[arg(long, default_value_t = 1000)]
+        episodes: usize,
+        /// Scenario TOML file (default: the built-in one, `admm-ta-agents::surveillance`).
+        #[arg(long)]
+        scenario: Option<PathBuf>,
+        /// ipc (one process per robot for the whole run), threads or uds.
+        #[arg(long, value_enum, default_value = "ipc")]
+        transport: TransportArg,
+        /// Start every episode from zero iterates instead of the previous episode's.
+        #[arg(long)]
+        cold_start: bool,
+        /// Round limit of each episode.
+        #[arg(long, default_value_t = 5000)]
+        max_iters: u64,
+        /// Directory for surveillance.json and the plots (created if missing).
+        #[arg(long, default_value = "experiment-results")]
+        out: PathBuf,
+        /// Print one JSON object (episodes, optimal_episodes, battery_violations,
+        /// mean_iterations_warm, mean_iterations_cold, …) instead of the summary.
+        #[arg(long)]
+        json: bool,
     },
     /// Table 1: iterations of primal / dual / inexact dual at 20×20 on the complete graph
     /// (paper: 28 / 159 / 387), for uniform costs in [0,1) and shifted to [1,2).
@@ -430,17 +477,72 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Solve(args) => run_solve(args),
         Command::Demo { json, transport } => run_demo(json, transport),
         Command::Agent {
+            team,
+            id,
             run,
             index,
             scenario,
-        } => admm_ta_runtime::ipc::agent_process::run(&run, index, &scenario).map_err(|e| {
-            // Exchange errors already start with "agent N:".
-            if e.starts_with(&format!("agent {index}:")) {
-                anyhow::anyhow!(e)
+        } => {
+            let (index, result) = match (team, id, run, index, scenario) {
+                (Some(team), Some(id), ..) => {
+                    let report = admm_ta_runtime::ipc::member::run_member(&team, id);
+                    if let Ok(r) = &report {
+                        println!(
+                            "{}",
+                            serde_json::json!({
+                                "id": id,
+                                "task": r.outcome.task,
+                                "rounds": r.outcome.rounds,
+                                "converged": r.outcome.converged,
+                            })
+                        );
+                    }
+                    (id, report.map(|_| ()))
+                }
+                (None, None, Some(run), Some(index), Some(scenario)) => (
+                    index,
+                    admm_ta_runtime::ipc::agent_process::run(&run, index, &scenario),
+                ),
+                _ => bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
+            };
+            result.map_err(|e| {
+                // Exchange errors already start with "agent N:".
+                if e.starts_with(&format!("agent {index}:")) {
+                    anyhow::anyhow!(e)
+                } else {
+                    anyhow::anyhow!("agent {index}: {e}")
+                }
+            })
+        }
+        Command::Collect { team, check, json } => {
+            let result =
+                admm_ta_runtime::ipc::member::collect(&team, check).map_err(anyhow::Error::msg)?;
+            if json {
+                println!("{}", serde_json::to_string(&result)?);
             } else {
-                anyhow::anyhow!("agent {index}: {e}")
+                println!(
+                    "team {}: assignment {:?}, cost {:.6}, {} rounds, {}{}",
+                    result.run,
+                    result.assignment,
+                    result.cost,
+                    result.iterations,
+                    if result.converged {
+                        "certified"
+                    } else {
+                        "round limit reached (not certified)"
+                    },
+                    match (result.optimal, result.optimal_cost) {
+                        (Some(true), _) => ", optimal".to_string(),
+                        (Some(false), Some(o)) => format!(", NOT optimal (optimum {o:.6})"),
+                        _ => String::new(),
+                    }
+                );
             }
-        }),
+            if result.optimal == Some(false) {
+                bail!("the team's assignment is not optimal");
+            }
+            Ok(())
+        }
         Command::Experiment { experiment } => run_experiment(experiment),
         Command::Bench { bench } => run_bench(bench),
         Command::Topology { kind, robots, seed } => {
@@ -889,6 +991,66 @@ fn run_experiment(experiment: Experiment) -> Result<()> {
                     written,
                 ))
             })
+        }
+        Experiment::Surveillance {
+            episodes,
+            scenario,
+            transport: transport_arg,
+            cold_start,
+            max_iters,
+            out,
+            json,
+        } => {
+            use admm_ta_agents::surveillance::SurveillanceScenario;
+            use admm_ta_bench::surveillance;
+            if episodes == 0 || max_iters == 0 {
+                bail!("--episodes and --max-iters must be at least 1");
+            }
+            let model = match &scenario {
+                Some(path) => {
+                    let text = std::fs::read_to_string(path)
+                        .with_context(|| format!("cannot read {}", path.display()))?;
+                    SurveillanceScenario::from_toml(&text)
+                        .with_context(|| format!("{}", path.display()))?
+                }
+                None => SurveillanceScenario::default(),
+            };
+            let config = admm_ta_runtime::episodes::EpisodeRunConfig {
+                transport: transport(transport_arg),
+                max_rounds: max_iters,
+                agent_program: Some(agent_program()?),
+                ..Default::default()
+            };
+            if config.transport == Transport::Sim {
+                bail!("--transport: the team runs on threads, ipc or uds");
+            }
+            let bar = indicatif::ProgressBar::new(episodes as u64).with_style(
+                indicatif::ProgressStyle::with_template(
+                    "{bar:30} {pos}/{len} cold-start comparisons, {elapsed} elapsed, ~{eta} left",
+                )
+                .expect("valid template"),
+            );
+            bar.set_message("team running");
+            let report = surveillance::run(model, episodes, !cold_start, &config, &|done| {
+                bar.set_position(done as u64)
+            });
+            bar.finish_and_clear();
+            let report = report?;
+            let written = surveillance::write_outputs(&report, &out)?;
+            if json {
+                let mut value = serde_json::to_value(&report)?;
+                // The per-episode detail is in surveillance.json; stdout stays one object.
+                if let Some(map) = value.as_object_mut() {
+                    map.remove("per_episode");
+                }
+                println!("{value}");
+            } else {
+                print!("{}", surveillance::render(&report));
+            }
+            for path in written {
+                eprintln!("wrote {}", path.display());
+            }
+            Ok(())
         }
         Experiment::Table1 {
             trials,

@@ -595,3 +595,55 @@ fn figure_experiments_write_json_and_svg() {
         assert_eq!(trace.len() as u64, run["stop_round"].as_u64().unwrap());
     }
 }
+
+#[test]
+fn surveillance_episodes_are_optimal_warm_started_and_the_same_on_threads_and_ipc() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |transport: &str| {
+        let out = admm_ta(&[
+            "experiment",
+            "surveillance",
+            "--episodes",
+            "80",
+            "--transport",
+            transport,
+            "--json",
+            "--out",
+            dir.path().to_str().unwrap(),
+        ]);
+        json(&out)
+    };
+    let (ipc, threads) = (run("ipc"), run("threads"));
+    for v in [&ipc, &threads] {
+        assert_eq!(v["episodes"], 80);
+        assert_eq!(v["optimal_episodes"], 80, "{:?}", v["misses"]);
+        assert_eq!(v["battery_violations"], 0);
+        let (warm, cold) = (
+            v["mean_iterations_warm"].as_f64().unwrap(),
+            v["mean_iterations_cold"].as_f64().unwrap(),
+        );
+        assert!(warm >= 5.0 && cold >= 5.0, "{warm} {cold}");
+    }
+    // One team, the same iterates on both transports.
+    assert_eq!(ipc["mean_iterations_warm"], threads["mean_iterations_warm"]);
+    for svg in ["surveillance-cost.svg", "surveillance-battery.svg"] {
+        assert!(dir.path().join(svg).exists(), "{svg}");
+    }
+    let detail: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("surveillance.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(detail["per_episode"].as_array().unwrap().len(), 80);
+    // A scenario that cannot run is refused with one line.
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "robots = 3\n").unwrap();
+    assert_clear_error(
+        &admm_ta(&[
+            "experiment",
+            "surveillance",
+            "--scenario",
+            bad.to_str().unwrap(),
+        ]),
+        "cannot cover",
+    );
+}

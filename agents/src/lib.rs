@@ -20,5 +20,6 @@ pub mod projection;
 pub mod rho;
 pub mod rounding;
 pub mod stopping;
+pub mod surveillance;
 pub mod ties;
 pub mod two_block;

@@ -211,6 +211,25 @@ impl MethodAgent {
         }
     }
 
+    /// New own costs for the next episode of a repeated assignment, warm-started from the
+    /// current iterates or (`warm = false`) from zero; primal consensus ADMM only.
+    pub fn set_costs(&mut self, costs: &[f64], warm: bool) -> Result<(), String> {
+        match &mut self.algorithm {
+            Algorithm::Primal(a) if costs.len() == a.iterate().nrows() => {
+                a.set_costs(costs);
+                if !warm {
+                    a.reset();
+                }
+                Ok(())
+            }
+            Algorithm::Primal(_) => Err(format!(
+                "{} costs for a robot with another number of tasks",
+                costs.len()
+            )),
+            _ => Err("repeated assignments with new costs run the primal method only".into()),
+        }
+    }
+
     /// The primal agent inside, if this is one.
     pub fn as_primal(&self) -> Option<&PrimalAgent> {
         match &self.algorithm {

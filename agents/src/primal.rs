@@ -124,6 +124,21 @@ impl PrimalAgent {
         MatRef::from_column_major_slice(&self.x, self.tasks, self.robots)
     }
 
+    /// Replaces the robot's own costs `α_i` for the next steps (a new episode of a repeated
+    /// assignment). The iterate `X_i` and the multipliers `Q_i` are kept: that is the warm
+    /// start. The certificate stays valid (it only needs `Σ_i Q_i = 0`, which no cost
+    /// change breaks).
+    pub fn set_costs(&mut self, costs: &[f64]) {
+        assert_eq!(costs.len(), self.tasks, "one cost per task");
+        self.costs.copy_from_slice(costs);
+    }
+
+    /// Forgets the iterate and the multipliers (a cold start of the next steps).
+    pub fn reset(&mut self) {
+        self.x.fill(0.0);
+        self.q.fill(0.0);
+    }
+
     /// Changes ρ from the next step on. `Q` is kept unscaled (`Q += ρ Σ (X_i − X_j)`), so it
     /// needs no rescaling; every robot must change ρ at the same round.
     pub fn set_rho(&mut self, rho: f64) {

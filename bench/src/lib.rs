@@ -8,6 +8,7 @@ pub mod compare;
 pub mod figures;
 pub mod plot;
 pub mod rounds;
+pub mod surveillance;
 pub mod table1;
 
 use admm_ta_topologies::rng::SeededRng;

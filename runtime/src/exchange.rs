@@ -192,106 +192,177 @@ pub fn run_agent<A: ConsensusAgent + ?Sized>(
     exchange: &mut dyn Exchange,
     plan: &AgentPlan,
 ) -> Result<AgentOutcome, ExchangeError> {
-    let mut latency = RoundLatency::new();
-    let mut stop = plan.stop.clone();
-    let mut mine = RoundHeader::initial(plan.index);
-    let mut iterate_digest = 0;
-    exchange.publish_initial(mine, &mut |out| {
-        agent.write_initial_payload(out);
-        iterate_digest = payload_digest(out);
-    })?;
-    let mut round = 0u64;
-    let mut projection_steps = 0u64;
-    let degree = exchange.degree();
-    let mut usage_from = ThreadUsage::now();
-    loop {
-        if round == plan.warmup_rounds && round > 0 {
-            usage_from = ThreadUsage::now();
-        }
-        let started = Instant::now();
-        exchange.gather(round, started + plan.round_timeout)?;
-        let gathered = Instant::now();
-        for k in 0..degree {
-            if let Err(what) = agent.check_payload(exchange.neighbour_payload(k)) {
-                return Err(ExchangeError::BadPayload {
-                    agent: plan.index,
-                    neighbour: exchange.neighbour_header(k).sender as usize,
-                    round,
-                    what,
-                });
-            }
-        }
-        let verdict = match &mut stop {
-            AgentStop::Local(rule) => {
-                let ex = &*exchange;
-                rule.observe(
-                    round,
-                    mine.stop_state(),
-                    (0..degree).map(|k| ex.neighbour_header(k).stop_state()),
-                    agent.rounded_task(),
-                    || agent.certificate_slack(),
-                )
-            }
-            AgentStop::MaxIters => Verdict::Continue,
-        };
-        let finished = match verdict {
-            Verdict::Certified {
-                certified_round,
-                task,
-            } => Some((task, Some(certified_round))),
-            Verdict::Continue if round >= plan.max_rounds => Some((agent.decide(), None)),
-            Verdict::Continue => None,
-        };
-        if let Some((task, certified_round)) = finished {
-            return Ok(AgentOutcome {
-                index: plan.index,
-                task,
-                rounds: round,
-                converged: certified_round.is_some(),
-                certified_round,
-                iterate_digest,
-                projection_steps,
-                latency: latency.to_buckets(),
-                usage: ThreadUsage::now().since(&usage_from),
-            });
-        }
-        let next_window = match &stop {
-            AgentStop::Local(rule) => rule.next_window(),
-            AgentStop::MaxIters => Default::default(),
-        };
-        let mut computed = gathered;
-        exchange.compute_and_publish(&mut |inbox, out| {
-            let report = agent.step(inbox, out);
-            projection_steps += report.inner_iterations as u64;
+    let mut rounds = RoundLoop::start(agent, exchange, plan)?;
+    let (task, certified_round) = rounds.run(agent, exchange, plan, plan.stop.clone())?;
+    Ok(rounds.outcome(plan.index, task, certified_round))
+}
+
+/// One agent's round loop, resumable: after a stop, the team may go on with the next
+/// episode (new costs, a fresh stop rule) from the round it stopped at, every agent at the
+/// same round, without publishing anything in between.
+pub struct RoundLoop {
+    latency: RoundLatency,
+    mine: RoundHeader,
+    iterate_digest: u64,
+    projection_steps: u64,
+    usage_from: ThreadUsage,
+    /// The round last gathered (the next to compute from).
+    round: u64,
+    /// A stop ended the last [`RoundLoop::run`]: the next one computes from the gathered
+    /// round at once.
+    stopped: bool,
+}
+
+impl RoundLoop {
+    /// Publishes the agent's round-0 message.
+    pub fn start<A: ConsensusAgent + ?Sized>(
+        agent: &mut A,
+        exchange: &mut dyn Exchange,
+        plan: &AgentPlan,
+    ) -> Result<Self, ExchangeError> {
+        let mine = RoundHeader::initial(plan.index);
+        let mut iterate_digest = 0;
+        exchange.publish_initial(mine, &mut |out| {
+            agent.write_initial_payload(out);
             iterate_digest = payload_digest(out);
-            mine = RoundHeader {
-                round: round + 1,
-                sender: plan.index as u32,
-                flags: 0,
-                digest: report.assignment_digest,
-                window: next_window,
-            };
-            computed = Instant::now();
-            mine
         })?;
-        let published = Instant::now();
-        if plan.global_barrier {
-            exchange.global_barrier(round + 1, published + plan.round_timeout)?;
-        }
-        let done = Instant::now();
-        if round >= plan.warmup_rounds {
-            latency.record(Component::Wait, gathered - started);
-            latency.record(Component::Compute, computed - gathered);
-            latency.record(Component::Publish, published - computed);
-            if plan.global_barrier {
-                latency.record(Component::Barrier, done - published);
+        Ok(Self {
+            latency: RoundLatency::new(),
+            mine,
+            iterate_digest,
+            projection_steps: 0,
+            usage_from: ThreadUsage::now(),
+            round: 0,
+            stopped: false,
+        })
+    }
+
+    /// The round last gathered.
+    pub fn round(&self) -> u64 {
+        self.round
+    }
+
+    /// Runs rounds until `stop` certifies or `plan.max_rounds` rounds of this run have passed;
+    /// returns the agent's task and the certified round (`None` at the round limit).
+    pub fn run<A: ConsensusAgent + ?Sized>(
+        &mut self,
+        agent: &mut A,
+        exchange: &mut dyn Exchange,
+        plan: &AgentPlan,
+        mut stop: AgentStop,
+    ) -> Result<(usize, Option<u64>), ExchangeError> {
+        let degree = exchange.degree();
+        let first = self.round;
+        // After a stop the neighbours' gathered messages are still held: compute from them.
+        let mut resume = std::mem::take(&mut self.stopped);
+        loop {
+            let round = self.round;
+            if round == plan.warmup_rounds && round > 0 {
+                self.usage_from = ThreadUsage::now();
             }
-            latency.record(Component::Round, done - started);
-            latency.record(
-                Component::Overhead,
-                (done - started) - (computed - gathered),
-            );
+            let started = Instant::now();
+            if !resume {
+                exchange.gather(round, started + plan.round_timeout)?;
+            }
+            let gathered = Instant::now();
+            if !resume {
+                for k in 0..degree {
+                    if let Err(what) = agent.check_payload(exchange.neighbour_payload(k)) {
+                        return Err(ExchangeError::BadPayload {
+                            agent: plan.index,
+                            neighbour: exchange.neighbour_header(k).sender as usize,
+                            round,
+                            what,
+                        });
+                    }
+                }
+                let verdict = match &mut stop {
+                    AgentStop::Local(rule) => {
+                        let ex = &*exchange;
+                        rule.observe(
+                            round,
+                            self.mine.stop_state(),
+                            (0..degree).map(|k| ex.neighbour_header(k).stop_state()),
+                            agent.rounded_task(),
+                            || agent.certificate_slack(),
+                        )
+                    }
+                    AgentStop::MaxIters => Verdict::Continue,
+                };
+                let finished = match verdict {
+                    Verdict::Certified {
+                        certified_round,
+                        task,
+                    } => Some((task, Some(certified_round))),
+                    Verdict::Continue if round - first >= plan.max_rounds => {
+                        Some((agent.decide(), None))
+                    }
+                    Verdict::Continue => None,
+                };
+                if let Some(finished) = finished {
+                    self.stopped = true;
+                    return Ok(finished);
+                }
+            }
+            resume = false;
+            let next_window = match &stop {
+                AgentStop::Local(rule) => rule.next_window(),
+                AgentStop::MaxIters => Default::default(),
+            };
+            let mut computed = gathered;
+            let (mut digest, mut steps, mut mine) = (0, 0, self.mine);
+            exchange.compute_and_publish(&mut |inbox, out| {
+                let report = agent.step(inbox, out);
+                steps = report.inner_iterations as u64;
+                digest = payload_digest(out);
+                mine = RoundHeader {
+                    round: round + 1,
+                    sender: plan.index as u32,
+                    flags: 0,
+                    digest: report.assignment_digest,
+                    window: next_window,
+                };
+                computed = Instant::now();
+                mine
+            })?;
+            self.mine = mine;
+            self.iterate_digest = digest;
+            self.projection_steps += steps;
+            let published = Instant::now();
+            if plan.global_barrier {
+                exchange.global_barrier(round + 1, published + plan.round_timeout)?;
+            }
+            let done = Instant::now();
+            if round >= plan.warmup_rounds {
+                let latency = &mut self.latency;
+                latency.record(Component::Wait, gathered - started);
+                latency.record(Component::Compute, computed - gathered);
+                latency.record(Component::Publish, published - computed);
+                if plan.global_barrier {
+                    latency.record(Component::Barrier, done - published);
+                }
+                latency.record(Component::Round, done - started);
+                latency.record(
+                    Component::Overhead,
+                    (done - started) - (computed - gathered),
+                );
+            }
+            self.round += 1;
         }
-        round += 1;
+    }
+
+    /// The agent's report after its last run.
+    pub fn outcome(&self, index: usize, task: usize, certified_round: Option<u64>) -> AgentOutcome {
+        AgentOutcome {
+            index,
+            task,
+            rounds: self.round,
+            converged: certified_round.is_some(),
+            certified_round,
+            iterate_digest: self.iterate_digest,
+            projection_steps: self.projection_steps,
+            latency: self.latency.to_buckets(),
+            usage: ThreadUsage::now().since(&self.usage_from),
+        }
     }
 }

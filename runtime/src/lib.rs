@@ -16,6 +16,7 @@
 //! assert!(problem.is_feasible(&report.assignment));
 //! ```
 
+pub mod episodes;
 pub mod exchange;
 pub mod header;
 pub mod ipc;

@@ -444,44 +444,11 @@ fn solve_once(
             gib: bytes / (1u64 << 30) as f64,
         });
     }
-    // Methods without a penalty report ρ = 0 and ignore --rho and --adaptive-rho.
-    let rho = if config.method.is_admm() {
-        config.rho.unwrap_or_else(|| {
-            rho::default_rho_for(config.method, problem.costs(), graph.mean_degree())
-        })
-    } else {
-        0.0
-    };
-    if config.method.is_admm() && !(rho > 0.0 && rho.is_finite()) {
-        return Err(SolveError::BadRho(rho));
-    }
     if config.method == Method::Hungarian && config.transport != Transport::Sim {
         return Err(SolveError::CentralizedMethod);
     }
-    let gamma_factor = config
-        .gamma_factor
-        .unwrap_or(admm_ta_agents::dual::DEFAULT_GAMMA_FACTOR);
-    if !(gamma_factor > 0.0 && gamma_factor.is_finite()) {
-        return Err(SolveError::BadGamma(gamma_factor));
-    }
-    let epsilon = ties::epsilon(problem.costs(), config.perturbation);
-    let tolerance = 1e-9 * problem.costs().spread() * n as f64;
-    let diameter = graph.diameter().unwrap_or(0);
-    let settings = AgentSettings {
-        projection: config.projection,
-        gamma_factor,
-        ..AgentSettings::new(config.method, rho, diameter, tolerance)
-    };
-    let schedule = (config.adaptive_rho && config.method.is_admm())
-        .then(|| RhoSchedule::for_method(config.method, rho));
-    let team = Team {
-        problem,
-        graph,
-        settings,
-        epsilon,
-        seed: config.seed,
-        schedule,
-    };
+    let prepared = prepare(problem, graph, config)?;
+    let rho = prepared.rho;
     let optimum = (config.check || config.stop == StopRule::Oracle)
         .then(|| oracle::solve(problem).expect("validated costs have an optimum"));
     if config.global_barrier && matches!(config.transport, Transport::Sim | Transport::Uds) {
@@ -520,11 +487,9 @@ fn solve_once(
             problem,
             graph,
             config,
-            &team,
+            &prepared,
             &mut tracer,
             optimum.as_ref(),
-            tolerance,
-            diameter,
         )?
     };
     let wall_time_ms = started.elapsed().as_secs_f64() * 1e3;
@@ -558,7 +523,7 @@ fn solve_once(
         tasks: m,
         case: problem.case().number(),
         topology: graph.name().to_string(),
-        perturbation: epsilon,
+        perturbation: prepared.team.epsilon,
         mean_projection_steps: run.projection_steps as f64 / (n * run.rounds.max(1)) as f64,
         message_bytes,
         messages_per_agent,
@@ -582,13 +547,12 @@ fn run_agents(
     problem: &TaskAssignmentProblem,
     graph: &Graph,
     config: &SolveConfig,
-    team: &Team<'_>,
+    prepared: &Prepared<'_>,
     tracer: &mut Option<Tracer<'_>>,
     optimum: Option<&OptimalAssignment>,
-    tolerance: f64,
-    diameter: usize,
 ) -> Result<RunResult, SolveError> {
-    let (n, m) = (problem.robots(), problem.tasks());
+    let n = problem.robots();
+    let (team, tolerance, diameter) = (&prepared.team, prepared.tolerance, prepared.diameter);
     let local_stop = || LocalCertifiedStop::new(diameter, n, tolerance);
     let run = match config.transport {
         Transport::Sim => {
@@ -677,49 +641,7 @@ fn run_agents(
                 .agent_program
                 .clone()
                 .ok_or(SolveError::NoAgentProgram)?;
-            let scenario = Scenario {
-                run_id: String::new(),
-                iceoryx_prefix: String::new(),
-                iceoryx_root: PathBuf::new(),
-                robots: n,
-                tasks: m,
-                case: problem.case(),
-                cost_bits: problem
-                    .costs()
-                    .values()
-                    .iter()
-                    .map(|v| v.to_bits())
-                    .collect(),
-                edges: graph.edges().collect(),
-                topology: graph.name().to_string(),
-                method: config.method,
-                rho_bits: team.settings.rho.to_bits(),
-                gamma_factor_bits: team.settings.gamma_factor.to_bits(),
-                adaptive_rho: config.adaptive_rho,
-                epsilon_bits: team.epsilon.map(f64::to_bits),
-                seed: config.seed,
-                qp_projection: config.projection == ProjectionPath::Qp,
-                stop: match config.stop {
-                    StopRule::MaxIters => ScenarioStop::MaxIters,
-                    _ => ScenarioStop::Local {
-                        tolerance_bits: tolerance.to_bits(),
-                    },
-                },
-                max_rounds: config.max_iters as u64,
-                diameter,
-                round_timeout_ms: 0,
-                startup_timeout_ms: 0,
-                board_shm: String::new(),
-                global_barrier: config.global_barrier,
-                workload: Default::default(),
-                transport: if config.transport == Transport::Uds {
-                    ProcessTransport::Uds
-                } else {
-                    ProcessTransport::Iceoryx2
-                },
-                wait: config.wait,
-                warmup_rounds: config.warmup_rounds,
-            };
+            let scenario = scenario_of(problem, graph, config, prepared)?;
             let run = launcher::launch(
                 scenario,
                 &IpcOptions {
@@ -744,6 +666,131 @@ fn run_agents(
         }
     };
     Ok(run)
+}
+
+/// What every transport's agents are built from.
+struct Prepared<'a> {
+    rho: f64,
+    tolerance: f64,
+    diameter: usize,
+    team: Team<'a>,
+}
+
+/// ρ, γ, the tie-breaking perturbation, the stop tolerance and the agents' settings, as every
+/// transport (and every independently started agent) computes them.
+fn prepare<'a>(
+    problem: &'a TaskAssignmentProblem,
+    graph: &'a Graph,
+    config: &SolveConfig,
+) -> Result<Prepared<'a>, SolveError> {
+    let n = problem.robots();
+    // Methods without a penalty report ρ = 0 and ignore --rho and --adaptive-rho.
+    let rho = if config.method.is_admm() {
+        config.rho.unwrap_or_else(|| {
+            rho::default_rho_for(config.method, problem.costs(), graph.mean_degree())
+        })
+    } else {
+        0.0
+    };
+    if config.method.is_admm() && !(rho > 0.0 && rho.is_finite()) {
+        return Err(SolveError::BadRho(rho));
+    }
+    let gamma_factor = config
+        .gamma_factor
+        .unwrap_or(admm_ta_agents::dual::DEFAULT_GAMMA_FACTOR);
+    if !(gamma_factor > 0.0 && gamma_factor.is_finite()) {
+        return Err(SolveError::BadGamma(gamma_factor));
+    }
+    let epsilon = ties::epsilon(problem.costs(), config.perturbation);
+    let tolerance = 1e-9 * problem.costs().spread() * n as f64;
+    let diameter = graph.diameter().unwrap_or(0);
+    let settings = AgentSettings {
+        projection: config.projection,
+        gamma_factor,
+        ..AgentSettings::new(config.method, rho, diameter, tolerance)
+    };
+    let schedule = (config.adaptive_rho && config.method.is_admm())
+        .then(|| RhoSchedule::for_method(config.method, rho));
+    let team = Team {
+        problem,
+        graph,
+        settings,
+        epsilon,
+        seed: config.seed,
+        schedule,
+    };
+    Ok(Prepared {
+        rho,
+        tolerance,
+        diameter,
+        team,
+    })
+}
+
+/// The scenario an agent process of `problem` on `graph` runs with `config` (run id, prefix,
+/// root and board name still to be filled in): what `solve --transport ipc` hands its
+/// agents, and what an independently started agent (`admm-ta agent --team`) builds itself.
+pub fn agent_scenario(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    config: &SolveConfig,
+) -> Result<Scenario, SolveError> {
+    let prepared = prepare(problem, graph, config)?;
+    scenario_of(problem, graph, config, &prepared)
+}
+
+fn scenario_of(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    config: &SolveConfig,
+    prepared: &Prepared<'_>,
+) -> Result<Scenario, SolveError> {
+    let (n, m) = (problem.robots(), problem.tasks());
+    let team = &prepared.team;
+    LocalCertifiedStop::new(prepared.diameter, n, prepared.tolerance)?;
+    Ok(Scenario {
+        run_id: String::new(),
+        iceoryx_prefix: String::new(),
+        iceoryx_root: PathBuf::new(),
+        robots: n,
+        tasks: m,
+        case: problem.case(),
+        cost_bits: problem
+            .costs()
+            .values()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect(),
+        edges: graph.edges().collect(),
+        topology: graph.name().to_string(),
+        method: config.method,
+        rho_bits: team.settings.rho.to_bits(),
+        gamma_factor_bits: team.settings.gamma_factor.to_bits(),
+        adaptive_rho: config.adaptive_rho,
+        epsilon_bits: team.epsilon.map(f64::to_bits),
+        seed: config.seed,
+        qp_projection: config.projection == ProjectionPath::Qp,
+        stop: match config.stop {
+            StopRule::MaxIters => ScenarioStop::MaxIters,
+            _ => ScenarioStop::Local {
+                tolerance_bits: prepared.tolerance.to_bits(),
+            },
+        },
+        max_rounds: config.max_iters as u64,
+        diameter: prepared.diameter,
+        round_timeout_ms: config.round_timeout.as_millis() as u64,
+        startup_timeout_ms: config.startup_timeout.as_millis() as u64,
+        board_shm: String::new(),
+        global_barrier: config.global_barrier,
+        workload: Default::default(),
+        transport: if config.transport == Transport::Uds {
+            ProcessTransport::Uds
+        } else {
+            ProcessTransport::Iceoryx2
+        },
+        wait: config.wait,
+        warmup_rounds: config.warmup_rounds,
+    })
 }
 
 /// What any transport's run yields, before rounding and checking.

@@ -273,6 +273,24 @@ pub fn run_threads_waiting<A: ConsensusAgent + Send>(
     plans: &[AgentPlan],
     wait: WaitStrategy,
 ) -> Result<Vec<AgentOutcome>, ExchangeError> {
+    run_threads_with(agents, graph, plans, wait, &|agent, exchange, plan| {
+        run_agent(agent, exchange, plan)
+    })
+}
+
+/// What an agent thread runs: the round loop, or a longer life such as repeated episodes.
+pub type AgentBody<'b, A, T> =
+    &'b (dyn Fn(&mut A, &mut dyn Exchange, &AgentPlan) -> Result<T, ExchangeError> + Sync);
+
+/// Runs `body` for every agent in its own thread over the threads transport (the round
+/// loop of [`run_agent`], or a longer life such as repeated episodes).
+pub fn run_threads_with<A: ConsensusAgent + Send, T: Send>(
+    agents: &mut [A],
+    graph: &Graph,
+    plans: &[AgentPlan],
+    wait: WaitStrategy,
+    body: AgentBody<'_, A, T>,
+) -> Result<Vec<T>, ExchangeError> {
     let n = agents.len();
     assert_eq!(n, graph.robots(), "one agent per robot");
     assert_eq!(n, plans.len(), "one plan per agent");
@@ -295,7 +313,7 @@ pub fn run_threads_waiting<A: ConsensusAgent + Send>(
         aborted: AtomicBool::new(false),
     };
     let policy = WaitPolicy::new(wait, n);
-    let results: Vec<Result<AgentOutcome, ExchangeError>> = std::thread::scope(|scope| {
+    let results: Vec<Result<T, ExchangeError>> = std::thread::scope(|scope| {
         let fabric = &fabric;
         let handles: Vec<_> = agents
             .iter_mut()
@@ -313,7 +331,7 @@ pub fn run_threads_waiting<A: ConsensusAgent + Send>(
                             policy,
                             gathered: 0,
                         };
-                        let result = run_agent(agent, &mut exchange, plan);
+                        let result = body(agent, &mut exchange, plan);
                         if result.is_err() {
                             fabric.aborted.store(true, Ordering::Release);
                             fabric.wake_all();

@@ -4,8 +4,9 @@
 //! round loop and writes its outcome as `result-I.json` into the run directory. It always
 //! returns (never `process::exit`), so iceoryx2's `Drop`s release its shared memory.
 
-use crate::exchange::{AgentOutcome, ExchangeError, run_agent};
-use crate::ipc::scenario::{ProcessTransport, Scenario};
+use crate::episodes::{EpisodeRecord, run_surveillance_agent};
+use crate::exchange::{AgentOutcome, Exchange, ExchangeError, run_agent};
+use crate::ipc::scenario::{ProcessTransport, Scenario, Workload};
 use crate::ipc::transport::{IpcExchange, run_config};
 use crate::uds::UdsExchange;
 use serde::{Deserialize, Serialize};
@@ -20,6 +21,9 @@ pub struct AgentReport {
     pub connected_unix_ns: u128,
     /// When the agent started (ns since the Unix epoch).
     pub started_unix_ns: u128,
+    /// Its episodes, in a repeated-assignment run.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub episodes: Vec<EpisodeRecord>,
 }
 
 /// Path of agent `index`'s result file in the run directory.
@@ -49,59 +53,113 @@ fn unix_ns() -> u128 {
         .map_or(0, |d| d.as_nanos())
 }
 
-/// Runs agent `index` of run `run_id`; errors are one line for the log.
+/// Runs agent `index` of run `run_id` (started by the launcher); errors are one line for
+/// the log.
 pub fn run(run_id: &str, index: usize, scenario_path: &Path) -> Result<(), String> {
+    let scenario = Scenario::read(scenario_path, run_id).map_err(|e| e.to_string())?;
+    let run_dir = scenario_path.parent().unwrap_or(Path::new("."));
+    run_scenario(
+        &scenario,
+        index,
+        run_dir,
+        &result_path(run_dir, index),
+        true,
+    )
+    .map(|_| ())
+}
+
+/// This agent's end of the transport.
+enum Endpoint {
+    // Boxed: both are large, and the enum is built once.
+    Ipc(Box<IpcExchange>),
+    Uds(Box<UdsExchange>),
+}
+
+impl Endpoint {
+    fn exchange(&mut self) -> &mut dyn Exchange {
+        match self {
+            Self::Ipc(e) => e.as_mut(),
+            Self::Uds(e) => e.as_mut(),
+        }
+    }
+
+    /// Points the launcher and the other agents at the agent that caused `error`.
+    fn blame_for(&self, error: &ExchangeError) {
+        let Self::Ipc(exchange) = self else {
+            return;
+        };
+        let culprit = match error {
+            // Blocked neighbours time out too: blame the agent everybody waits for.
+            ExchangeError::Timeout { .. } => Some(exchange.laggard()),
+            e => culprit(e),
+        };
+        if let Some(culprit) = culprit {
+            exchange.blame(culprit);
+        }
+    }
+}
+
+/// Runs agent `index` of `scenario` and writes its report to `result` (atomically);
+/// `supervised`: a launcher started it (it stops if the launcher dies). `run_dir` holds the
+/// uds sockets.
+pub fn run_scenario(
+    scenario: &Scenario,
+    index: usize,
+    run_dir: &Path,
+    result: &Path,
+    supervised: bool,
+) -> Result<AgentReport, String> {
     let started_unix_ns = unix_ns();
     let started = Instant::now();
-    let scenario = Scenario::read(scenario_path, run_id).map_err(|e| e.to_string())?;
     let graph = scenario.graph().map_err(|e| e.to_string())?;
-    let mut agent = scenario.workload_agent(index).map_err(|e| e.to_string())?;
     let plan = scenario.plan(index).map_err(|e| e.to_string())?;
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
-    let run_dir = scenario_path.parent().unwrap_or(Path::new("."));
-    let (outcome, connected_unix_ns) = match scenario.transport {
+    let mut endpoint = match scenario.transport {
         ProcessTransport::Iceoryx2 => {
             let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
             let fault = crate::ipc::fault::fault_for(index)?;
-            let mut exchange =
-                IpcExchange::connect(&scenario.endpoint(&graph, index), &config, deadline)
-                    .map_err(|e| e.to_string())?;
+            let mut exchange = IpcExchange::connect(
+                &scenario.endpoint(&graph, index, supervised),
+                &config,
+                deadline,
+            )
+            .map_err(|e| e.to_string())?;
             exchange.inject(fault);
-            let connected_unix_ns = unix_ns();
-            let outcome = run_agent(&mut *agent, &mut exchange, &plan).map_err(|e| {
-                // Point the launcher and the other agents at the agent that caused it.
-                let culprit = match &e {
-                    // Blocked neighbours time out too: blame the agent everybody waits for.
-                    ExchangeError::Timeout { .. } => Some(exchange.laggard()),
-                    e => culprit(e),
-                };
-                if let Some(culprit) = culprit {
-                    exchange.blame(culprit);
-                }
-                e.to_string()
-            })?;
-            (outcome, connected_unix_ns)
+            Endpoint::Ipc(Box::new(exchange))
         }
-        ProcessTransport::Uds => {
-            let mut exchange =
-                UdsExchange::connect(&scenario.uds_endpoint(&graph, index, run_dir), deadline)?;
-            let connected_unix_ns = unix_ns();
-            let outcome =
-                run_agent(&mut *agent, &mut exchange, &plan).map_err(|e| e.to_string())?;
-            (outcome, connected_unix_ns)
+        ProcessTransport::Uds => Endpoint::Uds(Box::new(UdsExchange::connect(
+            &scenario.uds_endpoint(&graph, index, run_dir),
+            deadline,
+        )?)),
+    };
+    let connected_unix_ns = unix_ns();
+    let ran = match &scenario.workload {
+        Workload::Episodes(settings) => {
+            let mut agent = settings.agent(index, graph.degree(index));
+            run_surveillance_agent(&mut agent, endpoint.exchange(), &plan, settings)
+                .map(|(records, outcome)| (outcome, records))
+        }
+        _ => {
+            let mut agent = scenario.workload_agent(index).map_err(|e| e.to_string())?;
+            run_agent(&mut *agent, endpoint.exchange(), &plan).map(|o| (o, Vec::new()))
         }
     };
-    // The ports were released when the exchange went out of scope: once the launcher sees
-    // the result it may clean up.
+    let (outcome, episodes) = ran.map_err(|e| {
+        endpoint.blame_for(&e);
+        e.to_string()
+    })?;
+    // Release the ports before reporting: once the launcher sees the result it may clean up.
+    drop(endpoint);
     let report = AgentReport {
         outcome,
         connected_unix_ns,
         started_unix_ns,
+        episodes,
     };
-    let path = result_path(run_dir, index);
-    let partial = path.with_extension("json.partial");
+    let partial = result.with_extension("json.partial");
     let text = serde_json::to_string(&report).map_err(|e| e.to_string())?;
     std::fs::write(&partial, text)
-        .and_then(|()| std::fs::rename(&partial, &path))
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        .and_then(|()| std::fs::rename(&partial, result))
+        .map_err(|e| format!("cannot write {}: {e}", result.display()))?;
+    Ok(report)
 }

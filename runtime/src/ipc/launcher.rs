@@ -75,6 +75,8 @@ pub struct IpcRun {
     pub startup: Duration,
     /// Files of the run still present after cleanup (should be none).
     pub leftovers: Vec<PathBuf>,
+    /// Each agent's episodes, in a repeated-assignment run.
+    pub episodes: Vec<Vec<crate::episodes::EpisodeRecord>>,
 }
 
 /// How long the other agents have to stop by themselves after a failure before they are
@@ -289,6 +291,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
     }
 
     let mut outcomes = Vec::with_capacity(scenario.robots);
+    let mut episodes = Vec::with_capacity(scenario.robots);
     let mut latency = RoundLatency::new();
     let mut connected = 0u128;
     for index in 0..scenario.robots {
@@ -305,6 +308,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
             })?;
         connected = connected.max(report.connected_unix_ns);
         outcomes.push(report.outcome);
+        episodes.push(report.episodes);
     }
     let startup = Duration::from_nanos(connected.saturating_sub(spawned_unix_ns) as u64);
     drop(guard);
@@ -314,5 +318,6 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
         latency,
         startup,
         leftovers: namespace.leftovers(),
+        episodes,
     })
 }

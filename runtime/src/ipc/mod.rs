@@ -10,6 +10,7 @@
 pub mod agent_process;
 pub mod fault;
 pub mod launcher;
+pub mod member;
 pub mod namespace;
 pub mod scenario;
 pub mod transport;

@@ -59,6 +59,34 @@ impl RunNamespace {
         format!("{}board", self.prefix)
     }
 
+    /// The namespace of an independently started team named `run` (letters, digits and
+    /// dashes): every agent of the team derives the same one from the name.
+    pub fn for_team(run: &str) -> Result<Self, String> {
+        Self::check_team_name(run)?;
+        let dir = std::env::temp_dir().join("admm-ta-teams").join(run);
+        std::fs::create_dir_all(&dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        Ok(Self {
+            // 't' is not a hex digit: no launcher run's prefix (`adta<hex>_`) starts so.
+            prefix: format!("adtat{run}_"),
+            id: format!("team-{run}"),
+            dir,
+        })
+    }
+
+    /// Refuses team names that cannot name shared memory (or that would prefix another's).
+    pub fn check_team_name(run: &str) -> Result<(), String> {
+        if run.is_empty()
+            || run.len() > 40
+            || !run.chars().all(|c| c.is_ascii_alphanumeric() || c == '-')
+        {
+            return Err(format!(
+                "run name '{run}': use 1 to 40 letters, digits and dashes"
+            ));
+        }
+        Ok(())
+    }
+
     /// Files of the run that still exist: shared memory with its prefix, and the run directory.
     pub fn leftovers(&self) -> Vec<PathBuf> {
         let mut found = shm_objects(&self.prefix);

@@ -3,6 +3,7 @@
 //! values travel as their bit patterns, so every process computes with exactly the same
 //! numbers as the lockstep simulation.
 
+use crate::episodes::EpisodeSettings;
 use crate::exchange::{AgentPlan, AgentStop};
 use crate::ipc::transport::IpcEndpoint;
 use crate::team::Team;
@@ -32,7 +33,7 @@ pub enum ScenarioStop {
 }
 
 /// What the agents compute.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Workload {
     /// The scenario's method on its problem.
@@ -40,6 +41,8 @@ pub enum Workload {
     Method,
     /// A benchmark probe ([`ProbeAgent`]) with a payload of `payload_len` values.
     Probe { payload_len: usize, step: ProbeStep },
+    /// Repeated surveillance episodes with the primal method ([`crate::episodes`]).
+    Episodes(Box<EpisodeSettings>),
 }
 
 /// What carries the messages between the agent processes.
@@ -195,7 +198,9 @@ impl Scenario {
     /// Values of every round message's payload.
     pub fn payload_len(&self) -> usize {
         match self.workload {
-            Workload::Method => self.method.payload_len(self.robots, self.tasks),
+            Workload::Method | Workload::Episodes(_) => {
+                self.method.payload_len(self.robots, self.tasks)
+            }
             Workload::Probe { payload_len, .. } => payload_len.max(1),
         }
     }
@@ -217,18 +222,23 @@ impl Scenario {
     pub fn workload_agent(&self, index: usize) -> Result<Box<dyn ConsensusAgent>, ScenarioError> {
         match self.workload {
             Workload::Method => Ok(Box::new(self.agent(index)?)),
+            Workload::Episodes(ref settings) if index < self.robots => {
+                let degree = self.graph()?.degree(index);
+                Ok(Box::new(settings.agent(index, degree)))
+            }
             Workload::Probe { payload_len, step } if index < self.robots => {
                 Ok(Box::new(ProbeAgent::new(index, payload_len, step)))
             }
-            Workload::Probe { .. } => Err(ScenarioError::BadIndex {
+            Workload::Probe { .. } | Workload::Episodes(_) => Err(ScenarioError::BadIndex {
                 index,
                 robots: self.robots,
             }),
         }
     }
 
-    /// Agent `index`'s iceoryx2 endpoint.
-    pub fn endpoint(&self, graph: &Graph, index: usize) -> IpcEndpoint {
+    /// Agent `index`'s iceoryx2 endpoint; `supervised`: started by a launcher (the agent
+    /// stops when its launcher is gone).
+    pub fn endpoint(&self, graph: &Graph, index: usize, supervised: bool) -> IpcEndpoint {
         IpcEndpoint {
             index,
             neighbours: graph.neighbours(index).to_vec(),
@@ -238,6 +248,7 @@ impl Scenario {
             policy: WaitPolicy::new(self.wait, self.robots),
             board_shm: self.board_shm.clone(),
             global_barrier: self.global_barrier,
+            supervised,
         }
     }
 

@@ -72,6 +72,8 @@ pub struct IpcEndpoint {
     /// Name of the run's board (shared memory created by the launcher, [`board_size`]).
     pub board_shm: String,
     pub global_barrier: bool,
+    /// Started by a launcher: stop when it is gone.
+    pub supervised: bool,
 }
 
 /// Bytes of the board: the global barrier's line, one line per agent (two arrival counters
@@ -163,6 +165,68 @@ impl Board {
         unsafe { &*(self.memory.base_address().as_ptr().add(offset) as *const AtomicU64) }
     }
 
+    /// Opens the board of an independently started team, creating it if nobody has yet (or
+    /// if the one there is left from a dead team: none of the agents recorded on it is
+    /// alive). Call it under a lock that the team's other agents take too.
+    pub fn open_or_create_for_team(
+        shm: &str,
+        agents: usize,
+        tasks: usize,
+        payload_len: usize,
+    ) -> Result<Self, String> {
+        // A dead team's board (nobody recorded on it alive) is taken over.
+        if let Ok(board) = Self::open(shm, agents)
+            && (0..agents).any(|i| board.member_alive(i))
+        {
+            board.check_shape(tasks, payload_len)?;
+            return Ok(board);
+        }
+        let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
+        let memory = SharedMemoryBuilder::new(&name)
+            .is_memory_locked(false)
+            .creation_mode(iceoryx2_bb_posix::creation_mode::CreationMode::PurgeAndCreate)
+            .size(board_size(agents))
+            .permission(iceoryx2_bb_posix::permission::Permission::OWNER_READ_WRITE)
+            .zero_memory(true)
+            // The last agent out removes it (with the team's other files), not its creator.
+            .has_ownership(false)
+            .create()
+            .map_err(|e| format!("cannot create the team's board {shm}: {e:?}"))?;
+        let board = Self { memory, agents };
+        let line = LINE * (agents + 1);
+        board.word(line + 8).store(tasks as u64, Ordering::Relaxed);
+        board
+            .word(line + 16)
+            .store(payload_len as u64, Ordering::Release);
+        Ok(board)
+    }
+
+    /// Records agent `agent`'s process id (independently started teams).
+    pub fn set_member_pid(&self, agent: usize, pid: u32) {
+        self.word(LINE * (agent + 1) + 24)
+            .store(u64::from(pid), Ordering::Release);
+    }
+
+    fn member_pid(&self, agent: usize) -> u32 {
+        self.word(LINE * (agent + 1) + 24).load(Ordering::Acquire) as u32
+    }
+
+    /// Counts agent `agent` of an independently started team out (call it under the team's
+    /// lock); `true` when no other agent of the team is left alive — every one finished, or
+    /// the others died or never came — so this one removes the team's shared memory.
+    pub fn member_left(&self, agent: usize) -> bool {
+        self.set_member_pid(agent, 0);
+        let line = LINE * (self.agents + 1);
+        let finished = self.word(line + 24).fetch_add(1, Ordering::AcqRel) + 1;
+        finished >= self.agents as u64 || !(0..self.agents).any(|i| self.member_alive(i))
+    }
+
+    fn member_alive(&self, agent: usize) -> bool {
+        let pid = self.member_pid(agent);
+        // SAFETY: kill with signal 0 only checks whether the process exists.
+        pid != 0 && unsafe { libc::kill(pid as libc::pid_t, 0) } == 0
+    }
+
     /// Marks agent `failed` as failed (the first mark wins); every agent stops at its next
     /// wait. Returns the agent already marked, if another was first.
     pub fn mark_failed(&self, failed: usize) -> Option<usize> {
@@ -251,7 +315,8 @@ pub struct IpcExchange {
     /// Fault injection (tests): misbehave when publishing after gathering its round.
     fault: Option<Fault>,
     /// The launcher's pid: if this process is orphaned (the launcher died), it stops.
-    launcher: u32,
+    /// The launcher's pid, for supervised agents.
+    launcher: Option<u32>,
     // Ports first: they must drop before the node.
     _node: Node<Svc>,
 }
@@ -348,14 +413,18 @@ impl IpcExchange {
         let t_own = t0.elapsed();
         let mut subscribers = Vec::with_capacity(endpoint.neighbours.len());
         let mut notifiers = Vec::with_capacity(endpoint.neighbours.len());
+        // Kept to name the neighbours that never show up.
+        let mut neighbour_services = Vec::with_capacity(endpoint.neighbours.len());
         for &j in &endpoint.neighbours {
+            let service = round_of(j)?;
             subscribers.push(
-                round_of(j)?
+                service
                     .subscriber_builder()
                     .buffer_size(SUBSCRIBER_BUFFER)
                     .create()
                     .map_err(|e| err(format!("cannot subscribe to agent {j}: {e:?}")))?,
             );
+            neighbour_services.push(service);
             notifiers.push(
                 wake_of(j)?
                     .notifier_builder()
@@ -394,8 +463,16 @@ impl IpcExchange {
                 }
             }
             if Instant::now() >= deadline {
+                // A neighbour that started has published its service.
+                let missing: Vec<usize> = endpoint
+                    .neighbours
+                    .iter()
+                    .zip(&neighbour_services)
+                    .filter(|(_, s)| s.dynamic_config().number_of_publishers() == 0)
+                    .map(|(&j, _)| j)
+                    .collect();
                 return Err(err(format!(
-                    "only {} of {degree} neighbours connected within {:?}",
+                    "only {} of {degree} neighbours connected within {:.1?}; missing: agent(s) {missing:?} (not started, or started too late)",
                     own_round.dynamic_config().number_of_subscribers(),
                     started.elapsed()
                 )));
@@ -429,7 +506,7 @@ impl IpcExchange {
             config: config.clone(),
             last_dead_node_scan: Instant::now(),
             fault: None,
-            launcher: std::os::unix::process::parent_id(),
+            launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
             _node: node,
         })
     }
@@ -473,13 +550,13 @@ impl IpcExchange {
         }
         // A system call: every 64 rounds and in long waits, not in every round.
         let look_for_launcher = round.is_multiple_of(64) || !waited.is_zero();
-        if look_for_launcher && std::os::unix::process::parent_id() != self.launcher {
+        if let Some(launcher) = self.launcher
+            && look_for_launcher
+            && std::os::unix::process::parent_id() != launcher
+        {
             return Err(transport(
                 self.index,
-                format!(
-                    "stopped at round {round}: its launcher (pid {}) is gone",
-                    self.launcher
-                ),
+                format!("stopped at round {round}: its launcher (pid {launcher}) is gone"),
             ));
         }
         if waited >= DEAD_NODE_SCAN_EVERY

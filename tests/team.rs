@@ -1,0 +1,222 @@
+//! Agents started independently (`admm-ta agent --team FILE --id I`), in a shuffled order with
+//! delays, as separate commands: they find each other, solve, and `admm-ta collect` gets the
+//! oracle's optimum. A missing agent fails the team with a line naming it, after the
+//! start-up deadline, and nothing is left in shared memory.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+fn admm_ta() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_admm-ta"))
+}
+
+/// Writes a team file; `run` must be unique among concurrently running tests.
+fn team_file(
+    dir: &Path,
+    run: &str,
+    robots: usize,
+    costs: &Path,
+    topology: &str,
+    startup: f64,
+) -> PathBuf {
+    let path = dir.join("team.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "run = \"{run}\"\nrobots = {robots}\ncosts = \"{}\"\ntopology = \"{topology}\"\nresults = \"results\"\nstartup_timeout = {startup}\nround_timeout = 20.0\n",
+            costs.display()
+        ),
+    )
+    .unwrap();
+    path
+}
+
+/// A fixed shuffle of `0..n` (no RNG crate needed: a multiplicative permutation).
+fn shuffled(n: usize, seed: usize) -> Vec<usize> {
+    let step = (1..n)
+        .rev()
+        .find(|s| gcd(*s, n) == 1 && *s > n / 2)
+        .unwrap_or(1);
+    (0..n).map(|k| (seed + k * step) % n).collect()
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 { a } else { gcd(b, a % b) }
+}
+
+fn start(team: &Path, id: usize) -> Child {
+    admm_ta()
+        .args([
+            "agent",
+            "--team",
+            team.to_str().unwrap(),
+            "--id",
+            &id.to_string(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+fn team_shm_left(run: &str) -> Vec<String> {
+    std::fs::read_dir("/dev/shm")
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.starts_with(&format!("adtat{run}_")))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+#[test]
+fn independently_started_agents_reach_the_oracle_optimum() {
+    for (k, (name, topology)) in [
+        ("case2_uniform_10x2", "ring"),
+        ("case1_uniform_20x20", "random:0.3"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let instance = common::oracle_instances()
+            .into_iter()
+            .find(|i| i.name == name)
+            .unwrap();
+        let robots = instance.optimal_assignment.len();
+        let dir = tempfile::tempdir().unwrap();
+        let run = format!("t{}-{k}", std::process::id());
+        let team = team_file(dir.path(), &run, robots, &instance.csv, topology, 60.0);
+        let order = shuffled(robots, 3 + k);
+        let mut children = Vec::new();
+        for (n, &id) in order.iter().enumerate() {
+            children.push((id, start(&team, id)));
+            // Staggered starts: the early ones wait for the late ones.
+            std::thread::sleep(Duration::from_millis(if n % 3 == 0 { 40 } else { 2 }));
+        }
+        for (id, child) in children {
+            let out = child.wait_with_output().unwrap();
+            assert!(
+                out.status.success(),
+                "agent {id}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+            assert_eq!(line["id"], id);
+            assert_eq!(line["converged"], true);
+        }
+        let out = admm_ta()
+            .args([
+                "collect",
+                "--team",
+                team.to_str().unwrap(),
+                "--check",
+                "--json",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(result["optimal"], true, "{name}: {result}");
+        let cost = result["cost"].as_f64().unwrap();
+        assert!(
+            common::relative_gap(cost, instance.optimal_cost) < 1e-9,
+            "{name}: {cost}"
+        );
+        if instance.unique == Some(true) {
+            let assignment: Vec<usize> =
+                serde_json::from_value(result["assignment"].clone()).unwrap();
+            assert_eq!(assignment, instance.optimal_assignment, "{name}");
+        }
+        assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
+    }
+}
+
+#[test]
+fn a_missing_agent_fails_the_team_after_the_deadline_naming_it() {
+    let instance = common::oracle_instances()
+        .into_iter()
+        .find(|i| i.name == "case1_uniform_5x5")
+        .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("m{}", std::process::id());
+    let team = team_file(dir.path(), &run, 5, &instance.csv, "ring", 1.5);
+    let started = std::time::Instant::now();
+    let children: Vec<(usize, Child)> = [4, 0, 3, 1]
+        .into_iter()
+        .map(|id| (id, start(&team, id)))
+        .collect();
+    let mut messages = String::new();
+    for (id, child) in children {
+        let out = child.wait_with_output().unwrap();
+        assert!(
+            !out.status.success(),
+            "agent {id} succeeded without agent 2"
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "agent {id}: {err}");
+        messages += &err;
+    }
+    assert!(started.elapsed() < Duration::from_secs(20), "the team hung");
+    assert!(messages.contains("missing: agent(s) [2]"), "{messages}");
+    // collect names the robots without results.
+    let out = admm_ta()
+        .args(["collect", "--team", team.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("left no result"));
+    assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
+}
+
+#[test]
+fn bad_team_files_are_refused_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    for (text, needle) in [
+        (
+            "run = \"a_b\"\nrobots = 2\ncosts = \"random\"\ntasks = 2\n",
+            "letters, digits and dashes",
+        ),
+        (
+            "run = \"x\"\nrobots = 2\ncosts = \"random\"\n",
+            "needs tasks",
+        ),
+        (
+            "run = \"x\"\nrobots = 3\ncosts = \"nope.csv\"\n",
+            "nope.csv",
+        ),
+        (
+            "run = \"x\"\nrobots = 2\ncosts = \"random\"\ntasks = 2\ncolour = 1\n",
+            "unknown field",
+        ),
+        (
+            "run = \"x\"\nrobots = 2\ncosts = \"random\"\ntasks = 3\n",
+            "cannot cover",
+        ),
+    ] {
+        let path = dir.path().join("bad.toml");
+        std::fs::write(&path, text).unwrap();
+        let out = admm_ta()
+            .args(["agent", "--team", path.to_str().unwrap(), "--id", "0"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(needle),
+            "{text}: {err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    let out = admm_ta()
+        .args(["agent", "--team", "/nonexistent/team.toml", "--id", "0"])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read team file"));
+}
