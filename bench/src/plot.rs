@@ -251,6 +251,10 @@ impl Chart {
             .map_err(|e| err(&e))?;
         chart
             .configure_mesh()
+            .x_labels(8)
+            .y_labels(8)
+            .x_label_formatter(&tick)
+            .y_label_formatter(&tick)
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
             .label_style(("sans-serif", 14))
@@ -323,8 +327,33 @@ impl Chart {
     }
 }
 
+/// An axis label: integers without decimals, very large or small values in scientific
+/// notation, others with at most 3 decimals.
+fn tick(v: &f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if !(1e-3..1e6).contains(&a) {
+        format!("{v:.0e}")
+    } else if (v - v.round()).abs() < 1e-9 * a.max(1.0) {
+        format!("{v:.0}")
+    } else {
+        let text = format!("{v:.3}");
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn ticks_are_short() {
+        assert_eq!(super::tick(&10.0), "10");
+        assert_eq!(super::tick(&0.25), "0.25");
+        assert_eq!(super::tick(&1e-5), "1e-5");
+        assert_eq!(super::tick(&2e6), "2e6");
+        assert_eq!(super::tick(&0.0), "0");
+    }
+
     use super::*;
 
     #[test]

@@ -179,7 +179,7 @@ pub fn cases(config: &RoundsConfig) -> Vec<Case> {
     } else if config.quick {
         vec![
             (
-                vec![2, 10, 20],
+                vec![2, 10, 50],
                 strings(&["complete", "ring"]),
                 vec![base.payload],
                 vec![base.wait],
@@ -660,7 +660,6 @@ pub fn charts(report: &RoundsReport) -> Vec<(String, Chart)> {
             "agents",
             "round time (µs), p50 solid, p99 dashed",
         )
-        .x_scale(Scale::Log)
         .y_scale(Scale::Log)
         .colour_by_prefix();
         let mut points_any = false;
