@@ -647,7 +647,7 @@ pub fn charts(report: &RoundsReport) -> Vec<(String, Chart)> {
     }
     let base_payload = PayloadShape { rows: 10, cols: 10 };
     for topology in &topologies {
-        let mut chart = Chart::new(
+        let chart = Chart::new(
             format!(
                 "round latency vs agents ({topology} graph, {} payload, {} step)",
                 if report.step == StepKind::Primal {
@@ -662,35 +662,13 @@ pub fn charts(report: &RoundsReport) -> Vec<(String, Chart)> {
         )
         .y_scale(Scale::Log)
         .colour_by_prefix();
-        let mut points_any = false;
-        for &t in &transports {
-            let mut rows: Vec<&CaseResult> = report
-                .results
-                .iter()
-                .filter(|r| {
-                    let c = &r.case;
-                    c.transport == t
-                        && &c.topology == topology
-                        && c.wait == base_wait
-                        && !c.global_barrier
-                        && (report.step == StepKind::Primal || c.payload == base_payload)
-                })
-                .collect();
-            rows.sort_by_key(|r| r.case.agents);
-            if rows.len() < 2 {
-                continue;
-            }
-            points_any = true;
-            let pts = |f: fn(&CaseResult) -> f64| {
-                rows.iter().map(|r| (r.case.agents as f64, f(r))).collect()
-            };
-            chart = chart
-                .series(Series::new(
-                    format!("{} p50", t.name()),
-                    pts(|r| r.round_us.p50),
-                ))
-                .series(Series::new(format!("{} p99", t.name()), pts(|r| r.round_us.p99)).dashed());
-        }
+        let (chart, points_any) = with_transport_series(chart, report, &transports, 2, |c| {
+            (&c.topology == topology
+                && c.wait == base_wait
+                && !c.global_barrier
+                && (report.step == StepKind::Primal || c.payload == base_payload))
+                .then_some(c.agents as f64)
+        });
         if points_any {
             let slug: String = topology
                 .chars()
@@ -703,7 +681,7 @@ pub fn charts(report: &RoundsReport) -> Vec<(String, Chart)> {
     sizes.sort_unstable();
     sizes.dedup();
     for n in sizes {
-        let mut chart = Chart::new(
+        let chart = Chart::new(
             format!(
                 "round latency vs payload ({n} agents, complete graph, {} step)",
                 report.step.name()
@@ -714,40 +692,47 @@ pub fn charts(report: &RoundsReport) -> Vec<(String, Chart)> {
         .x_scale(Scale::Log)
         .y_scale(Scale::Log)
         .colour_by_prefix();
-        let mut points_any = false;
-        for &t in &transports {
-            let mut rows: Vec<&CaseResult> = report
-                .results
-                .iter()
-                .filter(|r| {
-                    let c = &r.case;
-                    c.transport == t
-                        && c.agents == n
-                        && c.topology == "complete"
-                        && c.wait == base_wait
-                        && !c.global_barrier
-                })
-                .collect();
-            rows.sort_by_key(|r| r.payload_bytes);
-            if rows.len() < 3 {
-                continue;
-            }
-            points_any = true;
-            let pts = |f: fn(&CaseResult) -> f64| {
-                rows.iter()
-                    .map(|r| (r.payload_bytes as f64, f(r)))
-                    .collect()
-            };
-            chart = chart
-                .series(Series::new(
-                    format!("{} p50", t.name()),
-                    pts(|r| r.round_us.p50),
-                ))
-                .series(Series::new(format!("{} p99", t.name()), pts(|r| r.round_us.p99)).dashed());
-        }
+        let (chart, points_any) = with_transport_series(chart, report, &transports, 3, |c| {
+            (c.agents == n && c.topology == "complete" && c.wait == base_wait && !c.global_barrier)
+                .then_some((c.payload.values() * 8) as f64)
+        });
         if points_any {
             charts.push((format!("rounds-payload-{n}-agents.svg"), chart));
         }
     }
     charts
+}
+
+/// Adds a p50 and a dashed p99 line per transport to `chart`, over the cases that `x` places
+/// (returns their x value, `None` to leave a case out); transports with fewer than
+/// `min_points` cases are skipped. Also says whether any line was added.
+fn with_transport_series(
+    mut chart: Chart,
+    report: &RoundsReport,
+    transports: &[Transport],
+    min_points: usize,
+    x: impl Fn(&Case) -> Option<f64>,
+) -> (Chart, bool) {
+    let mut any = false;
+    for &t in transports {
+        let mut rows: Vec<(f64, &CaseResult)> = report
+            .results
+            .iter()
+            .filter(|r| r.case.transport == t)
+            .filter_map(|r| x(&r.case).map(|x| (x, r)))
+            .collect();
+        rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if rows.len() < min_points {
+            continue;
+        }
+        any = true;
+        let pts = |f: fn(&CaseResult) -> f64| rows.iter().map(|(x, r)| (*x, f(r))).collect();
+        chart = chart
+            .series(Series::new(
+                format!("{} p50", t.name()),
+                pts(|r| r.round_us.p50),
+            ))
+            .series(Series::new(format!("{} p99", t.name()), pts(|r| r.round_us.p99)).dashed());
+    }
+    (chart, any)
 }

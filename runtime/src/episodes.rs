@@ -12,7 +12,7 @@
 
 use crate::exchange::{AgentOutcome, AgentPlan, AgentStop, Exchange, ExchangeError, RoundLoop};
 use crate::ipc::launcher::{self, IpcOptions};
-use crate::ipc::scenario::{ProcessTransport, Scenario, ScenarioStop, Workload};
+use crate::ipc::scenario::{ProcessTransport, Scenario, Workload};
 use crate::latency::{LatencySummary, RoundLatency};
 use crate::solve::{SolveError, Transport};
 use crate::threads;
@@ -242,37 +242,15 @@ pub fn run_episodes(
                 .flat_map(|i| model.cost_row(i, &model.initial_state(i)))
                 .collect();
             let scenario = Scenario {
-                run_id: String::new(),
-                iceoryx_prefix: String::new(),
-                iceoryx_root: PathBuf::new(),
-                robots: n,
-                tasks: m,
                 case: AssignmentCase::Two,
                 cost_bits: first.iter().map(|v| v.to_bits()).collect(),
-                edges: graph.edges().collect(),
-                topology: graph.name().to_string(),
-                method: Method::Primal,
                 rho_bits: settings.rho.to_bits(),
-                gamma_factor_bits: 0,
-                adaptive_rho: false,
-                epsilon_bits: None,
-                seed: 0,
-                qp_projection: false,
-                stop: ScenarioStop::MaxIters,
                 max_rounds: config.max_rounds,
                 diameter: settings.diameter,
-                round_timeout_ms: 0,
-                startup_timeout_ms: 0,
-                board_shm: String::new(),
-                global_barrier: false,
                 workload: Workload::Episodes(Box::new(settings.clone())),
-                transport: if config.transport == Transport::Uds {
-                    ProcessTransport::Uds
-                } else {
-                    ProcessTransport::Iceoryx2
-                },
+                transport: ProcessTransport::for_transport(config.transport),
                 wait: config.wait,
-                warmup_rounds: 0,
+                ..Scenario::blank(graph, m)
             };
             let ran = launcher::launch(
                 scenario,

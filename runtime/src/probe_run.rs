@@ -17,14 +17,13 @@
 
 use crate::exchange::{AgentPlan, AgentStop};
 use crate::ipc::launcher::{self, IpcOptions};
-use crate::ipc::scenario::{ProcessTransport, Scenario, ScenarioStop, Workload};
+use crate::ipc::scenario::{ProcessTransport, Scenario, Workload};
 use crate::latency::{LatencySummary, RoundLatency};
-use crate::solve::{Method, SolveError, Transport};
+use crate::solve::{SolveError, Transport};
 use crate::threads;
 use crate::usage::ThreadUsage;
 use crate::wait::WaitStrategy;
 use admm_ta_agents::probe::{ProbeAgent, ProbeStep};
-use admm_ta_agents::problem::AssignmentCase;
 use admm_ta_topologies::Graph;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -124,40 +123,16 @@ pub fn run_probe(graph: &Graph, run: &ProbeRun) -> Result<ProbeReport, SolveErro
                 .clone()
                 .ok_or(SolveError::NoAgentProgram)?;
             let scenario = Scenario {
-                run_id: String::new(),
-                iceoryx_prefix: String::new(),
-                iceoryx_root: PathBuf::new(),
-                robots: n,
-                tasks: 1,
-                case: AssignmentCase::Two,
-                cost_bits: vec![0; n],
-                edges: graph.edges().collect(),
-                topology: graph.name().to_string(),
-                method: Method::Primal,
-                rho_bits: 0,
-                gamma_factor_bits: 0,
-                adaptive_rho: false,
-                epsilon_bits: None,
-                seed: 0,
-                qp_projection: false,
-                stop: ScenarioStop::MaxIters,
                 max_rounds: run.rounds,
-                diameter: graph.diameter().unwrap_or(0),
-                round_timeout_ms: 0,
-                startup_timeout_ms: 0,
-                board_shm: String::new(),
                 global_barrier: run.global_barrier,
                 workload: Workload::Probe {
                     payload_len: run.payload_len,
                     step: run.step,
                 },
-                transport: if run.transport == Transport::Uds {
-                    ProcessTransport::Uds
-                } else {
-                    ProcessTransport::Iceoryx2
-                },
+                transport: ProcessTransport::for_transport(run.transport),
                 wait: run.wait,
                 warmup_rounds: run.warmup_rounds,
+                ..Scenario::blank(graph, 1)
             };
             let ran = launcher::launch(
                 scenario,

@@ -783,11 +783,7 @@ fn scenario_of(
         board_shm: String::new(),
         global_barrier: config.global_barrier,
         workload: Default::default(),
-        transport: if config.transport == Transport::Uds {
-            ProcessTransport::Uds
-        } else {
-            ProcessTransport::Iceoryx2
-        },
+        transport: ProcessTransport::for_transport(config.transport),
         wait: config.wait,
         warmup_rounds: config.warmup_rounds,
     })

@@ -56,6 +56,17 @@ pub enum ProcessTransport {
     Uds,
 }
 
+impl ProcessTransport {
+    /// The process transport of `transport` (uds for uds, iceoryx2 otherwise).
+    pub fn for_transport(transport: crate::solve::Transport) -> Self {
+        if transport == crate::solve::Transport::Uds {
+            Self::Uds
+        } else {
+            Self::Iceoryx2
+        }
+    }
+}
+
 /// One run, as the agents see it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Scenario {
@@ -122,6 +133,46 @@ pub enum ScenarioError {
 }
 
 impl Scenario {
+    /// A scenario of a team on `graph` with `tasks` tasks and nothing else decided yet (zero
+    /// costs, the primal method, run to the round limit, iceoryx2, default waiting): the
+    /// base that benchmark and episode runs fill in. The launcher sets the run's names.
+    pub fn blank(graph: &Graph, tasks: usize) -> Self {
+        let robots = graph.robots();
+        Self {
+            run_id: String::new(),
+            iceoryx_prefix: String::new(),
+            iceoryx_root: PathBuf::new(),
+            robots,
+            tasks,
+            case: if robots == tasks {
+                AssignmentCase::One
+            } else {
+                AssignmentCase::Two
+            },
+            cost_bits: vec![0; robots * tasks],
+            edges: graph.edges().collect(),
+            topology: graph.name().to_string(),
+            method: Method::Primal,
+            rho_bits: 0,
+            gamma_factor_bits: 0,
+            adaptive_rho: false,
+            epsilon_bits: None,
+            seed: 0,
+            qp_projection: false,
+            stop: ScenarioStop::MaxIters,
+            max_rounds: 0,
+            diameter: graph.diameter().unwrap_or(0),
+            round_timeout_ms: 0,
+            startup_timeout_ms: 0,
+            board_shm: String::new(),
+            global_barrier: false,
+            workload: Workload::Method,
+            transport: ProcessTransport::Iceoryx2,
+            wait: WaitStrategy::Auto,
+            warmup_rounds: 0,
+        }
+    }
+
     pub fn read(path: &Path, run_id: &str) -> Result<Self, ScenarioError> {
         let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Read {
             path: path.to_path_buf(),

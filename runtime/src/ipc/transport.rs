@@ -139,6 +139,17 @@ impl Board {
         tasks: usize,
         payload_len: usize,
     ) -> Result<Self, String> {
+        Self::create_owned(shm, agents, tasks, payload_len, true)
+    }
+
+    /// A fresh zeroed board with the team's shape; `owned`: removed when dropped.
+    fn create_owned(
+        shm: &str,
+        agents: usize,
+        tasks: usize,
+        payload_len: usize,
+        owned: bool,
+    ) -> Result<Self, String> {
         let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
         let memory = SharedMemoryBuilder::new(&name)
             .is_memory_locked(false)
@@ -146,7 +157,7 @@ impl Board {
             .size(board_size(agents))
             .permission(iceoryx2_bb_posix::permission::Permission::OWNER_READ_WRITE)
             .zero_memory(true)
-            .has_ownership(true)
+            .has_ownership(owned)
             .create()
             .map_err(|e| format!("{e:?}"))?;
         let board = Self { memory, agents };
@@ -181,24 +192,9 @@ impl Board {
             board.check_shape(tasks, payload_len)?;
             return Ok(board);
         }
-        let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
-        let memory = SharedMemoryBuilder::new(&name)
-            .is_memory_locked(false)
-            .creation_mode(iceoryx2_bb_posix::creation_mode::CreationMode::PurgeAndCreate)
-            .size(board_size(agents))
-            .permission(iceoryx2_bb_posix::permission::Permission::OWNER_READ_WRITE)
-            .zero_memory(true)
-            // The last agent out removes it (with the team's other files), not its creator.
-            .has_ownership(false)
-            .create()
-            .map_err(|e| format!("cannot create the team's board {shm}: {e:?}"))?;
-        let board = Self { memory, agents };
-        let line = LINE * (agents + 1);
-        board.word(line + 8).store(tasks as u64, Ordering::Relaxed);
-        board
-            .word(line + 16)
-            .store(payload_len as u64, Ordering::Release);
-        Ok(board)
+        // The last agent out removes it (with the team's other files), not its creator.
+        Self::create_owned(shm, agents, tasks, payload_len, false)
+            .map_err(|e| format!("cannot create the team's board {shm}: {e}"))
     }
 
     /// Records agent `agent`'s process id (independently started teams).
