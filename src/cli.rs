@@ -91,7 +91,7 @@ enum Command {
 }
 
 #[derive(Subcommand, Debug)]
-enum Bench {
+pub(crate) enum Bench {
     /// Round latency of teams exchanging payloads on threads, ipc (iceoryx2 zero-copy) and
     /// uds (Unix-domain sockets, copying) in one run: p50/p90/p99/p99.9/max of the round
     /// time and of the exchange overhead (round − compute), CPU time and context switches
@@ -141,13 +141,13 @@ enum Bench {
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
-enum BarrierArg {
+pub(crate) enum BarrierArg {
     Neighbour,
     Global,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
-enum StepArg {
+pub(crate) enum StepArg {
     Touch,
     Average,
     Primal,
@@ -155,25 +155,25 @@ enum StepArg {
 
 /// Options shared by the figure experiments.
 #[derive(Args, Debug)]
-struct FigureArgs {
+pub(crate) struct FigureArgs {
     /// Seeds (cost matrices and random graphs) per point.
     #[arg(long, default_value_t = 3)]
-    trials: u64,
+    pub(crate) trials: u64,
     /// Directory for the JSON and SVG files (created if missing).
     #[arg(long, default_value = "experiment-results")]
-    out: PathBuf,
+    pub(crate) out: PathBuf,
     /// Run the ADMM methods with --adaptive-rho.
     #[arg(long)]
-    adaptive_rho: bool,
+    pub(crate) adaptive_rho: bool,
     #[arg(long, default_value_t = 5000)]
-    max_iters: usize,
+    pub(crate) max_iters: usize,
     /// Print the JSON instead of the table.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
 }
 
 #[derive(Subcommand, Debug)]
-enum Experiment {
+pub(crate) enum Experiment {
     /// Fig. 1 (left): the team's relaxed cost per iteration against the Hungarian optimum,
     /// 50×50 complete graph, primal / dual / inexact dual (paper: primal within ~50).
     #[command(name = "fig1-convergence")]
@@ -405,7 +405,7 @@ enum CaseArg {
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
-enum MethodArg {
+pub(crate) enum MethodArg {
     Primal,
     Dual,
     InexactDual,
@@ -416,7 +416,7 @@ enum MethodArg {
 }
 
 impl MethodArg {
-    fn method(self) -> Method {
+    pub(crate) fn method(self) -> Method {
         match self {
             Self::Primal => Method::Primal,
             Self::Dual => Method::Dual,
@@ -430,7 +430,7 @@ impl MethodArg {
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
-enum TransportArg {
+pub(crate) enum TransportArg {
     Sim,
     Threads,
     Ipc,
@@ -439,7 +439,7 @@ enum TransportArg {
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
-enum WaitArg {
+pub(crate) enum WaitArg {
     Auto,
     Block,
     SpinThenBlock,
@@ -447,7 +447,7 @@ enum WaitArg {
 }
 
 impl WaitArg {
-    fn strategy(self) -> WaitStrategy {
+    pub(crate) fn strategy(self) -> WaitStrategy {
         match self {
             Self::Auto => WaitStrategy::Auto,
             Self::Block => WaitStrategy::Block,
@@ -543,8 +543,8 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Experiment { experiment } => run_experiment(experiment),
-        Command::Bench { bench } => run_bench(bench),
+        Command::Experiment { experiment } => crate::experiments::run_experiment(experiment),
+        Command::Bench { bench } => crate::bench_cmd::run_bench(bench),
         Command::Topology { kind, robots, seed } => {
             let spec: TopologySpec = kind.parse()?;
             print!("{}", topology_file::to_toml(&spec.build(robots, seed)?));
@@ -621,7 +621,7 @@ fn run_solve(args: SolveArgs) -> Result<()> {
     output::print_report(&report, args.json)
 }
 
-fn transport(arg: TransportArg) -> Transport {
+pub(crate) fn transport(arg: TransportArg) -> Transport {
     match arg {
         TransportArg::Sim => Transport::Sim,
         TransportArg::Threads => Transport::Threads,
@@ -649,7 +649,7 @@ fn seconds(flag: &str, value: f64) -> Result<Duration> {
 }
 
 /// This binary: agent processes are started from it.
-fn agent_program() -> Result<PathBuf> {
+pub(crate) fn agent_program() -> Result<PathBuf> {
     std::env::current_exe().context("cannot locate the admm-ta binary to start agents from")
 }
 
@@ -670,435 +670,4 @@ fn run_demo(json: bool, transport_arg: TransportArg) -> Result<()> {
     }
     let report = solve::solve(&problem, &graph, &config)?;
     output::print_report(&report, json)
-}
-
-fn run_bench(bench: Bench) -> Result<()> {
-    use admm_ta_bench::rounds::{self, RoundsConfig, StepKind, SweepSpec};
-    let Bench::Rounds {
-        quick,
-        agents,
-        topologies,
-        payloads,
-        transports,
-        waits,
-        barriers,
-        step,
-        rounds: recorded,
-        warmup,
-        out,
-        json,
-    } = bench;
-    if agents.as_ref().is_some_and(|a| a.contains(&0)) {
-        bail!("--agents: every team needs at least 1 agent");
-    }
-    if let Some(t) = &topologies {
-        for topology in t {
-            topology
-                .parse::<TopologySpec>()
-                .with_context(|| format!("--topologies '{topology}'"))?;
-        }
-    }
-    let payloads = payloads
-        .map(|list| {
-            list.iter()
-                .map(|p| p.parse().map_err(anyhow::Error::msg))
-                .collect::<Result<Vec<_>>>()
-        })
-        .transpose()?;
-    let transports: Option<Vec<Transport>> =
-        transports.map(|t| t.into_iter().map(transport).collect());
-    if transports
-        .as_ref()
-        .is_some_and(|t| t.contains(&Transport::Sim))
-    {
-        bail!(
-            "--transports: round latency needs agents that run concurrently: threads, ipc or uds"
-        );
-    }
-    let mut config = RoundsConfig::new(quick);
-    config.sweep = SweepSpec {
-        agents,
-        topologies,
-        payloads,
-        transports,
-        waits: waits.map(|w| w.into_iter().map(WaitArg::strategy).collect()),
-        barriers: barriers.map(|b| {
-            b.into_iter()
-                .map(|b| matches!(b, BarrierArg::Global))
-                .collect()
-        }),
-    };
-    config.step = match step {
-        StepArg::Touch => StepKind::Touch,
-        StepArg::Average => StepKind::Average,
-        StepArg::Primal => StepKind::Primal,
-    };
-    config.rounds = recorded.unwrap_or(config.rounds);
-    config.warmup = warmup.unwrap_or(config.warmup);
-    if config.rounds == 0 {
-        bail!("--rounds must be at least 1");
-    }
-    config.agent_program = Some(agent_program()?);
-    let cases = rounds::cases(&config);
-    if cases.is_empty() {
-        bail!("no case to measure (a global barrier needs threads or ipc)");
-    }
-    let bar = indicatif::ProgressBar::new(cases.len() as u64).with_style(
-        indicatif::ProgressStyle::with_template(
-            "{bar:30} {pos}/{len} cases, {elapsed} elapsed, ~{eta} left  {msg}",
-        )
-        .expect("valid template"),
-    );
-    if !json {
-        println!(
-            "{} recorded rounds per case after {} of warm-up, step {}; latencies in µs over all agents' rounds
-",
-            config.rounds,
-            config.warmup,
-            config.step.name()
-        );
-        println!("{}", rounds::TABLE_HEADER);
-    }
-    let report = rounds::run(&config, &mut |case, result| {
-        bar.inc(1);
-        bar.set_message(format!(
-            "{} agents {} {} {}",
-            case.agents,
-            case.topology,
-            case.payload,
-            case.transport.name()
-        ));
-        if json {
-            return;
-        }
-        bar.suspend(|| match result {
-            Ok(r) => println!("{}", rounds::render_row(r)),
-            Err(e) => println!(
-                "| {} | {} | {} | {} | {} | {} | failed: {e} |",
-                case.agents,
-                case.topology,
-                case.payload,
-                case.transport.name(),
-                case.wait.name(),
-                if case.global_barrier {
-                    "global"
-                } else {
-                    "neighbour"
-                }
-            ),
-        });
-    });
-    bar.finish_and_clear();
-    let written = rounds::write_outputs(&report, &out).map_err(anyhow::Error::msg)?;
-    if json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        println!(
-            "
-Ratios on equal cases (round time):
-
-{}",
-            rounds::render_ratios(&report)
-        );
-    }
-    for path in written {
-        eprintln!("wrote {}", path.display());
-    }
-    if !report.failures.is_empty() {
-        bail!(
-            "{} of {} cases failed (see above and rounds.json)",
-            report.failures.len(),
-            report.failures.len() + report.results.len()
-        );
-    }
-    Ok(())
-}
-
-fn check_sizes(sizes: &[usize]) -> Result<()> {
-    if sizes.is_empty() || sizes.iter().any(|n| !(2..=500).contains(n)) {
-        bail!("--sizes: every team size must be 2…500");
-    }
-    Ok(())
-}
-
-type FigureOutput = (String, String, Vec<PathBuf>);
-
-fn run_figure(
-    args: FigureArgs,
-    body: impl FnOnce(
-        &admm_ta_bench::figures::FigureConfig,
-        &std::path::Path,
-        &indicatif::ProgressBar,
-    ) -> Result<FigureOutput>,
-) -> Result<()> {
-    run_figure_with(args, Vec::new(), 0, 0, body)
-}
-
-/// Runs a figure experiment with a progress bar of `steps` steps (a spinner when 0).
-fn run_figure_with(
-    args: FigureArgs,
-    sizes: Vec<usize>,
-    decentralized_up_to: usize,
-    steps: usize,
-    body: impl FnOnce(
-        &admm_ta_bench::figures::FigureConfig,
-        &std::path::Path,
-        &indicatif::ProgressBar,
-    ) -> Result<FigureOutput>,
-) -> Result<()> {
-    use admm_ta_bench::figures::FigureConfig;
-    if args.trials == 0 || args.max_iters == 0 {
-        bail!("--trials and --max-iters must be at least 1");
-    }
-    let mut config = FigureConfig {
-        trials: args.trials,
-        adaptive_rho: args.adaptive_rho,
-        max_iters: args.max_iters,
-        agent_program: Some(agent_program()?),
-        ..FigureConfig::default()
-    };
-    if !sizes.is_empty() {
-        config.sizes = sizes;
-        config.decentralized_up_to = decentralized_up_to;
-    }
-    let bar = if steps > 0 {
-        indicatif::ProgressBar::new(steps as u64).with_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:30} {pos}/{len}, {elapsed} elapsed, ~{eta} left  {msg}",
-            )
-            .expect("valid template"),
-        )
-    } else {
-        let bar = indicatif::ProgressBar::new_spinner();
-        bar.enable_steady_tick(Duration::from_millis(200));
-        bar
-    };
-    let result = body(&config, &args.out, &bar);
-    bar.finish_and_clear();
-    let (json, table, written) = result?;
-    if args.json {
-        println!("{json}");
-    } else {
-        print!("{table}");
-    }
-    for path in written {
-        eprintln!("wrote {}", path.display());
-    }
-    Ok(())
-}
-
-fn run_experiment(experiment: Experiment) -> Result<()> {
-    use admm_ta_bench::{compare, figures, table1};
-    match experiment {
-        Experiment::Compare {
-            robots,
-            seeds,
-            methods,
-            transports,
-            topology,
-            adaptive_rho,
-            max_iters,
-            out,
-        } => {
-            if seeds == 0 || max_iters == 0 || robots.contains(&0) {
-                bail!("--seeds, --max-iters and every --robots size must be at least 1");
-            }
-            let methods = if methods.is_empty() {
-                Method::ALL.to_vec()
-            } else {
-                methods.into_iter().map(MethodArg::method).collect()
-            };
-            let config = compare::CompareConfig {
-                robots,
-                seeds,
-                methods,
-                transports: transports.into_iter().map(transport).collect(),
-                topology: topology.parse()?,
-                adaptive_rho,
-                max_iters,
-                agent_program: Some(agent_program()?),
-            };
-            println!("{}", compare::TABLE_HEADER);
-            let rows = compare::run(&config, &|row| println!("{}", compare::render_row(row)))?;
-            if let Some(dir) = out {
-                std::fs::create_dir_all(&dir)
-                    .with_context(|| format!("cannot create {}", dir.display()))?;
-                let path = dir.join("compare.json");
-                std::fs::write(&path, serde_json::to_string_pretty(&rows)?)
-                    .with_context(|| format!("cannot write {}", path.display()))?;
-                eprintln!("wrote {}", path.display());
-            }
-            Ok(())
-        }
-        Experiment::Fig1Convergence { figure } => run_figure(figure, |config, out, bar| {
-            let (fig, written) =
-                figures::fig1_convergence(config, out, &|m| bar.set_message(m.to_string()))?;
-            Ok((
-                serde_json::to_string_pretty(&fig)?,
-                figures::render_summaries(&fig.summaries),
-                written,
-            ))
-        }),
-        Experiment::Fig1Topologies { figure } => run_figure(figure, |config, out, bar| {
-            let (fig, written) =
-                figures::fig1_topologies(config, out, &|m| bar.set_message(m.to_string()))?;
-            Ok((
-                serde_json::to_string_pretty(&fig)?,
-                figures::render_summaries(&fig.summaries),
-                written,
-            ))
-        }),
-        Experiment::Fig2Scaling {
-            figure,
-            sizes,
-            decentralized_up_to,
-        } => {
-            check_sizes(&sizes)?;
-            let steps = figures::fig2_points(&figures::FigureConfig {
-                sizes: sizes.clone(),
-                decentralized_up_to,
-                ..figures::FigureConfig::default()
-            });
-            run_figure_with(
-                figure,
-                sizes,
-                decentralized_up_to,
-                steps,
-                |config, out, bar| {
-                    let (fig, written) = figures::fig2_scaling(config, out, &|p| {
-                        bar.inc(1);
-                        bar.set_message(format!("{} {} robots {}", p.topology, p.robots, p.series));
-                    })?;
-                    Ok((
-                        serde_json::to_string_pretty(&fig)?,
-                        figures::render_scaling(&fig.points),
-                        written,
-                    ))
-                },
-            )
-        }
-        Experiment::IpcScaling { figure, sizes } => {
-            check_sizes(&sizes)?;
-            let steps = sizes.len() * figures::IPC_METHODS.len();
-            run_figure_with(figure, sizes, 0, steps, |config, out, bar| {
-                let (fig, written) = figures::ipc_scaling(config, out, &|p| {
-                    bar.inc(1);
-                    bar.set_message(format!("{} robots {}", p.robots, p.method.name()));
-                })?;
-                Ok((
-                    serde_json::to_string_pretty(&fig)?,
-                    figures::render_ipc(&fig.points),
-                    written,
-                ))
-            })
-        }
-        Experiment::Surveillance {
-            episodes,
-            scenario,
-            transport: transport_arg,
-            cold_start,
-            max_iters,
-            out,
-            json,
-        } => {
-            use admm_ta_agents::surveillance::SurveillanceScenario;
-            use admm_ta_bench::surveillance;
-            if episodes == 0 || max_iters == 0 {
-                bail!("--episodes and --max-iters must be at least 1");
-            }
-            let model = match &scenario {
-                Some(path) => {
-                    let text = std::fs::read_to_string(path)
-                        .with_context(|| format!("cannot read {}", path.display()))?;
-                    SurveillanceScenario::from_toml(&text)
-                        .with_context(|| format!("{}", path.display()))?
-                }
-                None => SurveillanceScenario::default(),
-            };
-            let config = admm_ta_runtime::episodes::EpisodeRunConfig {
-                transport: transport(transport_arg),
-                max_rounds: max_iters,
-                agent_program: Some(agent_program()?),
-                ..Default::default()
-            };
-            if config.transport == Transport::Sim {
-                bail!("--transport: the team runs on threads, ipc or uds");
-            }
-            let bar = indicatif::ProgressBar::new(episodes as u64).with_style(
-                indicatif::ProgressStyle::with_template(
-                    "{bar:30} {pos}/{len} cold-start comparisons, {elapsed} elapsed, ~{eta} left",
-                )
-                .expect("valid template"),
-            );
-            bar.set_message("team running");
-            let report = surveillance::run(model, episodes, !cold_start, &config, &|done| {
-                bar.set_position(done as u64)
-            });
-            bar.finish_and_clear();
-            let report = report?;
-            let written = surveillance::write_outputs(&report, &out)?;
-            if json {
-                let mut value = serde_json::to_value(&report)?;
-                // The per-episode detail is in surveillance.json; stdout stays one object.
-                if let Some(map) = value.as_object_mut() {
-                    map.remove("per_episode");
-                }
-                println!("{value}");
-            } else {
-                print!("{}", surveillance::render(&report));
-            }
-            for path in written {
-                eprintln!("wrote {}", path.display());
-            }
-            Ok(())
-        }
-        Experiment::Table1 {
-            trials,
-            out,
-            adaptive_rho,
-            rho_scale,
-            max_iters,
-            json,
-        } => {
-            if trials == 0 || max_iters == 0 {
-                bail!("--trials and --max-iters must be at least 1");
-            }
-            if !(rho_scale > 0.0 && rho_scale.is_finite()) {
-                bail!("--rho-scale must be a positive number, got {rho_scale}");
-            }
-            let config = table1::Table1Config {
-                trials,
-                adaptive_rho,
-                rho_scale,
-                max_iters,
-                ..table1::Table1Config::default()
-            };
-            let progress = |done: usize, total: usize| {
-                if !json {
-                    eprint!("\rtable1: {done}/{total} runs");
-                    if done == total {
-                        eprintln!();
-                    }
-                }
-            };
-            let table = table1::run(&config, &progress)?;
-            let text = serde_json::to_string_pretty(&table)?;
-            if let Some(dir) = out {
-                std::fs::create_dir_all(&dir)
-                    .with_context(|| format!("cannot create {}", dir.display()))?;
-                let path = dir.join("table1.json");
-                std::fs::write(&path, &text)
-                    .with_context(|| format!("cannot write {}", path.display()))?;
-                if !json {
-                    eprintln!("wrote {}", path.display());
-                }
-            }
-            if json {
-                println!("{text}");
-            } else {
-                print!("{}", table1::render(&table));
-            }
-            Ok(())
-        }
-    }
 }

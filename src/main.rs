@@ -1,6 +1,8 @@
 //! `admm-ta`: consensus ADMM task assignment for multi-robot teams.
 
+mod bench_cmd;
 mod cli;
+mod experiments;
 mod output;
 
 use clap::Parser;

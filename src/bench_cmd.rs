@@ -1,0 +1,149 @@
+//! `admm-ta bench rounds`: the round-latency sweep's arguments checked, its progress shown,
+//! its tables printed and its files written.
+
+use crate::cli::{BarrierArg, Bench, StepArg, WaitArg, agent_program, transport};
+use admm_ta_runtime::solve::Transport;
+use admm_ta_topologies::TopologySpec;
+use anyhow::{Context, Result, bail};
+
+pub(crate) fn run_bench(bench: Bench) -> Result<()> {
+    use admm_ta_bench::rounds::{self, RoundsConfig, StepKind, SweepSpec};
+    let Bench::Rounds {
+        quick,
+        agents,
+        topologies,
+        payloads,
+        transports,
+        waits,
+        barriers,
+        step,
+        rounds: recorded,
+        warmup,
+        out,
+        json,
+    } = bench;
+    if agents.as_ref().is_some_and(|a| a.contains(&0)) {
+        bail!("--agents: every team needs at least 1 agent");
+    }
+    if let Some(t) = &topologies {
+        for topology in t {
+            topology
+                .parse::<TopologySpec>()
+                .with_context(|| format!("--topologies '{topology}'"))?;
+        }
+    }
+    let payloads = payloads
+        .map(|list| {
+            list.iter()
+                .map(|p| p.parse().map_err(anyhow::Error::msg))
+                .collect::<Result<Vec<_>>>()
+        })
+        .transpose()?;
+    let transports: Option<Vec<Transport>> =
+        transports.map(|t| t.into_iter().map(transport).collect());
+    if transports
+        .as_ref()
+        .is_some_and(|t| t.contains(&Transport::Sim))
+    {
+        bail!(
+            "--transports: round latency needs agents that run concurrently: threads, ipc or uds"
+        );
+    }
+    let mut config = RoundsConfig::new(quick);
+    config.sweep = SweepSpec {
+        agents,
+        topologies,
+        payloads,
+        transports,
+        waits: waits.map(|w| w.into_iter().map(WaitArg::strategy).collect()),
+        barriers: barriers.map(|b| {
+            b.into_iter()
+                .map(|b| matches!(b, BarrierArg::Global))
+                .collect()
+        }),
+    };
+    config.step = match step {
+        StepArg::Touch => StepKind::Touch,
+        StepArg::Average => StepKind::Average,
+        StepArg::Primal => StepKind::Primal,
+    };
+    config.rounds = recorded.unwrap_or(config.rounds);
+    config.warmup = warmup.unwrap_or(config.warmup);
+    if config.rounds == 0 {
+        bail!("--rounds must be at least 1");
+    }
+    config.agent_program = Some(agent_program()?);
+    let cases = rounds::cases(&config);
+    if cases.is_empty() {
+        bail!("no case to measure (a global barrier needs threads or ipc)");
+    }
+    let bar = indicatif::ProgressBar::new(cases.len() as u64).with_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} cases, {elapsed} elapsed, ~{eta} left  {msg}",
+        )
+        .expect("valid template"),
+    );
+    if !json {
+        println!(
+            "{} recorded rounds per case after {} of warm-up, step {}; latencies in µs over all agents' rounds
+",
+            config.rounds,
+            config.warmup,
+            config.step.name()
+        );
+        println!("{}", rounds::TABLE_HEADER);
+    }
+    let report = rounds::run(&config, &mut |case, result| {
+        bar.inc(1);
+        bar.set_message(format!(
+            "{} agents {} {} {}",
+            case.agents,
+            case.topology,
+            case.payload,
+            case.transport.name()
+        ));
+        if json {
+            return;
+        }
+        bar.suspend(|| match result {
+            Ok(r) => println!("{}", rounds::render_row(r)),
+            Err(e) => println!(
+                "| {} | {} | {} | {} | {} | {} | failed: {e} |",
+                case.agents,
+                case.topology,
+                case.payload,
+                case.transport.name(),
+                case.wait.name(),
+                if case.global_barrier {
+                    "global"
+                } else {
+                    "neighbour"
+                }
+            ),
+        });
+    });
+    bar.finish_and_clear();
+    let written = rounds::write_outputs(&report, &out).map_err(anyhow::Error::msg)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "
+Ratios on equal cases (round time):
+
+{}",
+            rounds::render_ratios(&report)
+        );
+    }
+    for path in written {
+        eprintln!("wrote {}", path.display());
+    }
+    if !report.failures.is_empty() {
+        bail!(
+            "{} of {} cases failed (see above and rounds.json)",
+            report.failures.len(),
+            report.failures.len() + report.results.len()
+        );
+    }
+    Ok(())
+}

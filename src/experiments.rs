@@ -1,0 +1,297 @@
+//! `admm-ta experiment NAME`: the paper's experiments and the comparisons beyond it, each
+//! printing a table and writing JSON and SVG.
+
+use crate::cli::{Experiment, FigureArgs, MethodArg, agent_program, transport};
+use admm_ta_runtime::solve::{Method, Transport};
+use anyhow::{Context, Result, bail};
+use std::path::PathBuf;
+use std::time::Duration;
+
+fn check_sizes(sizes: &[usize]) -> Result<()> {
+    if sizes.is_empty() || sizes.iter().any(|n| !(2..=500).contains(n)) {
+        bail!("--sizes: every team size must be 2…500");
+    }
+    Ok(())
+}
+
+type FigureOutput = (String, String, Vec<PathBuf>);
+
+fn run_figure(
+    args: FigureArgs,
+    body: impl FnOnce(
+        &admm_ta_bench::figures::FigureConfig,
+        &std::path::Path,
+        &indicatif::ProgressBar,
+    ) -> Result<FigureOutput>,
+) -> Result<()> {
+    run_figure_with(args, Vec::new(), 0, 0, body)
+}
+
+/// Runs a figure experiment with a progress bar of `steps` steps (a spinner when 0).
+fn run_figure_with(
+    args: FigureArgs,
+    sizes: Vec<usize>,
+    decentralized_up_to: usize,
+    steps: usize,
+    body: impl FnOnce(
+        &admm_ta_bench::figures::FigureConfig,
+        &std::path::Path,
+        &indicatif::ProgressBar,
+    ) -> Result<FigureOutput>,
+) -> Result<()> {
+    use admm_ta_bench::figures::FigureConfig;
+    if args.trials == 0 || args.max_iters == 0 {
+        bail!("--trials and --max-iters must be at least 1");
+    }
+    let mut config = FigureConfig {
+        trials: args.trials,
+        adaptive_rho: args.adaptive_rho,
+        max_iters: args.max_iters,
+        agent_program: Some(agent_program()?),
+        ..FigureConfig::default()
+    };
+    if !sizes.is_empty() {
+        config.sizes = sizes;
+        config.decentralized_up_to = decentralized_up_to;
+    }
+    let bar = if steps > 0 {
+        indicatif::ProgressBar::new(steps as u64).with_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:30} {pos}/{len}, {elapsed} elapsed, ~{eta} left  {msg}",
+            )
+            .expect("valid template"),
+        )
+    } else {
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.enable_steady_tick(Duration::from_millis(200));
+        bar
+    };
+    let result = body(&config, &args.out, &bar);
+    bar.finish_and_clear();
+    let (json, table, written) = result?;
+    if args.json {
+        println!("{json}");
+    } else {
+        print!("{table}");
+    }
+    for path in written {
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+pub(crate) fn run_experiment(experiment: Experiment) -> Result<()> {
+    use admm_ta_bench::{compare, figures, table1};
+    match experiment {
+        Experiment::Compare {
+            robots,
+            seeds,
+            methods,
+            transports,
+            topology,
+            adaptive_rho,
+            max_iters,
+            out,
+        } => {
+            if seeds == 0 || max_iters == 0 || robots.contains(&0) {
+                bail!("--seeds, --max-iters and every --robots size must be at least 1");
+            }
+            let methods = if methods.is_empty() {
+                Method::ALL.to_vec()
+            } else {
+                methods.into_iter().map(MethodArg::method).collect()
+            };
+            let config = compare::CompareConfig {
+                robots,
+                seeds,
+                methods,
+                transports: transports.into_iter().map(transport).collect(),
+                topology: topology.parse()?,
+                adaptive_rho,
+                max_iters,
+                agent_program: Some(agent_program()?),
+            };
+            println!("{}", compare::TABLE_HEADER);
+            let rows = compare::run(&config, &|row| println!("{}", compare::render_row(row)))?;
+            if let Some(dir) = out {
+                std::fs::create_dir_all(&dir)
+                    .with_context(|| format!("cannot create {}", dir.display()))?;
+                let path = dir.join("compare.json");
+                std::fs::write(&path, serde_json::to_string_pretty(&rows)?)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+                eprintln!("wrote {}", path.display());
+            }
+            Ok(())
+        }
+        Experiment::Fig1Convergence { figure } => run_figure(figure, |config, out, bar| {
+            let (fig, written) =
+                figures::fig1_convergence(config, out, &|m| bar.set_message(m.to_string()))?;
+            Ok((
+                serde_json::to_string_pretty(&fig)?,
+                figures::render_summaries(&fig.summaries),
+                written,
+            ))
+        }),
+        Experiment::Fig1Topologies { figure } => run_figure(figure, |config, out, bar| {
+            let (fig, written) =
+                figures::fig1_topologies(config, out, &|m| bar.set_message(m.to_string()))?;
+            Ok((
+                serde_json::to_string_pretty(&fig)?,
+                figures::render_summaries(&fig.summaries),
+                written,
+            ))
+        }),
+        Experiment::Fig2Scaling {
+            figure,
+            sizes,
+            decentralized_up_to,
+        } => {
+            check_sizes(&sizes)?;
+            let steps = figures::fig2_points(&figures::FigureConfig {
+                sizes: sizes.clone(),
+                decentralized_up_to,
+                ..figures::FigureConfig::default()
+            });
+            run_figure_with(
+                figure,
+                sizes,
+                decentralized_up_to,
+                steps,
+                |config, out, bar| {
+                    let (fig, written) = figures::fig2_scaling(config, out, &|p| {
+                        bar.inc(1);
+                        bar.set_message(format!("{} {} robots {}", p.topology, p.robots, p.series));
+                    })?;
+                    Ok((
+                        serde_json::to_string_pretty(&fig)?,
+                        figures::render_scaling(&fig.points),
+                        written,
+                    ))
+                },
+            )
+        }
+        Experiment::IpcScaling { figure, sizes } => {
+            check_sizes(&sizes)?;
+            let steps = sizes.len() * figures::IPC_METHODS.len();
+            run_figure_with(figure, sizes, 0, steps, |config, out, bar| {
+                let (fig, written) = figures::ipc_scaling(config, out, &|p| {
+                    bar.inc(1);
+                    bar.set_message(format!("{} robots {}", p.robots, p.method.name()));
+                })?;
+                Ok((
+                    serde_json::to_string_pretty(&fig)?,
+                    figures::render_ipc(&fig.points),
+                    written,
+                ))
+            })
+        }
+        Experiment::Surveillance {
+            episodes,
+            scenario,
+            transport: transport_arg,
+            cold_start,
+            max_iters,
+            out,
+            json,
+        } => {
+            use admm_ta_agents::surveillance::SurveillanceScenario;
+            use admm_ta_bench::surveillance;
+            if episodes == 0 || max_iters == 0 {
+                bail!("--episodes and --max-iters must be at least 1");
+            }
+            let model = match &scenario {
+                Some(path) => {
+                    let text = std::fs::read_to_string(path)
+                        .with_context(|| format!("cannot read {}", path.display()))?;
+                    SurveillanceScenario::from_toml(&text)
+                        .with_context(|| format!("{}", path.display()))?
+                }
+                None => SurveillanceScenario::default(),
+            };
+            let config = admm_ta_runtime::episodes::EpisodeRunConfig {
+                transport: transport(transport_arg),
+                max_rounds: max_iters,
+                agent_program: Some(agent_program()?),
+                ..Default::default()
+            };
+            if config.transport == Transport::Sim {
+                bail!("--transport: the team runs on threads, ipc or uds");
+            }
+            let bar = indicatif::ProgressBar::new(episodes as u64).with_style(
+                indicatif::ProgressStyle::with_template(
+                    "{bar:30} {pos}/{len} cold-start comparisons, {elapsed} elapsed, ~{eta} left",
+                )
+                .expect("valid template"),
+            );
+            bar.set_message("team running");
+            let report = surveillance::run(model, episodes, !cold_start, &config, &|done| {
+                bar.set_position(done as u64)
+            });
+            bar.finish_and_clear();
+            let report = report?;
+            let written = surveillance::write_outputs(&report, &out)?;
+            if json {
+                let mut value = serde_json::to_value(&report)?;
+                // The per-episode detail is in surveillance.json; stdout stays one object.
+                if let Some(map) = value.as_object_mut() {
+                    map.remove("per_episode");
+                }
+                println!("{value}");
+            } else {
+                print!("{}", surveillance::render(&report));
+            }
+            for path in written {
+                eprintln!("wrote {}", path.display());
+            }
+            Ok(())
+        }
+        Experiment::Table1 {
+            trials,
+            out,
+            adaptive_rho,
+            rho_scale,
+            max_iters,
+            json,
+        } => {
+            if trials == 0 || max_iters == 0 {
+                bail!("--trials and --max-iters must be at least 1");
+            }
+            if !(rho_scale > 0.0 && rho_scale.is_finite()) {
+                bail!("--rho-scale must be a positive number, got {rho_scale}");
+            }
+            let config = table1::Table1Config {
+                trials,
+                adaptive_rho,
+                rho_scale,
+                max_iters,
+                ..table1::Table1Config::default()
+            };
+            let progress = |done: usize, total: usize| {
+                if !json {
+                    eprint!("\rtable1: {done}/{total} runs");
+                    if done == total {
+                        eprintln!();
+                    }
+                }
+            };
+            let table = table1::run(&config, &progress)?;
+            let text = serde_json::to_string_pretty(&table)?;
+            if let Some(dir) = out {
+                std::fs::create_dir_all(&dir)
+                    .with_context(|| format!("cannot create {}", dir.display()))?;
+                let path = dir.join("table1.json");
+                std::fs::write(&path, &text)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+                if !json {
+                    eprintln!("wrote {}", path.display());
+                }
+            }
+            if json {
+                println!("{text}");
+            } else {
+                print!("{}", table1::render(&table));
+            }
+            Ok(())
+        }
+    }
+}
