@@ -19,6 +19,7 @@ pub(crate) fn run_bench(bench: Bench) -> Result<()> {
         step,
         rounds: recorded,
         warmup,
+        repeat,
         out,
         json,
     } = bench;
@@ -69,6 +70,10 @@ pub(crate) fn run_bench(bench: Bench) -> Result<()> {
     };
     config.rounds = recorded.unwrap_or(config.rounds);
     config.warmup = warmup.unwrap_or(config.warmup);
+    if !(1..=100).contains(&repeat) {
+        bail!("--repeat must be 1…100, got {repeat}");
+    }
+    config.repeat = repeat;
     if config.rounds == 0 {
         bail!("--rounds must be at least 1");
     }

@@ -131,6 +131,10 @@ pub(crate) enum Bench {
         /// Rounds before recording starts (default 100, --quick 50).
         #[arg(long)]
         warmup: Option<u64>,
+        /// Measure every case this many times (the transports of a configuration in turn)
+        /// and report the repetition with the median p50, with the p50 range.
+        #[arg(long, default_value_t = 1)]
+        repeat: usize,
         /// Directory for rounds.json, rounds.csv and the plots (created if missing).
         #[arg(long, default_value = "bench-results")]
         out: PathBuf,

@@ -494,6 +494,8 @@ fn bench_rounds_measures_every_transport_and_writes_json_csv_and_plots() {
         "30",
         "--warmup",
         "5",
+        "--repeat",
+        "2",
         "--out",
         dir.path().to_str().unwrap(),
     ]);
@@ -535,6 +537,12 @@ fn bench_rounds_measures_every_transport_and_writes_json_csv_and_plots() {
         }
         assert!(r["overhead_us"]["p50"].as_f64().unwrap() <= round["p50"].as_f64().unwrap());
         assert!(r["cpu_us_per_round"].as_f64().unwrap() > 0.0);
+        // The median of two repetitions, with their spread.
+        assert_eq!(r["repeats"], 2);
+        let range = r["round_p50_range_us"].as_array().unwrap();
+        let (lo, hi) = (range[0].as_f64().unwrap(), range[1].as_f64().unwrap());
+        let p50 = round["p50"].as_f64().unwrap();
+        assert!(lo <= p50 && p50 <= hi, "{r}");
     }
     let csv = std::fs::read_to_string(dir.path().join("rounds.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + results.len());
@@ -552,6 +560,7 @@ fn bench_rounds_measures_every_transport_and_writes_json_csv_and_plots() {
         ),
         (vec!["--topologies", "moebius"], "moebius"),
         (vec!["--agents", "0"], "at least 1 agent"),
+        (vec!["--repeat", "0"], "--repeat"),
     ] {
         let mut all = vec!["bench", "rounds", "--rounds", "5"];
         all.extend(args);

@@ -118,6 +118,8 @@ pub struct RoundsConfig {
     /// Recorded rounds per case (after the warm-up).
     pub rounds: u64,
     pub warmup: u64,
+    /// Measurements of every case; transports of one configuration are interleaved.
+    pub repeat: usize,
     pub agent_program: Option<PathBuf>,
     pub round_timeout: Duration,
 }
@@ -131,6 +133,7 @@ impl RoundsConfig {
             step: StepKind::Touch,
             rounds: if quick { 400 } else { 1000 },
             warmup: if quick { 50 } else { 100 },
+            repeat: 1,
             agent_program: None,
             round_timeout: Duration::from_secs(30),
         }
@@ -329,6 +332,11 @@ pub struct CaseResult {
     pub involuntary_switches_per_round: f64,
     pub startup_ms: Option<f64>,
     pub wall_ms: f64,
+    /// Times the case was measured (`--repeat`); the numbers above are those of the
+    /// repetition with the median round p50.
+    pub repeats: usize,
+    /// Lowest and highest round p50 over the repetitions, µs: the run-to-run spread.
+    pub round_p50_range_us: (f64, f64),
 }
 
 /// A case that could not be measured.
@@ -445,7 +453,23 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
         involuntary_switches_per_round: per_round(usage.involuntary_switches),
         startup_ms: startup,
         wall_ms: wall.as_secs_f64() * 1e3,
+        repeats: 1,
+        round_p50_range_us: (latency.round.p50, latency.round.p50),
     })
+}
+
+/// The repetition with the median round p50, carrying the spread of all of them.
+fn median_of(mut repeats: Vec<CaseResult>) -> CaseResult {
+    repeats.sort_by(|a, b| a.round_us.p50.total_cmp(&b.round_us.p50));
+    let range = (
+        repeats.first().map_or(0.0, |r| r.round_us.p50),
+        repeats.last().map_or(0.0, |r| r.round_us.p50),
+    );
+    let count = repeats.len();
+    let mut median = repeats.swap_remove(count / 2);
+    median.repeats = count;
+    median.round_p50_range_us = range;
+    median
 }
 
 /// Runs every case of `config`; `progress` sees each result (or failure) as it comes. A
@@ -473,18 +497,47 @@ pub fn run(
         };
         let _ = measure(first, &warm);
     }
-    for case in cases {
-        match measure(&case, config) {
-            Ok(result) => {
-                progress(&case, Ok(&result));
-                report.results.push(result);
-            }
-            Err(e) => {
-                let error = e.to_string();
-                progress(&case, Err(&error));
-                report.failures.push(CaseFailure { case, error });
+    // Configurations that differ only by transport are measured together, repetition by
+    // repetition, so that every transport sees the same state of the machine.
+    let mut start = 0;
+    while start < cases.len() {
+        let same = |c: &Case| {
+            Case {
+                transport: cases[start].transport,
+                ..c.clone()
+            } == cases[start]
+        };
+        let end = start + cases[start..].iter().take_while(|c| same(c)).count();
+        let group = &cases[start..end];
+        let mut measured: Vec<Result<Vec<CaseResult>, String>> =
+            group.iter().map(|_| Ok(Vec::new())).collect();
+        for _ in 0..config.repeat.max(1) {
+            for (case, slot) in group.iter().zip(measured.iter_mut()) {
+                if let Ok(results) = slot {
+                    match measure(case, config) {
+                        Ok(r) => results.push(r),
+                        Err(e) => *slot = Err(e.to_string()),
+                    }
+                }
             }
         }
+        for (case, outcome) in group.iter().zip(measured) {
+            match outcome {
+                Ok(results) => {
+                    let result = median_of(results);
+                    progress(case, Ok(&result));
+                    report.results.push(result);
+                }
+                Err(error) => {
+                    progress(case, Err(&error));
+                    report.failures.push(CaseFailure {
+                        case: case.clone(),
+                        error,
+                    });
+                }
+            }
+        }
+        start = end;
     }
     report
 }
@@ -496,7 +549,7 @@ pub const TABLE_HEADER: &str = "| agents | graph | payload | transport | wait | 
 pub fn render_row(r: &CaseResult) -> String {
     let c = &r.case;
     format!(
-        "| {} | {} | {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.0} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {} |",
+        "| {} | {} | {} | {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.0} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {} |",
         c.agents,
         c.topology,
         c.payload,
@@ -507,7 +560,14 @@ pub fn render_row(r: &CaseResult) -> String {
         } else {
             "neighbour"
         },
-        r.round_us.p50,
+        if r.repeats > 1 {
+            format!(
+                "{:.1} ({:.1}–{:.1})",
+                r.round_us.p50, r.round_p50_range_us.0, r.round_p50_range_us.1
+            )
+        } else {
+            format!("{:.1}", r.round_us.p50)
+        },
         r.round_us.p90,
         r.round_us.p99,
         r.round_us.p999,
@@ -569,7 +629,7 @@ pub fn render_ratios(report: &RoundsReport) -> String {
 /// `rounds.csv`: one line per measured case.
 pub fn to_csv(report: &RoundsReport) -> String {
     let mut out = String::from(
-        "agents,topology,payload,payload_bytes,transport,wait,barrier,step,recorded,round_p50_us,round_p90_us,round_p99_us,round_p999_us,round_max_us,overhead_p50_us,overhead_p90_us,overhead_p99_us,overhead_p999_us,overhead_max_us,compute_p50_us,wait_p50_us,publish_p50_us,barrier_p50_us,cpu_us_per_round,voluntary_switches_per_round,involuntary_switches_per_round,startup_ms,wall_ms\n",
+        "agents,topology,payload,payload_bytes,transport,wait,barrier,step,recorded,round_p50_us,round_p90_us,round_p99_us,round_p999_us,round_max_us,overhead_p50_us,overhead_p90_us,overhead_p99_us,overhead_p999_us,overhead_max_us,compute_p50_us,wait_p50_us,publish_p50_us,barrier_p50_us,cpu_us_per_round,voluntary_switches_per_round,involuntary_switches_per_round,startup_ms,wall_ms,repeats,round_p50_min_us,round_p50_max_us\n",
     );
     for r in &report.results {
         let c = &r.case;
@@ -598,7 +658,11 @@ pub fn to_csv(report: &RoundsReport) -> String {
             r.cpu_us_per_round,
             r.voluntary_switches_per_round,
             r.involuntary_switches_per_round,
-            r.startup_ms.map_or(String::new(), |v| v.to_string()) + &format!(",{}", r.wall_ms),
+            r.startup_ms.map_or(String::new(), |v| v.to_string())
+                + &format!(
+                    ",{},{},{},{}",
+                    r.wall_ms, r.repeats, r.round_p50_range_us.0, r.round_p50_range_us.1
+                ),
         );
     }
     out
