@@ -731,10 +731,14 @@ fn scan_dead_agents(config: &Config, me: usize, board: &Board) -> Option<usize> 
 }
 
 /// Removes the stale resources of every dead node of the run; returns how many it removed.
+/// A node killed before it wrote its details is left to the namespace cleanup: iceoryx2
+/// would clean it with its *global* configuration (another prefix and root, and a warning
+/// on stderr that broke the launcher's one-line error once in the fault tests).
 pub fn cleanup_dead_nodes(config: &Config) -> usize {
     let mut removed = 0;
     let _ = Node::<Svc>::list(config, |state| {
         if let NodeState::Dead(view) = state
+            && view.details().is_some()
             && view.try_remove_stale_resources().is_ok()
         {
             removed += 1;
