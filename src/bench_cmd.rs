@@ -112,19 +112,7 @@ pub(crate) fn run_bench(bench: Bench) -> Result<()> {
         }
         bar.suspend(|| match result {
             Ok(r) => println!("{}", rounds::render_row(r)),
-            Err(e) => println!(
-                "| {} | {} | {} | {} | {} | {} | failed: {e} |",
-                case.agents,
-                case.topology,
-                case.payload,
-                case.transport.name(),
-                case.wait.name(),
-                if case.global_barrier {
-                    "global"
-                } else {
-                    "neighbour"
-                }
-            ),
+            Err(e) => println!("{} failed: {e} |", case.columns()),
         });
     });
     bar.finish_and_clear();

@@ -2,9 +2,10 @@
 //! printing a table and writing JSON and SVG.
 
 use crate::cli::{Experiment, FigureArgs, MethodArg, agent_program, transport};
+use admm_ta_bench::figures::FigureConfig;
 use admm_ta_runtime::solve::{Method, Transport};
 use anyhow::{Context, Result, bail};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 fn check_sizes(sizes: &[usize]) -> Result<()> {
@@ -14,32 +15,17 @@ fn check_sizes(sizes: &[usize]) -> Result<()> {
     Ok(())
 }
 
-type FigureOutput = (String, String, Vec<PathBuf>);
+/// A figure experiment's result: what `--json` prints, the table, the files written.
+type FigureOutput<T> = (T, String, Vec<PathBuf>);
 
-fn run_figure(
+/// Runs a figure experiment: its settings from `args` adjusted by `adjust`, a progress bar of
+/// `steps(settings)` steps (a spinner when 0), then the table or the JSON and the files.
+fn run_figure<T: serde::Serialize>(
     args: FigureArgs,
-    body: impl FnOnce(
-        &admm_ta_bench::figures::FigureConfig,
-        &std::path::Path,
-        &indicatif::ProgressBar,
-    ) -> Result<FigureOutput>,
+    adjust: impl FnOnce(&mut FigureConfig),
+    steps: impl FnOnce(&FigureConfig) -> usize,
+    body: impl FnOnce(&FigureConfig, &Path, &indicatif::ProgressBar) -> Result<FigureOutput<T>>,
 ) -> Result<()> {
-    run_figure_with(args, Vec::new(), 0, 0, body)
-}
-
-/// Runs a figure experiment with a progress bar of `steps` steps (a spinner when 0).
-fn run_figure_with(
-    args: FigureArgs,
-    sizes: Vec<usize>,
-    decentralized_up_to: usize,
-    steps: usize,
-    body: impl FnOnce(
-        &admm_ta_bench::figures::FigureConfig,
-        &std::path::Path,
-        &indicatif::ProgressBar,
-    ) -> Result<FigureOutput>,
-) -> Result<()> {
-    use admm_ta_bench::figures::FigureConfig;
     if args.trials == 0 || args.max_iters == 0 {
         bail!("--trials and --max-iters must be at least 1");
     }
@@ -50,10 +36,8 @@ fn run_figure_with(
         agent_program: Some(agent_program()?),
         ..FigureConfig::default()
     };
-    if !sizes.is_empty() {
-        config.sizes = sizes;
-        config.decentralized_up_to = decentralized_up_to;
-    }
+    adjust(&mut config);
+    let steps = steps(&config);
     let bar = if steps > 0 {
         indicatif::ProgressBar::new(steps as u64).with_style(
             indicatif::ProgressStyle::with_template(
@@ -68,9 +52,9 @@ fn run_figure_with(
     };
     let result = body(&config, &args.out, &bar);
     bar.finish_and_clear();
-    let (json, table, written) = result?;
+    let (value, table, written) = result?;
     if args.json {
-        println!("{json}");
+        println!("{}", serde_json::to_string_pretty(&value)?);
     } else {
         print!("{table}");
     }
@@ -123,67 +107,66 @@ pub(crate) fn run_experiment(experiment: Experiment) -> Result<()> {
             }
             Ok(())
         }
-        Experiment::Fig1Convergence { figure } => run_figure(figure, |config, out, bar| {
-            let (fig, written) =
-                figures::fig1_convergence(config, out, &|m| bar.set_message(m.to_string()))?;
-            Ok((
-                serde_json::to_string_pretty(&fig)?,
-                figures::render_summaries(&fig.summaries),
-                written,
-            ))
-        }),
-        Experiment::Fig1Topologies { figure } => run_figure(figure, |config, out, bar| {
-            let (fig, written) =
-                figures::fig1_topologies(config, out, &|m| bar.set_message(m.to_string()))?;
-            Ok((
-                serde_json::to_string_pretty(&fig)?,
-                figures::render_summaries(&fig.summaries),
-                written,
-            ))
-        }),
+        Experiment::Fig1Convergence { figure } => run_figure(
+            figure,
+            |_| {},
+            |_| 0,
+            |config, out, bar| {
+                let (fig, written) =
+                    figures::fig1_convergence(config, out, &|m| bar.set_message(m.to_string()))?;
+                let table = figures::render_summaries(&fig.summaries);
+                Ok((fig, table, written))
+            },
+        ),
+        Experiment::Fig1Topologies { figure } => run_figure(
+            figure,
+            |_| {},
+            |_| 0,
+            |config, out, bar| {
+                let (fig, written) =
+                    figures::fig1_topologies(config, out, &|m| bar.set_message(m.to_string()))?;
+                let table = figures::render_summaries(&fig.summaries);
+                Ok((fig, table, written))
+            },
+        ),
         Experiment::Fig2Scaling {
             figure,
             sizes,
             decentralized_up_to,
         } => {
             check_sizes(&sizes)?;
-            let steps = figures::fig2_points(&figures::FigureConfig {
-                sizes: sizes.clone(),
-                decentralized_up_to,
-                ..figures::FigureConfig::default()
-            });
-            run_figure_with(
+            run_figure(
                 figure,
-                sizes,
-                decentralized_up_to,
-                steps,
+                |c| {
+                    c.sizes = sizes;
+                    c.decentralized_up_to = decentralized_up_to;
+                },
+                figures::fig2_points,
                 |config, out, bar| {
                     let (fig, written) = figures::fig2_scaling(config, out, &|p| {
                         bar.inc(1);
                         bar.set_message(format!("{} {} robots {}", p.topology, p.robots, p.series));
                     })?;
-                    Ok((
-                        serde_json::to_string_pretty(&fig)?,
-                        figures::render_scaling(&fig.points),
-                        written,
-                    ))
+                    let table = figures::render_scaling(&fig.points);
+                    Ok((fig, table, written))
                 },
             )
         }
         Experiment::IpcScaling { figure, sizes } => {
             check_sizes(&sizes)?;
-            let steps = sizes.len() * figures::IPC_METHODS.len();
-            run_figure_with(figure, sizes, 0, steps, |config, out, bar| {
-                let (fig, written) = figures::ipc_scaling(config, out, &|p| {
-                    bar.inc(1);
-                    bar.set_message(format!("{} robots {}", p.robots, p.method.name()));
-                })?;
-                Ok((
-                    serde_json::to_string_pretty(&fig)?,
-                    figures::render_ipc(&fig.points),
-                    written,
-                ))
-            })
+            run_figure(
+                figure,
+                |c| c.sizes = sizes,
+                |c| c.sizes.len() * figures::ipc_methods().count(),
+                |config, out, bar| {
+                    let (fig, written) = figures::ipc_scaling(config, out, &|p| {
+                        bar.inc(1);
+                        bar.set_message(format!("{} robots {}", p.robots, p.method.name()));
+                    })?;
+                    let table = figures::render_ipc(&fig.points);
+                    Ok((fig, table, written))
+                },
+            )
         }
         Experiment::Surveillance {
             episodes,

@@ -258,6 +258,13 @@ impl SurveillanceScenario {
             .collect()
     }
 
+    /// Every robot's first-episode cost row, concatenated (row-major `robots × tasks`).
+    pub fn initial_costs(&self) -> Vec<f64> {
+        (0..self.robots)
+            .flat_map(|i| self.cost_row(i, &self.initial_state(i)))
+            .collect()
+    }
+
     /// The state after an episode at station `task`.
     pub fn advance(&self, state: &RobotState, task: usize) -> RobotState {
         let d = self.travel(state, task);

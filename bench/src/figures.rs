@@ -18,7 +18,9 @@
 use crate::plot::{Chart, Legend, PlotError, Scale, Series};
 use admm_ta_agents::method::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::solve::{SolveConfig, SolveError, StopRule, TracePoint, Transport, solve};
+use admm_ta_runtime::solve::{
+    OracleCheck, SolveConfig, SolveError, SolveReport, StopRule, TracePoint, Transport, solve,
+};
 use admm_ta_topologies::TopologySpec;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -82,6 +84,36 @@ fn topology(spec: &str, n: usize, seed: u64) -> Result<admm_ta_topologies::Graph
         .map_err(|e| FigureError::Setup(format!("topology {spec}: {e}")))
 }
 
+impl FigureConfig {
+    /// Solves `problem` on a `graph_spec` graph drawn from `seed`, checked against the
+    /// optimum, with this experiment's ρ schedule, round limit and agent binary; `config`
+    /// gives the rest (method, stop, transport, trace).
+    fn checked_solve(
+        &self,
+        problem: &TaskAssignmentProblem,
+        graph_spec: &str,
+        seed: u64,
+        config: SolveConfig,
+    ) -> Result<(SolveReport, OracleCheck), FigureError> {
+        let graph = topology(graph_spec, problem.robots(), seed)?;
+        let report = solve(
+            problem,
+            &graph,
+            &SolveConfig {
+                seed,
+                check: true,
+                adaptive_rho: self.adaptive_rho,
+                max_iters: self.max_iters,
+                agent_program: self.agent_program.clone(),
+                fault_injection: false,
+                ..config
+            },
+        )?;
+        let check = report.check.clone().expect("checked run");
+        Ok((report, check))
+    }
+}
+
 /// Writes `value` as pretty JSON into `dir/name`.
 pub fn write_json(dir: &Path, name: &str, value: &impl Serialize) -> Result<PathBuf, FigureError> {
     let path = dir.join(name);
@@ -121,21 +153,16 @@ fn traced_run(
     seed: u64,
     config: &FigureConfig,
 ) -> Result<TracedRun, FigureError> {
-    let graph = topology(graph_spec, problem.robots(), seed)?;
-    let report = solve(
+    let (report, check) = config.checked_solve(
         problem,
-        &graph,
-        &SolveConfig {
+        graph_spec,
+        seed,
+        SolveConfig {
             method,
-            seed,
-            check: true,
             trace: true,
-            adaptive_rho: config.adaptive_rho,
-            max_iters: config.max_iters,
             ..SolveConfig::default()
         },
     )?;
-    let check = report.check.expect("checked run");
     Ok(TracedRun {
         method,
         topology: graph_spec.to_string(),
@@ -149,18 +176,12 @@ fn traced_run(
     })
 }
 
-/// Mean of the values that are there, and how many there were.
-fn mean(values: impl IntoIterator<Item = Option<f64>>) -> (Option<f64>, usize) {
-    let (mut sum, mut count, mut seen) = (0.0, 0, 0);
-    for v in values {
-        seen += 1;
-        if let Some(v) = v {
-            sum += v;
-            count += 1;
-        }
-    }
-    let _ = seen;
-    ((count > 0).then(|| sum / count as f64), count)
+/// Mean of the values (`None` when there are none).
+pub(crate) fn mean_of(values: impl IntoIterator<Item = f64>) -> Option<f64> {
+    let (sum, count) = values
+        .into_iter()
+        .fold((0.0, 0usize), |(s, c), v| (s + v, c + 1));
+    (count > 0).then(|| sum / count as f64)
 }
 
 /// Summary of one method (or topology) over the trials.
@@ -180,18 +201,15 @@ fn summarise(label: &str, runs: &[&TracedRun], paper: Option<&str>) -> TraceSumm
         label: label.to_string(),
         trials: runs.len(),
         optimal_runs: runs.iter().filter(|r| r.optimal).count(),
-        mean_within_0_1pct: mean(
+        mean_within_0_1pct: mean_of(
             runs.iter()
-                .map(|r| r.rounds_within_0_1pct.map(|v| v as f64)),
-        )
-        .0,
-        mean_optimal_assignment_from: mean(
+                .filter_map(|r| r.rounds_within_0_1pct.map(|v| v as f64)),
+        ),
+        mean_optimal_assignment_from: mean_of(
             runs.iter()
-                .map(|r| r.rounds_to_optimal_assignment.map(|v| v as f64)),
-        )
-        .0,
-        mean_stop_round: runs.iter().map(|r| r.stop_round as f64).sum::<f64>()
-            / runs.len().max(1) as f64,
+                .filter_map(|r| r.rounds_to_optimal_assignment.map(|v| v as f64)),
+        ),
+        mean_stop_round: mean_of(runs.iter().map(|r| r.stop_round as f64)).unwrap_or(0.0),
         paper: paper.map(str::to_string),
     }
 }
@@ -434,22 +452,16 @@ fn scaling_point(
         mean_gap: 0.0,
     };
     for seed in 0..config.trials {
-        let problem = uniform(n, n, seed)?;
-        let graph = topology(graph_spec, n, seed)?;
-        let report = solve(
-            &problem,
-            &graph,
-            &SolveConfig {
+        let (report, check) = config.checked_solve(
+            &uniform(n, n, seed)?,
+            graph_spec,
+            seed,
+            SolveConfig {
                 method,
-                seed,
                 stop,
-                check: true,
-                adaptive_rho: config.adaptive_rho,
-                max_iters: config.max_iters,
                 ..SolveConfig::default()
             },
         )?;
-        let check = report.check.expect("checked run");
         point.trials += 1;
         point.mean_iterations += match stop {
             StopRule::Oracle => check.rounds_within_0_1pct.unwrap_or(report.iterations),
@@ -613,15 +625,10 @@ pub struct IpcScalingFigure {
     pub points: Vec<IpcPoint>,
 }
 
-/// The methods `ipc-scaling` runs.
-pub const IPC_METHODS: [Method; 6] = [
-    Method::Primal,
-    Method::Dual,
-    Method::InexactDual,
-    Method::Cbaa,
-    Method::Market,
-    Method::DistHungarian,
-];
+/// The methods `ipc-scaling` runs: every method with agents.
+pub fn ipc_methods() -> impl Iterator<Item = Method> {
+    Method::ALL.into_iter().filter(|&m| m != Method::Hungarian)
+}
 
 /// Markdown table of ipc points.
 pub fn render_ipc(points: &[IpcPoint]) -> String {
@@ -655,7 +662,7 @@ pub fn ipc_scaling(
 ) -> Result<(IpcScalingFigure, Vec<PathBuf>), FigureError> {
     let mut points = Vec::new();
     for &n in &config.sizes {
-        for method in IPC_METHODS {
+        for method in ipc_methods() {
             let mut p = IpcPoint {
                 robots: n,
                 method,
@@ -668,26 +675,19 @@ pub fn ipc_scaling(
                 mean_round_p99_us: 0.0,
             };
             for seed in 0..config.trials {
-                let problem = uniform(n, n, seed)?;
-                let graph = topology("complete", n, seed)?;
-                let report = solve(
-                    &problem,
-                    &graph,
-                    &SolveConfig {
+                let (report, check) = config.checked_solve(
+                    &uniform(n, n, seed)?,
+                    "complete",
+                    seed,
+                    SolveConfig {
                         method,
-                        seed,
                         transport: Transport::Ipc,
-                        check: true,
-                        adaptive_rho: config.adaptive_rho,
-                        max_iters: config.max_iters,
-                        agent_program: config.agent_program.clone(),
-                        fault_injection: false,
                         ..SolveConfig::default()
                     },
                 )?;
                 let latency = report.round_latency_us.unwrap_or_default();
                 p.trials += 1;
-                p.optimal_runs += usize::from(report.check.as_ref().is_some_and(|c| c.optimal));
+                p.optimal_runs += usize::from(check.optimal);
                 p.mean_rounds += report.iterations as f64;
                 p.mean_wall_ms += report.wall_time_ms;
                 p.mean_startup_ms += report.startup_ms.unwrap_or(0.0);
@@ -707,9 +707,8 @@ pub fn ipc_scaling(
     let figure = IpcScalingFigure { points };
     let mut written = vec![write_json(out, "ipc-scaling.json", &figure)?];
     let by_method = |f: fn(&IpcPoint) -> f64| -> Vec<(Method, Vec<(f64, f64)>)> {
-        IPC_METHODS
-            .iter()
-            .map(|&m| {
+        ipc_methods()
+            .map(|m| {
                 let pts = figure
                     .points
                     .iter()

@@ -98,6 +98,31 @@ pub struct Case {
     pub step: StepKind,
 }
 
+impl Case {
+    /// `global` or `neighbour`.
+    pub fn barrier_name(&self) -> &'static str {
+        if self.global_barrier {
+            "global"
+        } else {
+            "neighbour"
+        }
+    }
+
+    /// The first six columns of the Markdown tables: agents, graph, payload, transport,
+    /// wait, barrier.
+    pub fn columns(&self) -> String {
+        format!(
+            "| {} | {} | {} | {} | {} | {} |",
+            self.agents,
+            self.topology,
+            self.payload,
+            self.transport.name(),
+            self.wait.name(),
+            self.barrier_name()
+        )
+    }
+}
+
 /// Which configurations to measure. `None` axes take the preset's sweep.
 #[derive(Debug, Clone, Default)]
 pub struct SweepSpec {
@@ -549,17 +574,8 @@ pub const TABLE_HEADER: &str = "| agents | graph | payload | transport | wait | 
 pub fn render_row(r: &CaseResult) -> String {
     let c = &r.case;
     format!(
-        "| {} | {} | {} | {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.0} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {} |",
-        c.agents,
-        c.topology,
-        c.payload,
-        c.transport.name(),
-        c.wait.name(),
-        if c.global_barrier {
-            "global"
-        } else {
-            "neighbour"
-        },
+        "{} {} | {:.1} | {:.1} | {:.1} | {:.0} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {} |",
+        c.columns(),
         if r.repeats > 1 {
             format!(
                 "{:.1} ({:.1}–{:.1})",
@@ -613,11 +629,7 @@ pub fn render_ratios(report: &RoundsReport) -> String {
             c.topology,
             c.payload,
             c.wait.name(),
-            if c.global_barrier {
-                "global"
-            } else {
-                "neighbour"
-            },
+            c.barrier_name(),
             ratio(Some(r.round_us.p50), threads.map(|t| t.round_us.p50)),
             ratio(uds.map(|u| u.round_us.p50), Some(r.round_us.p50)),
             ratio(uds.map(|u| u.round_us.p99), Some(r.round_us.p99)),
@@ -642,11 +654,7 @@ pub fn to_csv(report: &RoundsReport) -> String {
             r.payload_bytes,
             c.transport.name(),
             c.wait.name(),
-            if c.global_barrier {
-                "global"
-            } else {
-                "neighbour"
-            },
+            c.barrier_name(),
             c.step.name(),
             r.recorded,
             t(&r.round_us),

@@ -9,7 +9,7 @@
 //! below 0), and the same cost matrix is solved again from a **cold** start (fresh agents,
 //! lockstep simulation, same ρ and stop rule) to measure what the warm start saves.
 
-use crate::figures::{FigureError, write_json};
+use crate::figures::{FigureError, mean_of, write_json};
 use crate::plot::{Chart, Legend, Series};
 use admm_ta_agents::local_stop::LocalCertifiedStop;
 use admm_ta_agents::oracle;
@@ -212,21 +212,19 @@ pub fn run(
             batteries,
         });
     }
-    let mean = |v: &mut dyn Iterator<Item = f64>| {
-        let (s, c) = v.fold((0.0, 0usize), |(s, c), x| (s + x, c + 1));
-        if c == 0 { f64::NAN } else { s / c as f64 }
-    };
     let costs: Vec<f64> = per_episode.iter().map(|e| e.team_cost).collect();
     Ok(SurveillanceReport {
         episodes,
         optimal_episodes: per_episode.iter().filter(|e| e.optimal).count(),
         battery_violations: violations,
-        mean_iterations_warm: mean(&mut per_episode.iter().map(|e| e.rounds_warm as f64)),
-        mean_iterations_cold: mean(
-            &mut per_episode
+        mean_iterations_warm: mean_of(per_episode.iter().map(|e| e.rounds_warm as f64))
+            .unwrap_or(f64::NAN),
+        mean_iterations_cold: mean_of(
+            per_episode
                 .iter()
                 .filter_map(|e| e.rounds_cold.map(|r| r as f64)),
-        ),
+        )
+        .unwrap_or(f64::NAN),
         robots: n,
         surveillance_stations: model.surveillance_stations.len(),
         charging_stations: model.charging_stations.len(),

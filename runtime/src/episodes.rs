@@ -38,8 +38,7 @@ pub struct EpisodeRecord {
     pub rounds: u64,
     /// The stop certified the assignment (else the round limit ended the episode).
     pub certified: bool,
-    /// Battery level before and after the episode.
-    pub battery_before: f64,
+    /// Battery level after the episode.
     pub battery: f64,
 }
 
@@ -67,9 +66,7 @@ impl EpisodeSettings {
         diameter: usize,
     ) -> Self {
         let n = model.robots;
-        let first: Vec<f64> = (0..n)
-            .flat_map(|i| model.cost_row(i, &model.initial_state(i)))
-            .collect();
+        let first = model.initial_costs();
         let ordinary = first
             .iter()
             .copied()
@@ -130,14 +127,12 @@ pub fn run_surveillance_agent(
             })?;
         let before = rounds.round();
         last = rounds.run(agent, exchange, plan, AgentStop::Local(stop))?;
-        let battery_before = state.battery;
         state = model.advance(&state, last.0);
         records.push(EpisodeRecord {
             costs,
             task: last.0,
             rounds: rounds.round() - before,
             certified: last.1.is_some(),
-            battery_before,
             battery: state.battery,
         });
     }
@@ -237,20 +232,21 @@ pub fn run_episodes(
                 .agent_program
                 .clone()
                 .ok_or(SolveError::NoAgentProgram)?;
-            let (m, model) = (settings.model.tasks(), &settings.model);
-            let first: Vec<f64> = (0..n)
-                .flat_map(|i| model.cost_row(i, &model.initial_state(i)))
-                .collect();
             let scenario = Scenario {
                 case: AssignmentCase::Two,
-                cost_bits: first.iter().map(|v| v.to_bits()).collect(),
+                cost_bits: settings
+                    .model
+                    .initial_costs()
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect(),
                 rho_bits: settings.rho.to_bits(),
                 max_rounds: config.max_rounds,
                 diameter: settings.diameter,
                 workload: Workload::Episodes(Box::new(settings.clone())),
                 transport: ProcessTransport::for_transport(config.transport),
                 wait: config.wait,
-                ..Scenario::blank(graph, m)
+                ..Scenario::blank(graph, settings.model.tasks())
             };
             let ran = launcher::launch(
                 scenario,

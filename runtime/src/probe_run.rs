@@ -81,16 +81,13 @@ pub struct ProbeReport {
 /// Runs `run` on `graph`.
 pub fn run_probe(graph: &Graph, run: &ProbeRun) -> Result<ProbeReport, SolveError> {
     let n = graph.robots();
-    if run.transport == Transport::Sim {
-        return Err(SolveError::NotDistributed);
-    }
     if run.global_barrier && run.transport == Transport::Uds {
         return Err(SolveError::BarrierNeedsAgents);
     }
     let started = Instant::now();
     let (latency, outcomes_usage, startup) = match run.transport {
-        Transport::Sim | Transport::Threads => {
-            // (Sim was refused above.)
+        Transport::Sim => return Err(SolveError::NotDistributed),
+        Transport::Threads => {
             let mut agents: Vec<ProbeAgent> = (0..n)
                 .map(|i| ProbeAgent::new(i, run.payload_len, run.step))
                 .collect();

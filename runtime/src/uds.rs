@@ -153,8 +153,7 @@ impl UdsExchange {
             let mut stream = loop {
                 match UnixStream::connect(&path) {
                     Ok(s) => break s,
-                    Err(e) if Instant::now() < deadline => {
-                        let _ = e;
+                    Err(_) if Instant::now() < deadline => {
                         std::thread::sleep(Duration::from_millis(1));
                     }
                     Err(e) => {

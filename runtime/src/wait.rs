@@ -53,11 +53,6 @@ pub struct WaitPolicy {
 }
 
 impl WaitPolicy {
-    /// Spin up to 20 µs when every agent can have a core of its own, else not at all.
-    pub fn for_team(agents: usize) -> Self {
-        Self::new(WaitStrategy::Auto, agents)
-    }
-
     /// The policy of `strategy` for a team of `agents` on this machine.
     pub fn new(strategy: WaitStrategy, agents: usize) -> Self {
         let cores = std::thread::available_parallelism().map_or(1, |c| c.get());

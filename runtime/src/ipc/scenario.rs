@@ -269,21 +269,21 @@ impl Scenario {
         }
     }
 
-    /// Agent `index` of the scenario's workload: the method's agent or a benchmark probe.
+    /// Agent `index` of a one-shot workload: the method's agent or a benchmark probe
+    /// (episode runs build theirs from [`EpisodeSettings::agent`], to change its costs).
     pub fn workload_agent(&self, index: usize) -> Result<Box<dyn ConsensusAgent>, ScenarioError> {
         match self.workload {
             Workload::Method => Ok(Box::new(self.agent(index)?)),
-            Workload::Episodes(ref settings) if index < self.robots => {
-                let degree = self.graph()?.degree(index);
-                Ok(Box::new(settings.agent(index, degree)))
-            }
             Workload::Probe { payload_len, step } if index < self.robots => {
                 Ok(Box::new(ProbeAgent::new(index, payload_len, step)))
             }
-            Workload::Probe { .. } | Workload::Episodes(_) => Err(ScenarioError::BadIndex {
+            Workload::Probe { .. } => Err(ScenarioError::BadIndex {
                 index,
                 robots: self.robots,
             }),
+            Workload::Episodes(_) => Err(ScenarioError::Inconsistent(
+                "an episode run's agents come from its episode settings".into(),
+            )),
         }
     }
 
