@@ -47,7 +47,7 @@ pub(crate) fn run_bench(bench: Bench) -> Result<()> {
         .is_some_and(|t| t.contains(&Transport::Sim))
     {
         bail!(
-            "--transports: round latency needs agents that run concurrently: threads, ipc or uds"
+            "--transports: round latency needs agents that run concurrently: threads, ipc, uds or zenoh"
         );
     }
     let mut config = RoundsConfig::new(quick);

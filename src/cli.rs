@@ -68,6 +68,18 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run one machine of a team across several machines (`transport = "zenoh"` or `"mixed"`
+    /// in the team file): its Zenoh router, linked to the other hosts' routers, and in a
+    /// mixed team its bridge. Start it next to the host's agents; it returns once every agent
+    /// of the team has come and gone. Needs a build with `--features zenoh`.
+    Host {
+        /// The team file (the same on every machine).
+        #[arg(long)]
+        team: PathBuf,
+        /// This machine's name in the team file's [[hosts]].
+        #[arg(long)]
+        name: String,
+    },
     /// Benchmarks: consensus-round latency per transport.
     Bench {
         #[command(subcommand)]
@@ -111,13 +123,15 @@ pub(crate) enum Bench {
         /// Payload shapes ROWSxCOLS of f64, comma-separated (e.g. 1x1,10x10,200x200).
         #[arg(long, value_delimiter = ',')]
         payloads: Option<Vec<String>>,
-        /// Transports, comma-separated: threads, ipc, uds (default: all three).
+        /// Transports, comma-separated: threads, ipc, uds, zenoh (default: threads, ipc, uds;
+        /// zenoh needs a build with `--features zenoh`).
         #[arg(long, value_enum, value_delimiter = ',')]
         transports: Option<Vec<TransportArg>>,
         /// Wait strategies, comma-separated: auto, block, spin-then-block, spin.
         #[arg(long, value_enum, value_delimiter = ',')]
         waits: Option<Vec<WaitArg>>,
-        /// Barrier kinds, comma-separated: neighbour, global (uds has no global barrier).
+        /// Barrier kinds, comma-separated: neighbour, global (uds and zenoh have no global
+        /// barrier).
         #[arg(long, value_enum, value_delimiter = ',')]
         barriers: Option<Vec<BarrierArg>>,
         /// What agents compute per round: touch (one value per neighbour: the exchange
@@ -324,8 +338,9 @@ struct SolveArgs {
     #[arg(long, value_enum, default_value = "primal")]
     method: MethodArg,
     /// sim (one thread, lockstep), threads (a thread per agent), ipc (a process per agent,
-    /// iceoryx2 zero-copy) or uds (a process per agent, payloads copied through Unix-domain
-    /// sockets: a baseline).
+    /// iceoryx2 zero-copy), uds (a process per agent, payloads copied through Unix-domain
+    /// sockets: a baseline) or zenoh (a process per agent, Zenoh through a router on
+    /// loopback: the multi-host transport; needs `--features zenoh`).
     #[arg(long, value_enum, default_value = "sim")]
     transport: TransportArg,
     /// ADMM penalty ρ: auto (scale-free rule from the cost spread and the graph's mean
@@ -440,6 +455,9 @@ pub(crate) enum TransportArg {
     Ipc,
     /// Agent processes copying payloads through Unix-domain sockets (benchmark baseline).
     Uds,
+    /// Agent processes talking Zenoh through a router on loopback (multi-host transport;
+    /// needs a build with `--features zenoh`).
+    Zenoh,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -518,6 +536,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 }
             })
         }
+        Command::Host { team, name } => run_host(&team, &name),
         Command::Collect { team, check, json } => {
             let result =
                 admm_ta_runtime::ipc::member::collect(&team, check).map_err(anyhow::Error::msg)?;
@@ -631,6 +650,7 @@ pub(crate) fn transport(arg: TransportArg) -> Transport {
         TransportArg::Threads => Transport::Threads,
         TransportArg::Ipc => Transport::Ipc,
         TransportArg::Uds => Transport::Uds,
+        TransportArg::Zenoh => Transport::Zenoh,
     }
 }
 
@@ -655,6 +675,19 @@ fn seconds(flag: &str, value: f64) -> Result<Duration> {
 /// This binary: agent processes are started from it.
 pub(crate) fn agent_program() -> Result<PathBuf> {
     std::env::current_exe().context("cannot locate the admm-ta binary to start agents from")
+}
+
+#[cfg(feature = "zenoh")]
+fn run_host(team: &std::path::Path, name: &str) -> Result<()> {
+    let report =
+        admm_ta_runtime::zenoh_net::host::run_host(team, name).map_err(anyhow::Error::msg)?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(())
+}
+
+#[cfg(not(feature = "zenoh"))]
+fn run_host(_team: &std::path::Path, _name: &str) -> Result<()> {
+    bail!(admm_ta_runtime::zenoh_net::not_built())
 }
 
 fn run_demo(json: bool, transport_arg: TransportArg) -> Result<()> {

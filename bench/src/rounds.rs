@@ -168,7 +168,7 @@ impl RoundsConfig {
 const ALL_TRANSPORTS: [Transport; 3] = [Transport::Threads, Transport::Ipc, Transport::Uds];
 
 /// The cases of `config`, in run order, without duplicates. Invalid combinations (a global
-/// barrier on uds) are left out.
+/// barrier on uds or zenoh) are left out.
 pub fn cases(config: &RoundsConfig) -> Vec<Case> {
     let s = &config.sweep;
     let base = Case {
@@ -283,7 +283,9 @@ pub fn cases(config: &RoundsConfig) -> Vec<Case> {
                     for &wait in &waits {
                         for &global_barrier in &barriers {
                             for &transport in &transports {
-                                if global_barrier && transport == Transport::Uds {
+                                if global_barrier
+                                    && matches!(transport, Transport::Uds | Transport::Zenoh)
+                                {
                                     continue;
                                 }
                                 let payload = if config.step == StepKind::Primal {
@@ -598,11 +600,11 @@ pub fn render_row(r: &CaseResult) -> String {
 }
 
 /// Ratios of round p50 between transports on otherwise equal cases (`ipc/threads`,
-/// `uds/ipc`), as Markdown.
+/// `uds/ipc`, `zenoh/ipc`), as Markdown.
 pub fn render_ratios(report: &RoundsReport) -> String {
     let mut lines = vec![
-        "| agents | graph | payload | wait | barrier | ipc / threads p50 | uds / ipc p50 | uds / ipc p99 |".to_string(),
-        "|---|---|---|---|---|---|---|---|".to_string(),
+        "| agents | graph | payload | wait | barrier | ipc / threads p50 | uds / ipc p50 | uds / ipc p99 | zenoh / ipc p50 | zenoh / ipc p99 |".to_string(),
+        "|---|---|---|---|---|---|---|---|---|---|".to_string(),
     ];
     let find = |case: &Case, t: Transport| {
         report.results.iter().find(|r| {
@@ -623,8 +625,9 @@ pub fn render_ratios(report: &RoundsReport) -> String {
         };
         let threads = find(c, Transport::Threads);
         let uds = find(c, Transport::Uds);
+        let zenoh = find(c, Transport::Zenoh);
         lines.push(format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             c.agents,
             c.topology,
             c.payload,
@@ -633,6 +636,8 @@ pub fn render_ratios(report: &RoundsReport) -> String {
             ratio(Some(r.round_us.p50), threads.map(|t| t.round_us.p50)),
             ratio(uds.map(|u| u.round_us.p50), Some(r.round_us.p50)),
             ratio(uds.map(|u| u.round_us.p99), Some(r.round_us.p99)),
+            ratio(zenoh.map(|z| z.round_us.p50), Some(r.round_us.p50)),
+            ratio(zenoh.map(|z| z.round_us.p99), Some(r.round_us.p99)),
         ));
     }
     lines.join("\n")

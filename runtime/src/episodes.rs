@@ -227,7 +227,7 @@ pub fn run_episodes(
                 wall: started.elapsed(),
             })
         }
-        Transport::Ipc | Transport::Uds => {
+        Transport::Ipc | Transport::Uds | Transport::Zenoh => {
             let program = config
                 .agent_program
                 .clone()

@@ -94,6 +94,23 @@ pub enum ExchangeError {
     },
 }
 
+impl ExchangeError {
+    /// The agent that raised the error.
+    pub fn agent(&self) -> usize {
+        match self {
+            Self::Timeout { agent, .. }
+            | Self::BarrierTimeout { agent, .. }
+            | Self::OutOfOrder { agent, .. }
+            | Self::WrongLength { agent, .. }
+            | Self::WrongSender { agent, .. }
+            | Self::Transport { agent, .. }
+            | Self::Aborted { agent }
+            | Self::BadPayload { agent, .. }
+            | Self::PeerFailed { agent, .. } => *agent,
+        }
+    }
+}
+
 /// The error that ended a run: the first that is not a consequence of another.
 pub fn root_cause(errors: impl IntoIterator<Item = ExchangeError>) -> Option<ExchangeError> {
     let mut fallback = None;

@@ -28,6 +28,37 @@ impl RoundHeader {
         }
     }
 
+    /// Words of the header on a byte stream (the copying transports: uds, Zenoh).
+    pub const WORDS: usize = 7;
+
+    /// Writes the header as [`Self::WORDS`] `f64` words (bit patterns), ahead of a payload.
+    pub fn write_words(&self, words: &mut [f64]) {
+        let w = [
+            self.round,
+            (u64::from(self.sender) << 32) | u64::from(self.flags),
+            self.digest,
+            self.window[0],
+            self.window[1],
+            self.window[2],
+            self.window[3],
+        ];
+        for (slot, v) in words.iter_mut().zip(w) {
+            *slot = f64::from_bits(v);
+        }
+    }
+
+    /// Reads a header written by [`Self::write_words`].
+    pub fn from_words(words: &[f64]) -> Self {
+        let w = |k: usize| words[k].to_bits();
+        Self {
+            round: w(0),
+            sender: (w(1) >> 32) as u32,
+            flags: w(1) as u32,
+            digest: w(2),
+            window: [w(3), w(4), w(5), w(6)],
+        }
+    }
+
     /// What the stop protocol reads of this message.
     pub fn stop_state(&self) -> NeighbourState {
         NeighbourState {
@@ -77,5 +108,41 @@ pub fn check_message(
         Ok(Placement::Next)
     } else {
         Err(MessageFault::OutOfOrder { got: header.round })
+    }
+}
+
+/// The bytes of `words` (for writing a message to a byte stream).
+pub fn words_as_bytes(words: &[f64]) -> &[u8] {
+    // SAFETY: any f64 is 8 initialised bytes; u8 has no alignment requirement.
+    unsafe { std::slice::from_raw_parts(words.as_ptr().cast::<u8>(), std::mem::size_of_val(words)) }
+}
+
+/// The bytes of `words`, writable (for reading a message from a byte stream).
+pub fn words_as_bytes_mut(words: &mut [f64]) -> &mut [u8] {
+    // SAFETY: as above, and every byte pattern is a valid f64.
+    unsafe {
+        std::slice::from_raw_parts_mut(
+            words.as_mut_ptr().cast::<u8>(),
+            std::mem::size_of_val(words),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_words_round_trip() {
+        let header = RoundHeader {
+            round: u64::MAX - 3,
+            sender: 41,
+            flags: 0xdead_beef,
+            digest: 0x0123_4567_89ab_cdef,
+            window: [1, u64::MAX, 0, 7],
+        };
+        let mut words = [0.0; RoundHeader::WORDS];
+        header.write_words(&mut words);
+        assert_eq!(RoundHeader::from_words(&words), header);
     }
 }

@@ -29,3 +29,4 @@ pub mod threads;
 pub mod uds;
 pub mod usage;
 pub mod wait;
+pub mod zenoh_net;

@@ -81,7 +81,7 @@ pub struct ProbeReport {
 /// Runs `run` on `graph`.
 pub fn run_probe(graph: &Graph, run: &ProbeRun) -> Result<ProbeReport, SolveError> {
     let n = graph.robots();
-    if run.global_barrier && run.transport == Transport::Uds {
+    if run.global_barrier && matches!(run.transport, Transport::Uds | Transport::Zenoh) {
         return Err(SolveError::BarrierNeedsAgents);
     }
     let started = Instant::now();
@@ -114,7 +114,7 @@ pub fn run_probe(graph: &Graph, run: &ProbeRun) -> Result<ProbeReport, SolveErro
                 None,
             )
         }
-        Transport::Ipc | Transport::Uds => {
+        Transport::Ipc | Transport::Uds | Transport::Zenoh => {
             let program = run
                 .agent_program
                 .clone()

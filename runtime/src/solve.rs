@@ -42,6 +42,9 @@ pub enum Transport {
     /// One OS process per agent, every payload copied through Unix-domain sockets: the
     /// baseline that shows what zero-copy saves ([`crate::uds`]).
     Uds,
+    /// One OS process per agent, Zenoh publish-subscribe through a router: the transport of
+    /// multi-host teams ([`crate::zenoh_net`]; needs the `zenoh` feature).
+    Zenoh,
 }
 
 impl Transport {
@@ -52,6 +55,7 @@ impl Transport {
             Self::Threads => "threads",
             Self::Ipc => "ipc",
             Self::Uds => "uds",
+            Self::Zenoh => "zenoh",
         }
     }
 }
@@ -207,11 +211,11 @@ pub enum SolveError {
         "--stop {stop} needs the whole team's state: it runs on the sim transport only (use --stop local or max-iters)"
     )]
     CentralStop { stop: &'static str },
-    #[error("--global-barrier needs the threads or ipc transport (sim and uds have none)")]
+    #[error("--global-barrier needs the threads or ipc transport (sim, uds and zenoh have none)")]
     BarrierNeedsAgents,
-    #[error("round latency is measured on a distributed transport: threads, ipc or uds")]
+    #[error("round latency is measured on a distributed transport: threads, ipc, uds or zenoh")]
     NotDistributed,
-    #[error("the ipc and uds transports need the admm-ta binary to start agents from")]
+    #[error("the ipc, uds and zenoh transports need the admm-ta binary to start agents from")]
     NoAgentProgram,
     #[error(transparent)]
     LocalStop(#[from] LocalStopError),
@@ -451,7 +455,12 @@ fn solve_once(
     let rho = prepared.rho;
     let optimum = (config.check || config.stop == StopRule::Oracle)
         .then(|| oracle::solve(problem).expect("validated costs have an optimum"));
-    if config.global_barrier && matches!(config.transport, Transport::Sim | Transport::Uds) {
+    if config.global_barrier
+        && matches!(
+            config.transport,
+            Transport::Sim | Transport::Uds | Transport::Zenoh
+        )
+    {
         return Err(SolveError::BarrierNeedsAgents);
     }
     if config.transport != Transport::Sim
@@ -635,7 +644,7 @@ fn run_agents(
             }
             RunResult::from_outcomes(&outcomes, Some(latency.summary()), None)
         }
-        Transport::Ipc | Transport::Uds => {
+        Transport::Ipc | Transport::Uds | Transport::Zenoh => {
             local_stop()?;
             let program = config
                 .agent_program
@@ -786,6 +795,8 @@ fn scenario_of(
         transport: ProcessTransport::for_transport(config.transport),
         wait: config.wait,
         warmup_rounds: config.warmup_rounds,
+        zenoh: None,
+        local_agents: None,
     })
 }
 

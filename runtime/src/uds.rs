@@ -17,7 +17,7 @@
 //! is reported as its failure. There is no global barrier.
 
 use crate::exchange::{Exchange, ExchangeError};
-use crate::header::RoundHeader;
+use crate::header::{RoundHeader, words_as_bytes as as_bytes, words_as_bytes_mut as as_bytes_mut};
 use crate::ipc::transport::Board;
 use crate::wait::WaitPolicy;
 use admm_ta_agents::agent::Inbox;
@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 /// Words of the message header.
-const HEADER_WORDS: usize = 7;
+const HEADER_WORDS: usize = RoundHeader::WORDS;
 
 /// Longest sleep between two looks at the run's failure mark.
 const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
@@ -72,47 +72,6 @@ pub struct UdsExchange {
     policy: WaitPolicy,
     board: Board,
     poll_fds: Vec<libc::pollfd>,
-}
-
-fn as_bytes(words: &[f64]) -> &[u8] {
-    // SAFETY: any f64 is 8 initialised bytes; u8 has no alignment requirement.
-    unsafe { std::slice::from_raw_parts(words.as_ptr().cast::<u8>(), std::mem::size_of_val(words)) }
-}
-
-fn as_bytes_mut(words: &mut [f64]) -> &mut [u8] {
-    // SAFETY: as above, and every byte pattern is a valid f64.
-    unsafe {
-        std::slice::from_raw_parts_mut(
-            words.as_mut_ptr().cast::<u8>(),
-            std::mem::size_of_val(words),
-        )
-    }
-}
-
-fn encode(header: &RoundHeader, words: &mut [f64]) {
-    let w = [
-        header.round,
-        (u64::from(header.sender) << 32) | u64::from(header.flags),
-        header.digest,
-        header.window[0],
-        header.window[1],
-        header.window[2],
-        header.window[3],
-    ];
-    for (slot, v) in words.iter_mut().zip(w) {
-        *slot = f64::from_bits(v);
-    }
-}
-
-fn decode(words: &[f64]) -> RoundHeader {
-    let w = |k: usize| words[k].to_bits();
-    RoundHeader {
-        round: w(0),
-        sender: (w(1) >> 32) as u32,
-        flags: w(1) as u32,
-        digest: w(2),
-        window: [w(3), w(4), w(5), w(6)],
-    }
 }
 
 fn transport(agent: usize, what: impl Into<String>) -> ExchangeError {
@@ -269,7 +228,7 @@ impl UdsExchange {
                     Ok(n) => {
                         link.received += n;
                         if link.received == total {
-                            link.header = decode(&link.inbox[..HEADER_WORDS]);
+                            link.header = RoundHeader::from_words(&link.inbox[..HEADER_WORDS]);
                             if link.header.sender as usize != j {
                                 return Err(ExchangeError::WrongSender {
                                     agent: i,
@@ -343,7 +302,7 @@ impl UdsExchange {
     }
 
     fn send(&mut self, header: RoundHeader) -> Result<(), ExchangeError> {
-        encode(&header, &mut self.outbox[..HEADER_WORDS]);
+        header.write_words(&mut self.outbox[..HEADER_WORDS]);
         for link in &mut self.links {
             link.sent = 0;
         }

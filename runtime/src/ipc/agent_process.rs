@@ -73,6 +73,8 @@ enum Endpoint {
     // Boxed: both are large, and the enum is built once.
     Ipc(Box<IpcExchange>),
     Uds(Box<UdsExchange>),
+    #[cfg(feature = "zenoh")]
+    Zenoh(Box<crate::zenoh_net::exchange::ZenohExchange>),
 }
 
 impl Endpoint {
@@ -80,21 +82,37 @@ impl Endpoint {
         match self {
             Self::Ipc(e) => e.as_mut(),
             Self::Uds(e) => e.as_mut(),
+            #[cfg(feature = "zenoh")]
+            Self::Zenoh(e) => e.as_mut(),
         }
     }
 
     /// Points the launcher and the other agents at the agent that caused `error`.
     fn blame_for(&self, error: &ExchangeError) {
-        let Self::Ipc(exchange) = self else {
-            return;
-        };
-        let culprit = match error {
-            // Blocked neighbours time out too: blame the agent everybody waits for.
-            ExchangeError::Timeout { .. } => Some(exchange.laggard()),
-            e => culprit(e),
-        };
-        if let Some(culprit) = culprit {
-            exchange.blame(culprit);
+        match self {
+            Self::Ipc(exchange) => {
+                let culprit = match error {
+                    // Blocked neighbours time out too: blame the agent everybody waits for.
+                    ExchangeError::Timeout { .. } => Some(exchange.laggard()),
+                    e => culprit(e),
+                };
+                if let Some(culprit) = culprit {
+                    exchange.blame(culprit);
+                }
+            }
+            Self::Uds(_) => {}
+            // No launcher sees every host: whoever fails first tells the others.
+            #[cfg(feature = "zenoh")]
+            Self::Zenoh(exchange) => {
+                let culprit = match error {
+                    ExchangeError::Aborted { .. } => return,
+                    // Possibly seen only by us (its token vanished): pass it on.
+                    ExchangeError::PeerFailed { failed, .. } => Some(*failed),
+                    ExchangeError::Timeout { round, .. } => exchange.first_missing(*round),
+                    e => culprit(e),
+                };
+                exchange.blame(culprit.unwrap_or(error.agent()));
+            }
         }
     }
 }
@@ -131,6 +149,18 @@ pub fn run_scenario(
             &scenario.uds_endpoint(&graph, index, run_dir),
             deadline,
         )?)),
+        #[cfg(feature = "zenoh")]
+        ProcessTransport::Zenoh => {
+            let endpoint = scenario
+                .zenoh_endpoint(&graph, index, supervised)
+                .map_err(|e| e.to_string())?;
+            Endpoint::Zenoh(Box::new(
+                crate::zenoh_net::exchange::ZenohExchange::connect(&endpoint, deadline)
+                    .map_err(|e| e.to_string())?,
+            ))
+        }
+        #[cfg(not(feature = "zenoh"))]
+        ProcessTransport::Zenoh => return Err(crate::zenoh_net::not_built()),
     };
     let connected_unix_ns = unix_ns();
     let ran = match &scenario.workload {

@@ -13,9 +13,11 @@
 use crate::exchange::AgentOutcome;
 use crate::ipc::agent_process::{AgentReport, log_path, result_path};
 use crate::ipc::namespace::RunNamespace;
-use crate::ipc::scenario::Scenario;
+use crate::ipc::scenario::{ProcessTransport, Scenario};
 use crate::ipc::transport::{Board, cleanup_dead_nodes, run_config};
 use crate::latency::RoundLatency;
+#[cfg(feature = "zenoh")]
+use crate::zenoh_net::links::ZenohLinks;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
@@ -39,6 +41,8 @@ pub enum LaunchError {
     RunDirectory(std::io::Error),
     #[error("cannot create the run's shared board: {0}")]
     Board(String),
+    #[error("cannot start the run's Zenoh router: {0}")]
+    Zenoh(String),
     #[error("cannot start agent process {index} ({program}): {source}")]
     Spawn {
         index: usize,
@@ -89,6 +93,9 @@ struct RunGuard {
     namespace: RunNamespace,
     children: Vec<Option<Child>>,
     board: Option<Board>,
+    /// The Zenoh agents' router (Zenoh runs), closed after the children are gone.
+    #[cfg(feature = "zenoh")]
+    router: Option<crate::zenoh_net::router::HostRouter>,
 }
 
 impl Drop for RunGuard {
@@ -150,6 +157,8 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
         namespace: namespace.clone(),
         children: Vec::new(),
         board: None,
+        #[cfg(feature = "zenoh")]
+        router: None,
     };
     scenario.run_id = namespace.id.clone();
     scenario.iceoryx_prefix = namespace.prefix.clone();
@@ -167,6 +176,21 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
         )
         .map_err(LaunchError::Board)?,
     );
+    if scenario.transport == ProcessTransport::Zenoh {
+        #[cfg(feature = "zenoh")]
+        {
+            let router = crate::zenoh_net::router::HostRouter::open_on_loopback()
+                .map_err(LaunchError::Zenoh)?;
+            scenario.zenoh = Some(ZenohLinks {
+                key_prefix: format!("admm-ta/run/{}", namespace.id),
+                connect: vec![router.endpoint.clone()],
+                listen: vec!["tcp/127.0.0.1:0".into()],
+            });
+            guard.router = Some(router);
+        }
+        #[cfg(not(feature = "zenoh"))]
+        return Err(LaunchError::Zenoh(crate::zenoh_net::not_built()));
+    }
     let run_dir = namespace.dir.clone();
     let scenario_path = run_dir.join("scenario.json");
     let text = serde_json::to_string(&scenario).expect("a scenario serialises");
@@ -232,6 +256,11 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
                 // An agent may have found a dead or misbehaving peer first: then that peer
                 // is the one.
                 failed = Some(board.mark_failed(index).unwrap_or(index));
+                // Zenoh agents do not read the board: tell them through the router.
+                #[cfg(feature = "zenoh")]
+                if let (Some(router), Some(links)) = (&guard.router, &scenario.zenoh) {
+                    router.announce_failure(links, failed.unwrap_or(index));
+                }
                 grace_ends = Some(std::time::Instant::now() + FAILURE_GRACE);
             }
             failures[index] = how;

@@ -19,11 +19,31 @@
 //! results = "results"       # each agent writes result-<id>.json here
 //! startup_timeout = 30.0    # seconds to wait for the neighbours
 //! ```
+//!
+//! A team across several machines names its hosts and how they talk (see
+//! [`crate::zenoh_net`]): `transport = "zenoh"` (every agent a Zenoh peer of its host's
+//! router) or `"mixed"` (iceoryx2 among the agents of a host, Zenoh between hosts through
+//! each host's bridge). Every host runs `admm-ta host --team FILE --name NAME` next to its
+//! agents (needs a build with `--features zenoh`):
+//!
+//! ```toml
+//! transport = "zenoh"
+//! [[hosts]]
+//! name = "alpha"
+//! agents = [0, 1, 2, 3, 4]
+//! endpoint = "tcp/192.168.1.10:7447"   # where alpha's router listens
+//! [[hosts]]
+//! name = "beta"
+//! agents = [5, 6, 7, 8, 9]
+//! endpoint = "tcp/192.168.1.11:7447"
+//! ```
 
 use crate::ipc::agent_process::{AgentReport, run_scenario};
 use crate::ipc::namespace::RunNamespace;
+use crate::ipc::scenario::{ProcessTransport, Scenario};
 use crate::ipc::transport::{Board, cleanup_dead_nodes, run_config};
 use crate::solve::{self, Method, SolveConfig, StopRule, Transport};
+use crate::zenoh_net::links::{ZenohLinks, any_port_on, check_endpoint};
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_topologies::{Graph, TopologySpec, file as topology_file};
@@ -58,6 +78,38 @@ pub struct TeamFile {
     pub max_iters: usize,
     #[serde(default)]
     pub adaptive_rho: bool,
+    /// What carries the messages.
+    #[serde(default)]
+    pub transport: TeamTransport,
+    /// The machines of a zenoh or mixed team.
+    #[serde(default)]
+    pub hosts: Vec<HostEntry>,
+}
+
+/// What carries a team's messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TeamTransport {
+    /// Every agent on this machine, iceoryx2 zero-copy.
+    #[default]
+    Iceoryx2,
+    /// Every agent a Zenoh peer of its host's router.
+    Zenoh,
+    /// iceoryx2 among the agents of a host; the host's bridge carries what crosses hosts.
+    Mixed,
+}
+
+/// One machine of a multi-host team.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HostEntry {
+    /// Letters, digits and dashes (`admm-ta host --name NAME`).
+    pub name: String,
+    /// The robots that run on it.
+    pub agents: Vec<usize>,
+    /// Where its Zenoh router listens, `tcp/ADDRESS:PORT`, reachable from the other hosts;
+    /// its agents listen on the same address.
+    pub endpoint: String,
 }
 
 fn complete() -> String {
@@ -103,7 +155,35 @@ impl Team {
         RunNamespace::check_team_name(&file.run)?;
         seconds("startup_timeout", file.startup_timeout)?;
         seconds("round_timeout", file.round_timeout)?;
+        check_hosts(&file)?;
         Ok(Self { file, base })
+    }
+
+    /// The host agent `id` runs on (zenoh and mixed teams).
+    pub fn host_of(&self, id: usize) -> Option<&HostEntry> {
+        self.file.hosts.iter().find(|h| h.agents.contains(&id))
+    }
+
+    /// The host called `name`.
+    pub fn host(&self, name: &str) -> Result<&HostEntry, String> {
+        self.file
+            .hosts
+            .iter()
+            .find(|h| h.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = self.file.hosts.iter().map(|h| h.name.as_str()).collect();
+                format!("the team file has no host '{name}' (hosts: {names:?})")
+            })
+    }
+
+    /// The Zenoh links of agent `id` (or of a host's bridge, with `host`): its host's router,
+    /// and a listening port on its host's address.
+    pub fn zenoh_links(&self, host: &HostEntry) -> ZenohLinks {
+        ZenohLinks {
+            key_prefix: format!("admm-ta/team/{}", self.file.run),
+            connect: vec![host.endpoint.clone()],
+            listen: any_port_on(&host.endpoint).into_iter().collect(),
+        }
     }
 
     fn path(&self, p: &Path) -> PathBuf {
@@ -177,6 +257,70 @@ impl Team {
     }
 }
 
+/// Checks the hosts of a team file: a zenoh or mixed team puts every robot on exactly one
+/// named host with a distinct TCP endpoint; an iceoryx2 team has no hosts.
+fn check_hosts(file: &TeamFile) -> Result<(), String> {
+    if file.transport == TeamTransport::Iceoryx2 {
+        if !file.hosts.is_empty() {
+            return Err(
+                "[[hosts]] are for teams across machines: add transport = \"zenoh\" or \"mixed\""
+                    .into(),
+            );
+        }
+        return Ok(());
+    }
+    if file.hosts.is_empty() {
+        return Err(
+            "a zenoh or mixed team needs [[hosts]] entries (name, agents, endpoint)".into(),
+        );
+    }
+    let mut host_of = vec![None; file.robots];
+    for (h, host) in file.hosts.iter().enumerate() {
+        RunNamespace::check_team_name(&host.name)
+            .map_err(|e| format!("host name '{}': {e}", host.name))?;
+        check_endpoint(&host.endpoint).map_err(|e| format!("host '{}': {e}", host.name))?;
+        if let Some(other) = file.hosts[..h].iter().find(|o| o.name == host.name) {
+            return Err(format!("two hosts are called '{}'", other.name));
+        }
+        if let Some(other) = file.hosts[..h].iter().find(|o| o.endpoint == host.endpoint) {
+            return Err(format!(
+                "hosts '{}' and '{}' have the same endpoint {}",
+                other.name, host.name, host.endpoint
+            ));
+        }
+        for &a in &host.agents {
+            let slot = host_of.get_mut(a).ok_or_else(|| {
+                format!(
+                    "host '{}' lists robot {a}, but the team has {} robots (0..{})",
+                    host.name, file.robots, file.robots
+                )
+            })?;
+            if let Some(other) = slot.replace(h) {
+                return Err(format!(
+                    "robot {a} is on two hosts: '{}' and '{}'",
+                    file.hosts[other].name, host.name
+                ));
+            }
+        }
+    }
+    if file.transport == TeamTransport::Mixed
+        && let Some(host) = file
+            .hosts
+            .iter()
+            .find(|h| file.run.len() + 1 + h.name.len() > 40)
+    {
+        return Err(format!(
+            "a mixed team's run name and host name together must fit 40 characters ('{}-{}' does not): each host's shared memory is named after both",
+            file.run, host.name
+        ));
+    }
+    let homeless: Vec<usize> = (0..file.robots).filter(|&a| host_of[a].is_none()).collect();
+    if !homeless.is_empty() {
+        return Err(format!("robot(s) {homeless:?} are on no host"));
+    }
+    Ok(())
+}
+
 /// Path of agent `id`'s result in `results`.
 pub fn member_result(results: &Path, id: usize) -> PathBuf {
     results.join(format!("result-{id}.json"))
@@ -216,6 +360,94 @@ impl Drop for FileLock {
     }
 }
 
+/// The scenario every agent of the team derives from the team file, in the iceoryx2
+/// namespace of its machine (`host`, in a mixed team: each host has its own).
+pub(crate) fn member_scenario(
+    team: &Team,
+    host: Option<&HostEntry>,
+) -> Result<(Scenario, RunNamespace), String> {
+    let (problem, graph) = team.problem_and_graph()?;
+    let config = team.solve_config()?;
+    let mut scenario =
+        solve::agent_scenario(&problem, &graph, &config).map_err(|e| e.to_string())?;
+    let namespace = match host {
+        Some(host) => RunNamespace::for_team(&format!("{}-{}", team.file.run, host.name))?,
+        None => RunNamespace::for_team(&team.file.run)?,
+    };
+    scenario.run_id = namespace.id.clone();
+    scenario.iceoryx_prefix = namespace.prefix.clone();
+    scenario.iceoryx_root = namespace.iceoryx_root();
+    scenario.board_shm = namespace.board_shm();
+    scenario.local_agents = host.map(|h| h.agents.clone());
+    Ok((scenario, namespace))
+}
+
+/// A place on the team's board in shared memory: an agent's own slot, or (a mixed host's
+/// bridge) the slots of the agents it stands in for. The board is created by whoever comes
+/// first; the last member to leave removes every shared-memory file of the namespace.
+pub(crate) struct Membership {
+    board: Board,
+    namespace: RunNamespace,
+    slots: Vec<usize>,
+}
+
+impl Membership {
+    /// Joins the board of `scenario` for `slots`, under the team's lock (until `deadline`).
+    pub(crate) fn join(
+        scenario: &Scenario,
+        namespace: &RunNamespace,
+        slots: &[usize],
+        deadline: Instant,
+    ) -> Result<Self, String> {
+        let _lock = FileLock::acquire(&namespace.dir.join("lock"), deadline)?;
+        let n = scenario.robots;
+        let fresh = Board::open(&scenario.board_shm, n).is_err();
+        let board = Board::open_or_create_for_team(
+            &scenario.board_shm,
+            n,
+            scenario.tasks,
+            scenario.payload_len(),
+        )?;
+        for &slot in slots {
+            board.set_member_pid(slot, std::process::id());
+        }
+        std::fs::create_dir_all(&scenario.iceoryx_root)
+            .map_err(|e| format!("cannot create {}: {e}", scenario.iceoryx_root.display()))?;
+        if fresh {
+            // Nodes of a dead team of this name.
+            let _ = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)
+                .map(|c| cleanup_dead_nodes(&c));
+        }
+        Ok(Self {
+            board,
+            namespace: namespace.clone(),
+            slots: slots.to_vec(),
+        })
+    }
+
+    pub(crate) fn board(&self) -> &Board {
+        &self.board
+    }
+
+    /// Counts the slots out; the last member of the team removes its namespace.
+    pub(crate) fn leave(self) {
+        let deadline = Instant::now() + Duration::from_secs(5);
+        let last = FileLock::acquire(&self.namespace.dir.join("lock"), deadline)
+            .map(|_lock| {
+                let mut last = false;
+                for &slot in &self.slots {
+                    last |= self.board.member_left(slot);
+                }
+                last
+            })
+            .unwrap_or(false);
+        if last {
+            drop(self.board);
+            let _ = self.namespace.cleanup();
+        }
+    }
+}
+
 /// Runs agent `id` of the team in `team_path` to the end; errors are one line.
 pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
     let started = Instant::now();
@@ -226,55 +458,36 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
             "--id {id} is out of range for a team of {n} robots"
         ));
     }
-    let (problem, graph) = team.problem_and_graph()?;
-    let config = team.solve_config()?;
-    let mut scenario =
-        solve::agent_scenario(&problem, &graph, &config).map_err(|e| e.to_string())?;
-    let namespace = RunNamespace::for_team(&team.file.run)?;
-    scenario.run_id = namespace.id.clone();
-    scenario.iceoryx_prefix = namespace.prefix.clone();
-    scenario.iceoryx_root = namespace.iceoryx_root();
-    scenario.board_shm = namespace.board_shm();
+    let host = match team.file.transport {
+        TeamTransport::Mixed => team.host_of(id),
+        _ => None,
+    };
+    let (mut scenario, namespace) = member_scenario(&team, host)?;
     let results = team.results_dir();
     std::fs::create_dir_all(&results)
         .map_err(|e| format!("cannot create {}: {e}", results.display()))?;
     let result = member_result(&results, id);
     // A result of an earlier run must not pass for this one's.
     let _ = std::fs::remove_file(&result);
-    let deadline = started + config.startup_timeout;
-    let board = {
-        let _lock = FileLock::acquire(&namespace.dir.join("lock"), deadline)?;
-        let fresh = Board::open(&scenario.board_shm, n).is_err();
-        let board = Board::open_or_create_for_team(
-            &scenario.board_shm,
-            n,
-            scenario.tasks,
-            scenario.payload_len(),
-        )?;
-        board.set_member_pid(id, std::process::id());
-        std::fs::create_dir_all(&scenario.iceoryx_root)
-            .map_err(|e| format!("cannot create {}: {e}", scenario.iceoryx_root.display()))?;
-        if fresh {
-            // Nodes of a dead team of this name.
-            let _ = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)
-                .map(|c| cleanup_dead_nodes(&c));
-        }
-        board
-    };
+    if team.file.transport == TeamTransport::Zenoh {
+        // No shared memory: presence, failures and cleanup are Zenoh's.
+        let host = team.host_of(id).expect("checked: every robot is on a host");
+        scenario.transport = ProcessTransport::Zenoh;
+        scenario.zenoh = Some(team.zenoh_links(host));
+        let startup =
+            Duration::from_millis(scenario.startup_timeout_ms).saturating_sub(started.elapsed());
+        scenario.startup_timeout_ms = startup.as_millis() as u64;
+        return run_scenario(&scenario, id, &results, &result, false);
+    }
+    let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
+    let membership = Membership::join(&scenario, &namespace, &[id], deadline)?;
     let report = run_scenario(&scenario, id, &namespace.dir, &result, false);
     if report.is_err() {
         // No launcher reports us: tell the others (the first mark wins, so an agent that
         // stopped because of another's failure changes nothing).
-        let _ = board.mark_failed(id);
+        let _ = membership.board().mark_failed(id);
     }
-    let deadline = Instant::now() + Duration::from_secs(5);
-    let last = FileLock::acquire(&namespace.dir.join("lock"), deadline)
-        .map(|_lock| board.member_left(id))
-        .unwrap_or(false);
-    if last {
-        drop(board);
-        let _ = namespace.cleanup();
-    }
+    membership.leave();
     report
 }
 

@@ -9,6 +9,7 @@ use crate::ipc::transport::IpcEndpoint;
 use crate::team::Team;
 use crate::uds::UdsEndpoint;
 use crate::wait::{WaitPolicy, WaitStrategy};
+use crate::zenoh_net::links::ZenohLinks;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::local_stop::LocalCertifiedStop;
 use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
@@ -54,15 +55,18 @@ pub enum ProcessTransport {
     Iceoryx2,
     /// Unix-domain sockets that copy every payload (a benchmark baseline, [`crate::uds`]).
     Uds,
+    /// Zenoh publish-subscribe through the host's router, across machines
+    /// ([`crate::zenoh_net`]; needs the `zenoh` feature).
+    Zenoh,
 }
 
 impl ProcessTransport {
-    /// The process transport of `transport` (uds for uds, iceoryx2 otherwise).
+    /// The process transport of `transport` (iceoryx2 for ipc and the in-process ones).
     pub fn for_transport(transport: crate::solve::Transport) -> Self {
-        if transport == crate::solve::Transport::Uds {
-            Self::Uds
-        } else {
-            Self::Iceoryx2
+        match transport {
+            crate::solve::Transport::Uds => Self::Uds,
+            crate::solve::Transport::Zenoh => Self::Zenoh,
+            _ => Self::Iceoryx2,
         }
     }
 }
@@ -105,6 +109,13 @@ pub struct Scenario {
     /// Rounds before latency is recorded.
     #[serde(default)]
     pub warmup_rounds: u64,
+    /// Where the agents' Zenoh sessions connect (the Zenoh transport).
+    #[serde(default)]
+    pub zenoh: Option<ZenohLinks>,
+    /// The agents on this host, in a mixed team (the others are reached through the host's
+    /// bridge); `None`: every agent is here.
+    #[serde(default)]
+    pub local_agents: Option<Vec<usize>>,
 }
 
 /// A scenario that cannot be used.
@@ -170,6 +181,8 @@ impl Scenario {
             transport: ProcessTransport::Iceoryx2,
             wait: WaitStrategy::Auto,
             warmup_rounds: 0,
+            zenoh: None,
+            local_agents: None,
         }
     }
 
@@ -269,6 +282,26 @@ impl Scenario {
         }
     }
 
+    /// Agent `index`'s Zenoh endpoint; `supervised` as for [`Self::endpoint`].
+    #[cfg(feature = "zenoh")]
+    pub fn zenoh_endpoint(
+        &self,
+        graph: &Graph,
+        index: usize,
+        supervised: bool,
+    ) -> Result<crate::zenoh_net::exchange::ZenohEndpoint, ScenarioError> {
+        Ok(crate::zenoh_net::exchange::ZenohEndpoint {
+            index,
+            neighbours: graph.neighbours(index).to_vec(),
+            payload_len: self.payload_len(),
+            policy: WaitPolicy::new(self.wait, self.robots),
+            links: self.zenoh.clone().ok_or_else(|| {
+                ScenarioError::Inconsistent("a Zenoh run without Zenoh endpoints".into())
+            })?,
+            supervised,
+        })
+    }
+
     /// Agent `index` of a one-shot workload: the method's agent or a benchmark probe
     /// (episode runs build theirs from [`EpisodeSettings::agent`], to change its costs).
     pub fn workload_agent(&self, index: usize) -> Result<Box<dyn ConsensusAgent>, ScenarioError> {
@@ -300,6 +333,10 @@ impl Scenario {
             board_shm: self.board_shm.clone(),
             global_barrier: self.global_barrier,
             supervised,
+            notify_bridge: self
+                .local_agents
+                .as_ref()
+                .is_some_and(|local| graph.neighbours(index).iter().any(|j| !local.contains(j))),
         }
     }
 

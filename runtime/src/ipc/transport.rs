@@ -58,6 +58,72 @@ pub fn wake_service(i: usize) -> String {
 
 const BARRIER_SERVICE: &str = "admm-ta/barrier";
 
+/// Event service waking a mixed-mode host's bridge ([`crate::zenoh_net`]): agents with
+/// neighbours on other hosts notify it after every publish.
+pub const BRIDGE_WAKE_SERVICE: &str = "admm-ta/bridge/wake";
+
+/// Opens (or creates) agent `j`'s round-message service from `node`; `degree` is `j`'s.
+/// Every participant opens it with these limits (iceoryx2 refuses mismatched ones).
+pub(crate) fn open_round_service<S: iceoryx2::service::Service>(
+    node: &Node<S>,
+    j: usize,
+    degree: usize,
+    err: &dyn Fn(String) -> ExchangeError,
+) -> Result<
+    iceoryx2::service::port_factory::publish_subscribe::PortFactory<S, [f64], RoundHeader>,
+    ExchangeError,
+> {
+    let name =
+        ServiceName::new(&round_service(j)).map_err(|e| err(format!("bad service name: {e:?}")))?;
+    node.service_builder(&name)
+        .publish_subscribe::<[f64]>()
+        .user_header::<RoundHeader>()
+        .max_publishers(1)
+        .max_subscribers(degree.max(1))
+        .max_nodes(degree + 1)
+        .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
+        .subscriber_max_borrowed_samples(SUBSCRIBER_BORROWED)
+        .history_size(0)
+        .enable_safe_overflow(false)
+        .open_or_create()
+        .map_err(|e| err(format!("cannot open service {}: {e:?}", round_service(j))))
+}
+
+/// Opens (or creates) agent `j`'s wake-up event service from `node`; `degree` is `j`'s.
+pub(crate) fn open_wake_service<S: iceoryx2::service::Service>(
+    node: &Node<S>,
+    j: usize,
+    degree: usize,
+    err: &dyn Fn(String) -> ExchangeError,
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, ExchangeError> {
+    let name =
+        ServiceName::new(&wake_service(j)).map_err(|e| err(format!("bad service name: {e:?}")))?;
+    node.service_builder(&name)
+        .event()
+        .max_listeners(1)
+        .max_notifiers(degree.max(1))
+        .max_nodes(degree + 1)
+        .open_or_create()
+        .map_err(|e| err(format!("cannot open service {}: {e:?}", wake_service(j))))
+}
+
+/// Opens (or creates) the bridge's wake-up service of a team of `agents`.
+pub(crate) fn open_bridge_wake_service<S: iceoryx2::service::Service>(
+    node: &Node<S>,
+    agents: usize,
+    err: &dyn Fn(String) -> ExchangeError,
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, ExchangeError> {
+    let name = ServiceName::new(BRIDGE_WAKE_SERVICE)
+        .map_err(|e| err(format!("bad service name: {e:?}")))?;
+    node.service_builder(&name)
+        .event()
+        .max_listeners(1)
+        .max_notifiers(agents.max(1))
+        .max_nodes(agents + 1)
+        .open_or_create()
+        .map_err(|e| err(format!("cannot open service {BRIDGE_WAKE_SERVICE}: {e:?}")))
+}
+
 /// What an agent process needs to know to connect.
 #[derive(Debug, Clone)]
 pub struct IpcEndpoint {
@@ -74,6 +140,9 @@ pub struct IpcEndpoint {
     pub global_barrier: bool,
     /// Started by a launcher: stop when it is gone.
     pub supervised: bool,
+    /// Some neighbours run on other hosts (a mixed team): wake the host's bridge after every
+    /// publish. The bridge then stands in for them on this host.
+    pub notify_bridge: bool,
 }
 
 /// Bytes of the board: the global barrier's line, one line per agent (two arrival counters
@@ -217,7 +286,8 @@ impl Board {
         finished >= self.agents as u64 || !(0..self.agents).any(|i| self.member_alive(i))
     }
 
-    fn member_alive(&self, agent: usize) -> bool {
+    /// Agent `agent` of an independently started team has joined and its process lives.
+    pub(crate) fn member_alive(&self, agent: usize) -> bool {
         let pid = self.member_pid(agent);
         // SAFETY: kill with signal 0 only checks whether the process exists.
         pid != 0 && unsafe { libc::kill(pid as libc::pid_t, 0) } == 0
@@ -278,7 +348,7 @@ impl Board {
     }
 
     /// Agent `agent`'s arrival counter for rounds of parity `round % 2`.
-    fn arrivals(&self, agent: usize, round: u64) -> &AtomicU64 {
+    pub(crate) fn arrivals(&self, agent: usize, round: u64) -> &AtomicU64 {
         debug_assert!(agent < self.agents);
         self.word(LINE * (agent + 1) + 8 * (round % 2) as usize)
     }
@@ -299,6 +369,8 @@ pub struct IpcExchange {
     listener: Listener<Svc>,
     subscribers: Vec<Subscriber<Svc, [f64], RoundHeader>>,
     notifiers: Vec<Notifier<Svc>>,
+    /// Wakes the host's bridge (agents with neighbours on other hosts).
+    bridge: Option<Notifier<Svc>>,
     held: Vec<Option<RoundSample>>,
     pending: Vec<Option<RoundSample>>,
     gathered: u64,
@@ -364,33 +436,8 @@ impl IpcExchange {
             .config(config)
             .create::<Svc>()
             .map_err(|e| err(format!("cannot create the iceoryx2 node: {e:?}")))?;
-        let round_of = |j: usize| {
-            let name = ServiceName::new(&round_service(j))
-                .map_err(|e| err(format!("bad service name: {e:?}")))?;
-            node.service_builder(&name)
-                .publish_subscribe::<[f64]>()
-                .user_header::<RoundHeader>()
-                .max_publishers(1)
-                .max_subscribers(endpoint.degrees[j].max(1))
-                .max_nodes(endpoint.degrees[j] + 1)
-                .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
-                .subscriber_max_borrowed_samples(SUBSCRIBER_BORROWED)
-                .history_size(0)
-                .enable_safe_overflow(false)
-                .open_or_create()
-                .map_err(|e| err(format!("cannot open service {}: {e:?}", round_service(j))))
-        };
-        let wake_of = |j: usize| {
-            let name = ServiceName::new(&wake_service(j))
-                .map_err(|e| err(format!("bad service name: {e:?}")))?;
-            node.service_builder(&name)
-                .event()
-                .max_listeners(1)
-                .max_notifiers(endpoint.degrees[j].max(1))
-                .max_nodes(endpoint.degrees[j] + 1)
-                .open_or_create()
-                .map_err(|e| err(format!("cannot open service {}: {e:?}", wake_service(j))))
-        };
+        let round_of = |j: usize| open_round_service(&node, j, endpoint.degrees[j], &err);
+        let wake_of = |j: usize| open_wake_service(&node, j, endpoint.degrees[j], &err);
         // Listener before subscribers: a neighbour that sees our subscriber can wake us.
         let t_node = t0.elapsed();
         let own_wake = wake_of(i)?;
@@ -430,6 +477,16 @@ impl IpcExchange {
         }
         let barrier = if endpoint.global_barrier {
             Some(open_barrier(&node, endpoint.degrees.len(), &err)?)
+        } else {
+            None
+        };
+        let bridge = if endpoint.notify_bridge {
+            Some(
+                open_bridge_wake_service(&node, endpoint.degrees.len(), &err)?
+                    .notifier_builder()
+                    .create()
+                    .map_err(|e| err(format!("cannot create the bridge's notifier: {e:?}")))?,
+            )
         } else {
             None
         };
@@ -493,6 +550,7 @@ impl IpcExchange {
             listener,
             subscribers,
             notifiers,
+            bridge,
             held: (0..degree).map(|_| None).collect(),
             pending: (0..degree).map(|_| None).collect(),
             gathered: 0,
@@ -702,6 +760,11 @@ impl IpcExchange {
                     .notify()
                     .map_err(|e| transport(i, format!("notify failed: {e:?}")))?;
             }
+        }
+        if let Some(bridge) = &self.bridge {
+            bridge
+                .notify()
+                .map_err(|e| transport(i, format!("notifying the bridge failed: {e:?}")))?;
         }
         Ok(())
     }

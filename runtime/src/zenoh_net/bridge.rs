@@ -1,0 +1,619 @@
+//! The mixed mode's per-host bridge: the agents of one host exchange their messages over
+//! iceoryx2 exactly as in a one-machine team, and the bridge forwards only the messages that
+//! cross hosts. The agents' code is unchanged: on this host the bridge *is* the remote
+//! agents — it publishes their messages on their iceoryx2 services, counts their arrivals on
+//! the board and wakes the local agents, and it subscribes to every local agent that has a
+//! remote neighbour (once per remote neighbour, so the agent's start-up rendezvous and its
+//! delivery check count it like the neighbours it stands in for).
+//!
+//! Two threads, each with its own iceoryx2 node (ports stay in the thread that made them):
+//! * **out**: sleeps on the bridge's wake-up service, which local agents with remote
+//!   neighbours notify after every publish; reads their samples in place and puts each once
+//!   on the agent's Zenoh key (`<run>/round/<i>`), header words + payload;
+//! * **in**: receives the remote agents' messages from Zenoh (through a channel fed by
+//!   Zenoh's callbacks) and publishes each into the remote agent's local service, once all
+//!   of the agent's local neighbours subscribe (so round 0 is not lost to a late starter).
+//!
+//! Start-up order, so that no round-0 message is lost between hosts: Zenoh subscriptions
+//! first, then the host's liveliness token (declared by the host after [`Bridge::start`]),
+//! then — once every other host's token is seen — the local subscriptions that let local
+//! agents start. Presence: the bridge declares a liveliness token `<run>/alive/<i>` for each
+//! local agent while it is on the board, so every host sees the whole team come and go.
+//! Failures cross hosts both ways: a failure marked on the local board is announced on the
+//! run's failure key, and an announced one is marked on the local board.
+
+use crate::header::{RoundHeader, words_as_bytes};
+use crate::ipc::member::{HostEntry, Membership, Team, member_scenario};
+use crate::ipc::scenario::Scenario;
+use crate::ipc::transport::{
+    Board, arrivals_target, open_bridge_wake_service, open_round_service, open_wake_service,
+    run_config,
+};
+use crate::zenoh_net::links::ZenohLinks;
+use crate::zenoh_net::router::HostRouter;
+use crossbeam::channel::{Receiver, RecvTimeoutError, unbounded};
+use iceoryx2::prelude::*;
+use std::collections::{HashMap, HashSet, VecDeque};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+use zenoh::qos::CongestionControl;
+use zenoh::sample::{Sample, SampleKind};
+use zenoh::{Session, Wait};
+
+type Svc = ipc::Service;
+
+/// Longest sleep of either thread between two looks at failures and the stop flag.
+const SLICE: Duration = Duration::from_millis(20);
+
+/// No agent failed yet (in [`Shared::announced`]).
+const NONE: usize = usize::MAX;
+
+/// What the bridge's threads and Zenoh's callbacks share.
+struct Shared {
+    stop: AtomicBool,
+    /// The first failure announced on Zenoh.
+    announced: AtomicUsize,
+    error: Mutex<Option<String>>,
+    forwarded_out: AtomicU64,
+    forwarded_in: AtomicU64,
+}
+
+impl Shared {
+    fn fail(&self, what: String) {
+        self.error
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .get_or_insert(what);
+        self.stop.store(true, Ordering::Release);
+    }
+}
+
+/// A running bridge.
+pub struct Bridge {
+    shared: Arc<Shared>,
+    threads: Vec<JoinHandle<()>>,
+    membership: Option<Membership>,
+    _subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
+}
+
+/// Who is where, from the bridge's point of view.
+#[derive(Clone)]
+struct Layout {
+    local: Vec<usize>,
+    neighbours: Vec<Vec<usize>>,
+    degrees: Vec<usize>,
+    payload_len: usize,
+}
+
+impl Layout {
+    fn is_local(&self, a: usize) -> bool {
+        self.local.contains(&a)
+    }
+    /// Local agents with a neighbour on another host.
+    fn local_senders(&self) -> Vec<usize> {
+        self.local
+            .iter()
+            .copied()
+            .filter(|&i| self.neighbours[i].iter().any(|&j| !self.is_local(j)))
+            .collect()
+    }
+    /// Remote agents with a neighbour on this host.
+    fn remote_senders(&self) -> Vec<usize> {
+        (0..self.degrees.len())
+            .filter(|&r| !self.is_local(r) && self.neighbours[r].iter().any(|&j| self.is_local(j)))
+            .collect()
+    }
+    fn local_neighbours(&self, a: usize) -> Vec<usize> {
+        self.neighbours[a]
+            .iter()
+            .copied()
+            .filter(|&j| self.is_local(j))
+            .collect()
+    }
+    fn remote_neighbours(&self, a: usize) -> usize {
+        self.neighbours[a]
+            .iter()
+            .filter(|&&j| !self.is_local(j))
+            .count()
+    }
+}
+
+impl Bridge {
+    /// Joins the host's board for the remote agents, subscribes to their Zenoh keys and
+    /// starts the two forwarding threads.
+    pub fn start(team: &Team, host: &HostEntry, router: &HostRouter) -> Result<Self, String> {
+        let started = Instant::now();
+        let (scenario, namespace) = member_scenario(team, Some(host))?;
+        let graph = scenario.graph().map_err(|e| e.to_string())?;
+        let n = scenario.robots;
+        let layout = Layout {
+            local: host.agents.clone(),
+            neighbours: (0..n).map(|a| graph.neighbours(a).to_vec()).collect(),
+            degrees: (0..n).map(|a| graph.degree(a)).collect(),
+            payload_len: scenario.payload_len(),
+        };
+        let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
+        let remote: Vec<usize> = (0..n).filter(|&a| !layout.is_local(a)).collect();
+        let membership = Membership::join(&scenario, &namespace, &remote, deadline)?;
+        let links = team.zenoh_links(host);
+        let session = router.session().clone();
+        let shared = Arc::new(Shared {
+            stop: AtomicBool::new(false),
+            announced: AtomicUsize::new(NONE),
+            error: Mutex::new(None),
+            forwarded_out: AtomicU64::new(0),
+            forwarded_in: AtomicU64::new(0),
+        });
+        // Zenoh side first: the remote agents' messages, failures, and the other hosts.
+        let (to_in, inbox) = unbounded::<(usize, Vec<u8>)>();
+        let mut subscribers = Vec::new();
+        for r in layout.remote_senders() {
+            let to_in = to_in.clone();
+            subscribers.push(
+                session
+                    .declare_subscriber(links.round_key(r))
+                    .callback(move |sample: Sample| {
+                        let _ = to_in.send((r, sample.payload().to_bytes().into_owned()));
+                    })
+                    .wait()
+                    .map_err(|e| format!("bridge: cannot subscribe to agent {r}: {e}"))?,
+            );
+        }
+        {
+            let shared = Arc::clone(&shared);
+            subscribers.push(
+                session
+                    .declare_subscriber(links.failure_key())
+                    .callback(move |sample: Sample| {
+                        let failed = String::from_utf8_lossy(&sample.payload().to_bytes())
+                            .trim()
+                            .parse::<usize>();
+                        if let Ok(failed) = failed {
+                            let _ = shared.announced.compare_exchange(
+                                NONE,
+                                failed,
+                                Ordering::AcqRel,
+                                Ordering::Acquire,
+                            );
+                        }
+                    })
+                    .wait()
+                    .map_err(|e| format!("bridge: cannot watch failures: {e}"))?,
+            );
+        }
+        let hosts_seen = Arc::new(Mutex::new(HashSet::new()));
+        {
+            let hosts_seen = Arc::clone(&hosts_seen);
+            let prefix = links.host_key("");
+            subscribers.push(
+                session
+                    .liveliness()
+                    .declare_subscriber(links.host_key("*"))
+                    .history(true)
+                    .callback(move |sample: Sample| {
+                        if let Some(name) = sample.key_expr().as_str().strip_prefix(&prefix) {
+                            let mut seen = hosts_seen.lock().unwrap_or_else(|e| e.into_inner());
+                            match sample.kind() {
+                                SampleKind::Put => seen.insert(name.to_string()),
+                                SampleKind::Delete => seen.remove(name),
+                            };
+                        }
+                    })
+                    .wait()
+                    .map_err(|e| format!("bridge: cannot watch the hosts: {e}"))?,
+            );
+        }
+        let other_hosts: Vec<String> = team
+            .file
+            .hosts
+            .iter()
+            .filter(|h| h.name != host.name)
+            .map(|h| h.name.clone())
+            .collect();
+        let mut threads = Vec::new();
+        {
+            let (shared, session, links, scenario, layout) = (
+                Arc::clone(&shared),
+                session.clone(),
+                links.clone(),
+                scenario.clone(),
+                layout.clone(),
+            );
+            let hosts_seen = Arc::clone(&hosts_seen);
+            threads.push(
+                std::thread::Builder::new()
+                    .name("bridge-out".into())
+                    .spawn(move || {
+                        let out = OutThread {
+                            shared: &shared,
+                            session: &session,
+                            links: &links,
+                            scenario: &scenario,
+                            layout: &layout,
+                        };
+                        if let Err(e) = out.run(&hosts_seen, &other_hosts, deadline) {
+                            shared.fail(e);
+                        }
+                    })
+                    .map_err(|e| format!("bridge: cannot start a thread: {e}"))?,
+            );
+        }
+        {
+            let (shared, session, links, scenario) = (
+                Arc::clone(&shared),
+                session.clone(),
+                links.clone(),
+                scenario.clone(),
+            );
+            threads.push(
+                std::thread::Builder::new()
+                    .name("bridge-in".into())
+                    .spawn(move || {
+                        let into = InThread {
+                            shared: &shared,
+                            session: &session,
+                            links: &links,
+                            scenario: &scenario,
+                            layout: &layout,
+                        };
+                        if let Err(e) = into.run(&inbox, deadline) {
+                            shared.fail(e);
+                        }
+                    })
+                    .map_err(|e| format!("bridge: cannot start a thread: {e}"))?,
+            );
+        }
+        Ok(Self {
+            shared,
+            threads,
+            membership: Some(membership),
+            _subscribers: subscribers,
+        })
+    }
+
+    /// The first error of a forwarding thread.
+    pub fn check(&self) -> Result<(), String> {
+        match self
+            .shared
+            .error
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
+        {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    /// Stops the threads (after a last forwarding pass), leaves the board; returns the
+    /// messages forwarded out and in.
+    pub fn finish(mut self) -> (u64, u64) {
+        self.stop_threads();
+        if let Some(m) = self.membership.take() {
+            m.leave();
+        }
+        (
+            self.shared.forwarded_out.load(Ordering::Relaxed),
+            self.shared.forwarded_in.load(Ordering::Relaxed),
+        )
+    }
+
+    fn stop_threads(&mut self) {
+        self.shared.stop.store(true, Ordering::Release);
+        for t in self.threads.drain(..) {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Drop for Bridge {
+    fn drop(&mut self) {
+        self.stop_threads();
+        if let Some(m) = self.membership.take() {
+            m.leave();
+        }
+    }
+}
+
+fn node(scenario: &Scenario, name: &str) -> Result<Node<Svc>, String> {
+    let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
+    let name = NodeName::new(name).map_err(|e| format!("bad node name: {e:?}"))?;
+    NodeBuilder::new()
+        .name(&name)
+        .config(&config)
+        .create::<Svc>()
+        .map_err(|e| format!("bridge: cannot create an iceoryx2 node: {e:?}"))
+}
+
+fn board(scenario: &Scenario) -> Result<Board, String> {
+    Board::open(&scenario.board_shm, scenario.robots)
+}
+
+fn put(session: &Session, key: String, value: String) {
+    let _ = session
+        .put(key, value)
+        .congestion_control(CongestionControl::Block)
+        .wait();
+}
+
+/// Local agents' messages out to Zenoh.
+struct OutThread<'a> {
+    shared: &'a Shared,
+    session: &'a Session,
+    links: &'a ZenohLinks,
+    scenario: &'a Scenario,
+    layout: &'a Layout,
+}
+
+impl OutThread<'_> {
+    fn run(
+        &self,
+        hosts_seen: &Mutex<HashSet<String>>,
+        other_hosts: &[String],
+        deadline: Instant,
+    ) -> Result<(), String> {
+        let err = |what: String| crate::exchange::ExchangeError::Transport { agent: 0, what };
+        let text = |e: crate::exchange::ExchangeError| match e {
+            crate::exchange::ExchangeError::Transport { what, .. } => format!("bridge: {what}"),
+            e => e.to_string(),
+        };
+        // Every other host subscribed to our agents before we let them start.
+        loop {
+            let missing: Vec<&String> = {
+                let seen = hosts_seen.lock().unwrap_or_else(|e| e.into_inner());
+                other_hosts.iter().filter(|h| !seen.contains(*h)).collect()
+            };
+            if missing.is_empty() {
+                break;
+            }
+            if self.shared.stop.load(Ordering::Acquire) {
+                return Ok(());
+            }
+            if Instant::now() >= deadline {
+                return Err(format!(
+                    "bridge: host(s) {missing:?} did not come up within the start-up deadline"
+                ));
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        let node = node(self.scenario, "bridge-out")?;
+        let board = board(self.scenario)?;
+        let listener = open_bridge_wake_service(&node, self.scenario.robots, &err)
+            .map_err(text)?
+            .listener_builder()
+            .create()
+            .map_err(|e| format!("bridge: cannot create its listener: {e:?}"))?;
+        // Per local agent with remote neighbours: one subscriber per remote neighbour.
+        let mut senders = Vec::new();
+        for i in self.layout.local_senders() {
+            let service =
+                open_round_service(&node, i, self.layout.degrees[i], &err).map_err(text)?;
+            let subscribers = (0..self.layout.remote_neighbours(i))
+                .map(|_| {
+                    service
+                        .subscriber_builder()
+                        .buffer_size(2)
+                        .create()
+                        .map_err(|e| format!("bridge: cannot subscribe to agent {i}: {e:?}"))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let publisher = self
+                .session
+                .declare_publisher(self.links.round_key(i))
+                .congestion_control(CongestionControl::Block)
+                .express(true)
+                .wait()
+                .map_err(|e| format!("bridge: cannot publish agent {i}'s messages: {e}"))?;
+            senders.push((subscribers, publisher));
+        }
+        let words = RoundHeader::WORDS + self.layout.payload_len;
+        let mut message = vec![0.0; words];
+        let mut announced_local = false;
+        loop {
+            let stopping = self.shared.stop.load(Ordering::Acquire);
+            for (subscribers, publisher) in &senders {
+                for (k, subscriber) in subscribers.iter().enumerate() {
+                    while let Some(sample) = subscriber
+                        .receive()
+                        .map_err(|e| format!("bridge: receive failed: {e:?}"))?
+                    {
+                        // Every remote neighbour's copy arrives; one goes out.
+                        if k > 0 {
+                            continue;
+                        }
+                        sample
+                            .user_header()
+                            .write_words(&mut message[..RoundHeader::WORDS]);
+                        let payload = sample.payload();
+                        if payload.len() != self.layout.payload_len {
+                            return Err(format!(
+                                "bridge: agent {} sent {} values, expected {}",
+                                sample.user_header().sender,
+                                payload.len(),
+                                self.layout.payload_len
+                            ));
+                        }
+                        message[RoundHeader::WORDS..].copy_from_slice(payload);
+                        publisher
+                            .put(words_as_bytes(&message).to_vec())
+                            .wait()
+                            .map_err(|e| format!("bridge: forwarding failed: {e}"))?;
+                        self.shared.forwarded_out.fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+            }
+            if !announced_local && let Some(failed) = board.failed() {
+                // A local failure (or one we marked from an announcement: harmless echo).
+                put(self.session, self.links.failure_key(), failed.to_string());
+                announced_local = true;
+            }
+            if stopping {
+                return Ok(());
+            }
+            listener
+                .timed_wait(|_| {}, SLICE)
+                .map_err(|e| format!("bridge: waiting failed: {e:?}"))?;
+        }
+    }
+}
+
+/// Remote agents' messages in from Zenoh.
+struct InThread<'a> {
+    shared: &'a Shared,
+    session: &'a Session,
+    links: &'a ZenohLinks,
+    scenario: &'a Scenario,
+    layout: &'a Layout,
+}
+
+impl InThread<'_> {
+    fn run(&self, inbox: &Receiver<(usize, Vec<u8>)>, deadline: Instant) -> Result<(), String> {
+        let err = |what: String| crate::exchange::ExchangeError::Transport { agent: 0, what };
+        let text = |e: crate::exchange::ExchangeError| match e {
+            crate::exchange::ExchangeError::Transport { what, .. } => format!("bridge: {what}"),
+            e => e.to_string(),
+        };
+        let node = node(self.scenario, "bridge-in")?;
+        let board = board(self.scenario)?;
+        let layout = self.layout;
+        let mut publishers = HashMap::new();
+        for r in layout.remote_senders() {
+            let service = open_round_service(&node, r, layout.degrees[r], &err).map_err(text)?;
+            let publisher = service
+                .publisher_builder()
+                .initial_max_slice_len(layout.payload_len)
+                .allocation_strategy(AllocationStrategy::Static)
+                .create()
+                .map_err(|e| format!("bridge: cannot publish for agent {r}: {e:?}"))?;
+            publishers.insert(r, (service, publisher, layout.local_neighbours(r)));
+        }
+        let mut notifiers = HashMap::new();
+        for i in layout.local_senders() {
+            let notifier = open_wake_service(&node, i, layout.degrees[i], &err)
+                .map_err(text)?
+                .notifier_builder()
+                .create()
+                .map_err(|e| format!("bridge: cannot wake agent {i}: {e:?}"))?;
+            notifiers.insert(i, notifier);
+        }
+        let mut pending: VecDeque<(usize, Vec<u8>)> = VecDeque::new();
+        let mut tokens: HashMap<usize, zenoh::liveliness::LivelinessToken> = HashMap::new();
+        let mut joined = vec![false; self.scenario.robots];
+        let mut marked = false;
+        let words = RoundHeader::WORDS + layout.payload_len;
+        loop {
+            match inbox.recv_timeout(SLICE) {
+                Ok(message) => pending.push_back(message),
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => return Ok(()),
+            }
+            pending.extend(inbox.try_iter());
+            // In arrival order; a remote agent whose local neighbours are not all subscribed
+            // yet waits (only at start-up), and so do its later messages.
+            let mut blocked = HashSet::new();
+            let mut kept = VecDeque::new();
+            while let Some((r, bytes)) = pending.pop_front() {
+                let Some((service, publisher, local)) = publishers.get(&r) else {
+                    continue;
+                };
+                if blocked.contains(&r)
+                    || service.dynamic_config().number_of_subscribers() < local.len()
+                {
+                    if Instant::now() >= deadline {
+                        return Err(format!(
+                            "bridge: the local neighbours {local:?} of agent {r} did not all start within the start-up deadline"
+                        ));
+                    }
+                    blocked.insert(r);
+                    kept.push_back((r, bytes));
+                    continue;
+                }
+                if bytes.len() != words * 8 {
+                    return Err(format!(
+                        "bridge: agent {r} sent a message of {} bytes, expected {}",
+                        bytes.len(),
+                        words * 8
+                    ));
+                }
+                let word = |k: usize| {
+                    f64::from_ne_bytes(bytes[8 * k..8 * k + 8].try_into().expect("8 bytes"))
+                };
+                let mut header_words = [0.0; RoundHeader::WORDS];
+                for (k, w) in header_words.iter_mut().enumerate() {
+                    *w = word(k);
+                }
+                let header = RoundHeader::from_words(&header_words);
+                let mut sample = publisher
+                    .loan_slice_uninit(layout.payload_len)
+                    .map_err(|e| format!("bridge: cannot loan a sample: {e:?}"))?
+                    .write_from_fn(|k| word(RoundHeader::WORDS + k));
+                *sample.user_header_mut() = header;
+                sample
+                    .send()
+                    .map_err(|e| format!("bridge: send failed: {e:?}"))?;
+                board.set_published_round(r, header.round);
+                for &j in local {
+                    let arrived = board
+                        .arrivals(j, header.round)
+                        .fetch_add(1, Ordering::AcqRel)
+                        + 1;
+                    if arrived == arrivals_target(layout.degrees[j], header.round)
+                        && let Some(notifier) = notifiers.get(&j)
+                    {
+                        notifier
+                            .notify()
+                            .map_err(|e| format!("bridge: notify failed: {e:?}"))?;
+                    }
+                }
+                self.shared.forwarded_in.fetch_add(1, Ordering::Relaxed);
+            }
+            pending = kept;
+            // Presence of the local agents, for the other hosts.
+            for &i in &layout.local {
+                let alive = board.member_alive(i);
+                if alive && !joined[i] {
+                    joined[i] = true;
+                    let token = self
+                        .session
+                        .liveliness()
+                        .declare_token(self.links.alive_key(i))
+                        .wait()
+                        .map_err(|e| format!("bridge: cannot declare agent {i}'s token: {e}"))?;
+                    tokens.insert(i, token);
+                } else if !alive && let Some(token) = tokens.remove(&i) {
+                    let _ = token.undeclare().wait();
+                }
+            }
+            let announced = self.shared.announced.load(Ordering::Acquire);
+            if !marked && announced != NONE {
+                let _ = board.mark_failed(announced);
+                marked = true;
+            }
+            if self.shared.stop.load(Ordering::Acquire) {
+                return Ok(());
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layout_of_a_ring_over_two_hosts() {
+        // Ring 0-1-2-3-0, agents 0 and 1 here.
+        let layout = Layout {
+            local: vec![0, 1],
+            neighbours: vec![vec![1, 3], vec![0, 2], vec![1, 3], vec![2, 0]],
+            degrees: vec![2; 4],
+            payload_len: 1,
+        };
+        assert_eq!(layout.local_senders(), vec![0, 1]);
+        assert_eq!(layout.remote_senders(), vec![2, 3]);
+        assert_eq!(layout.local_neighbours(3), vec![0]);
+        assert_eq!(layout.remote_neighbours(0), 1);
+    }
+}

@@ -1,0 +1,541 @@
+//! One agent's end of the Zenoh transport.
+//!
+//! Agent `i` publishes each round message on `<run>/round/<i>` and subscribes to its
+//! neighbours' keys. A message is the round header as [`RoundHeader::WORDS`] words followed
+//! by the payload (the layout of the `uds` transport). Zenoh delivers it on one of its
+//! threads into a per-neighbour slot chosen by the round's parity — a neighbour is never
+//! more than one round ahead, so two slots suffice and a late duplicate cannot displace a
+//! message not yet read — and wakes the agent through a condition variable. Gathering swaps
+//! the slot's buffer with the agent's own (no copy); the step then reads the neighbours'
+//! payloads from the swapped buffers exactly as over iceoryx2, and writes its own payload in
+//! place. Publishing copies the message once into the buffer Zenoh takes ownership of.
+//!
+//! Presence and failures, with no shared memory between hosts:
+//! * every agent holds a liveliness token `<run>/alive/<i>`; start-up waits until every
+//!   neighbour's token is seen (a neighbour declares its subscriptions before its token, so
+//!   its round-0 message reaches us), and names the neighbours that never came;
+//! * a neighbour whose token vanishes while its message is still awaited has died or lost
+//!   the network (a killed process closes its links at once; a vanished machine is noticed
+//!   after Zenoh's lease, 10 s by default): the agent stops with an error naming it;
+//! * an agent that fails announces the culprit on `<run>/failed`; everybody else stops at
+//!   its next wait with an error naming that agent.
+//!
+//! There is no global barrier: use `ipc` or `threads` for lockstep benchmarks.
+
+use crate::exchange::{Exchange, ExchangeError};
+use crate::header::{RoundHeader, words_as_bytes, words_as_bytes_mut};
+use crate::wait::WaitPolicy;
+use crate::zenoh_net::links::ZenohLinks;
+use crate::zenoh_net::session::{self, Role};
+use admm_ta_agents::agent::Inbox;
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+use zenoh::liveliness::LivelinessToken;
+use zenoh::pubsub::{Publisher, Subscriber};
+use zenoh::qos::CongestionControl;
+use zenoh::sample::{Sample, SampleKind};
+use zenoh::{Session, Wait};
+
+/// Longest sleep between two looks at the launcher and the failure announcements.
+const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
+
+/// How long a neighbour's message may still arrive after its liveliness token vanished (the
+/// token and the message may travel different links).
+const DEPARTURE_GRACE: Duration = Duration::from_millis(300);
+
+/// What one agent needs to join a Zenoh run.
+#[derive(Debug, Clone)]
+pub struct ZenohEndpoint {
+    pub index: usize,
+    pub neighbours: Vec<usize>,
+    pub payload_len: usize,
+    pub policy: WaitPolicy,
+    pub links: ZenohLinks,
+    /// Started by a launcher: stop when it is gone.
+    pub supervised: bool,
+}
+
+/// A received message in its parity slot.
+struct Slot {
+    words: Vec<f64>,
+    round: Option<u64>,
+}
+
+/// What Zenoh's threads deliver, guarded by one mutex.
+struct Inbound {
+    /// Per neighbour, the slots of even and odd rounds.
+    slots: Vec<[Slot; 2]>,
+    /// Per neighbour: its token was seen, and when it vanished.
+    present: Vec<bool>,
+    departed: Vec<Option<Instant>>,
+    /// The agent announced as failed on the run's failure key (the first announcement).
+    failed: Option<usize>,
+    /// A malformed message (wrong length or sender): the first one.
+    fault: Option<ExchangeError>,
+    /// Bumped on every delivery, so that a waiter never sleeps past one.
+    generation: u64,
+}
+
+struct Shared {
+    inbound: Mutex<Inbound>,
+    wake: Condvar,
+}
+
+impl Shared {
+    fn lock(&self) -> MutexGuard<'_, Inbound> {
+        // A panic in a Zenoh callback poisons nothing we cannot still read.
+        self.inbound.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn deliver(&self, change: impl FnOnce(&mut Inbound)) {
+        let mut inbound = self.lock();
+        change(&mut inbound);
+        inbound.generation += 1;
+        drop(inbound);
+        self.wake.notify_all();
+    }
+}
+
+/// One agent's end of the Zenoh transport.
+pub struct ZenohExchange {
+    index: usize,
+    neighbours: Vec<usize>,
+    policy: WaitPolicy,
+    shared: Arc<Shared>,
+    /// The gathered messages (header words + payload), swapped out of the slots.
+    held: Vec<Vec<f64>>,
+    held_round: Vec<Option<u64>>,
+    headers: Vec<RoundHeader>,
+    /// Header words + payload of the own message.
+    outbox: Vec<f64>,
+    /// Generation of the inbound state when last looked at.
+    seen: u64,
+    launcher: Option<u32>,
+    failure_key: String,
+    publisher: Publisher<'static>,
+    _subscribers: Vec<Subscriber<()>>,
+    _token: LivelinessToken,
+    session: Session,
+}
+
+fn transport(agent: usize, what: impl Into<String>) -> ExchangeError {
+    ExchangeError::Transport {
+        agent,
+        what: what.into(),
+    }
+}
+
+/// Puts a received round message of neighbour `k` (agent `neighbour`) into its slot.
+fn receive(
+    inbound: &mut Inbound,
+    agent: usize,
+    k: usize,
+    neighbour: usize,
+    message_words: usize,
+    bytes: &[u8],
+) {
+    if bytes.len() != message_words * 8 || bytes.len() < RoundHeader::WORDS * 8 {
+        inbound.fault.get_or_insert(ExchangeError::WrongLength {
+            agent,
+            neighbour,
+            expected: message_words.saturating_sub(RoundHeader::WORDS),
+            got: (bytes.len() / 8).saturating_sub(RoundHeader::WORDS),
+        });
+        return;
+    }
+    let mut header_words = [0.0; RoundHeader::WORDS];
+    words_as_bytes_mut(&mut header_words).copy_from_slice(&bytes[..RoundHeader::WORDS * 8]);
+    let header = RoundHeader::from_words(&header_words);
+    if header.sender as usize != neighbour {
+        inbound.fault.get_or_insert(ExchangeError::WrongSender {
+            agent,
+            neighbour,
+            got: header.sender,
+        });
+        return;
+    }
+    let slot = &mut inbound.slots[k][(header.round % 2) as usize];
+    words_as_bytes_mut(&mut slot.words).copy_from_slice(bytes);
+    slot.round = Some(header.round);
+}
+
+impl ZenohExchange {
+    /// Opens this agent's Zenoh session, declares its subscriptions, publisher and token,
+    /// and waits (until `deadline`) for every neighbour's token.
+    pub fn connect(endpoint: &ZenohEndpoint, deadline: Instant) -> Result<Self, ExchangeError> {
+        let i = endpoint.index;
+        let err = |what: String| transport(i, what);
+        let links = &endpoint.links;
+        let session = session::open(
+            &Role::Agent {
+                within: deadline.saturating_duration_since(Instant::now()),
+            },
+            &links.listen,
+            &links.connect,
+        )
+        .map_err(err)?;
+        let degree = endpoint.neighbours.len();
+        let message_words = RoundHeader::WORDS + endpoint.payload_len;
+        let slot = || Slot {
+            words: vec![0.0; message_words],
+            round: None,
+        };
+        let shared = Arc::new(Shared {
+            inbound: Mutex::new(Inbound {
+                slots: (0..degree).map(|_| [slot(), slot()]).collect(),
+                present: vec![false; degree],
+                departed: vec![None; degree],
+                failed: None,
+                fault: None,
+                generation: 0,
+            }),
+            wake: Condvar::new(),
+        });
+        let mut subscribers = Vec::with_capacity(degree + 2);
+        for (k, &j) in endpoint.neighbours.iter().enumerate() {
+            let shared = Arc::clone(&shared);
+            subscribers.push(
+                session
+                    .declare_subscriber(links.round_key(j))
+                    .callback(move |sample: Sample| {
+                        let bytes = sample.payload().to_bytes();
+                        shared.deliver(|inbound| receive(inbound, i, k, j, message_words, &bytes));
+                    })
+                    .wait()
+                    .map_err(|e| err(format!("cannot subscribe to agent {j}: {e}")))?,
+            );
+        }
+        {
+            let shared = Arc::clone(&shared);
+            subscribers.push(
+                session
+                    .declare_subscriber(links.failure_key())
+                    .callback(move |sample: Sample| {
+                        let announced = String::from_utf8_lossy(&sample.payload().to_bytes())
+                            .trim()
+                            .parse::<usize>();
+                        if let Ok(failed) = announced {
+                            shared.deliver(|inbound| {
+                                inbound.failed.get_or_insert(failed);
+                            });
+                        }
+                    })
+                    .wait()
+                    .map_err(|e| err(format!("cannot subscribe to failure announcements: {e}")))?,
+            );
+        }
+        {
+            let shared = Arc::clone(&shared);
+            let links = links.clone();
+            let neighbours = endpoint.neighbours.clone();
+            subscribers.push(
+                session
+                    .liveliness()
+                    .declare_subscriber(links.alive_all())
+                    .history(true)
+                    .callback(move |sample: Sample| {
+                        let Some(k) = links
+                            .agent_of_alive_key(sample.key_expr().as_str())
+                            .and_then(|j| neighbours.iter().position(|&n| n == j))
+                        else {
+                            return;
+                        };
+                        let kind = sample.kind();
+                        shared.deliver(|inbound| match kind {
+                            SampleKind::Put => {
+                                inbound.present[k] = true;
+                                inbound.departed[k] = None;
+                            }
+                            SampleKind::Delete => inbound.departed[k] = Some(Instant::now()),
+                        });
+                    })
+                    .wait()
+                    .map_err(|e| err(format!("cannot watch the agents' presence: {e}")))?,
+            );
+        }
+        let publisher = session
+            .declare_publisher(links.round_key(i))
+            .congestion_control(CongestionControl::Block)
+            .express(true)
+            .wait()
+            .map_err(|e| err(format!("cannot declare the publisher: {e}")))?;
+        // Subscriptions first: a neighbour that sees our token can send to us.
+        let token = session
+            .liveliness()
+            .declare_token(links.alive_key(i))
+            .wait()
+            .map_err(|e| err(format!("cannot declare the liveliness token: {e}")))?;
+        let exchange = Self {
+            index: i,
+            neighbours: endpoint.neighbours.clone(),
+            policy: endpoint.policy,
+            shared,
+            held: (0..degree).map(|_| vec![0.0; message_words]).collect(),
+            held_round: vec![None; degree],
+            headers: vec![RoundHeader::default(); degree],
+            outbox: vec![0.0; message_words],
+            seen: 0,
+            launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
+            failure_key: links.failure_key(),
+            publisher,
+            _subscribers: subscribers,
+            _token: token,
+            session,
+        };
+        exchange.await_neighbours(deadline)?;
+        Ok(exchange)
+    }
+
+    /// Start-up rendezvous: every neighbour's token seen.
+    fn await_neighbours(&self, deadline: Instant) -> Result<(), ExchangeError> {
+        let started = Instant::now();
+        let mut inbound = self.shared.lock();
+        loop {
+            if let Some(failed) = inbound.failed {
+                return Err(ExchangeError::PeerFailed {
+                    agent: self.index,
+                    failed,
+                    round: 0,
+                    how: "failed during start-up".into(),
+                });
+            }
+            if inbound.present.iter().all(|&p| p) {
+                return Ok(());
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                let missing: Vec<usize> = self
+                    .neighbours
+                    .iter()
+                    .zip(&inbound.present)
+                    .filter(|(_, p)| !**p)
+                    .map(|(&j, _)| j)
+                    .collect();
+                return Err(transport(
+                    self.index,
+                    format!(
+                        "only {} of {} neighbours joined the Zenoh network within {:.1?}; missing: agent(s) {missing:?} (not started, started too late, or their host's router unreachable)",
+                        self.neighbours.len() - missing.len(),
+                        self.neighbours.len(),
+                        started.elapsed()
+                    ),
+                ));
+            }
+            inbound = self
+                .shared
+                .wake
+                .wait_timeout(inbound, deadline - now)
+                .unwrap_or_else(|p| p.into_inner())
+                .0;
+        }
+    }
+
+    /// Announces `agent` as the one that failed, so that every agent of the run stops.
+    pub fn blame(&self, agent: usize) {
+        let _ = self
+            .session
+            .put(self.failure_key.clone(), agent.to_string())
+            .congestion_control(CongestionControl::Block)
+            .wait();
+    }
+
+    /// The first neighbour whose round-`round` message is missing (after a timeout).
+    pub fn first_missing(&self, round: u64) -> Option<usize> {
+        self.held_round
+            .iter()
+            .position(|&r| r != Some(round))
+            .map(|k| self.neighbours[k])
+    }
+
+    /// Moves every neighbour's round-`round` message that arrived into `held`; `true` once
+    /// all are held. Fails on a malformed message, an announced failure, or a neighbour that
+    /// left while its message is awaited.
+    fn take_arrived(&mut self, round: u64) -> Result<bool, ExchangeError> {
+        let mut inbound = self.shared.lock();
+        self.seen = inbound.generation;
+        if let Some(fault) = inbound.fault.take() {
+            return Err(fault);
+        }
+        if let Some(failed) = inbound.failed {
+            return Err(ExchangeError::PeerFailed {
+                agent: self.index,
+                failed,
+                round,
+                how: if failed == self.index {
+                    "was reported failed by a neighbour".into()
+                } else {
+                    "failed".into()
+                },
+            });
+        }
+        let parity = (round % 2) as usize;
+        let mut all = true;
+        for k in 0..self.neighbours.len() {
+            if self.held_round[k] == Some(round) {
+                continue;
+            }
+            let slot = &mut inbound.slots[k][parity];
+            if slot.round == Some(round) {
+                std::mem::swap(&mut slot.words, &mut self.held[k]);
+                slot.round = None;
+                self.held_round[k] = Some(round);
+                self.headers[k] = RoundHeader::from_words(&self.held[k][..RoundHeader::WORDS]);
+                continue;
+            }
+            if let Some(slot_round) = slot.round
+                && slot_round > round
+            {
+                return Err(ExchangeError::OutOfOrder {
+                    agent: self.index,
+                    neighbour: self.neighbours[k],
+                    expected: round,
+                    got: slot_round,
+                });
+            }
+            if inbound.departed[k].is_some_and(|t| t.elapsed() >= DEPARTURE_GRACE) {
+                return Err(ExchangeError::PeerFailed {
+                    agent: self.index,
+                    failed: self.neighbours[k],
+                    round,
+                    how: "left the Zenoh network (its liveliness token vanished)".into(),
+                });
+            }
+            all = false;
+        }
+        Ok(all)
+    }
+
+    /// Sleeps until a delivery, `until`, or a failure-check slice.
+    fn sleep(&mut self, until: Instant, round: u64) -> Result<(), ExchangeError> {
+        let until = until.min(Instant::now() + FAILURE_CHECK_SLICE);
+        let mut inbound = self.shared.lock();
+        while inbound.generation == self.seen {
+            let now = Instant::now();
+            if now >= until {
+                break;
+            }
+            inbound = self
+                .shared
+                .wake
+                .wait_timeout(inbound, until - now)
+                .unwrap_or_else(|p| p.into_inner())
+                .0;
+        }
+        drop(inbound);
+        self.check_launcher(round)
+    }
+
+    fn check_launcher(&self, round: u64) -> Result<(), ExchangeError> {
+        match self.launcher {
+            Some(launcher) if std::os::unix::process::parent_id() != launcher => Err(transport(
+                self.index,
+                format!("stopped at round {round}: its launcher (pid {launcher}) is gone"),
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    fn send(&mut self, header: RoundHeader) -> Result<(), ExchangeError> {
+        header.write_words(&mut self.outbox[..RoundHeader::WORDS]);
+        // Zenoh takes ownership of what it sends: one copy per round.
+        self.publisher
+            .put(words_as_bytes(&self.outbox).to_vec())
+            .wait()
+            .map_err(|e| {
+                transport(
+                    self.index,
+                    format!("publishing round {} failed: {e}", header.round),
+                )
+            })
+    }
+}
+
+impl Drop for ZenohExchange {
+    fn drop(&mut self) {
+        // Flushes what is queued and tells the peers we left (our token vanishes).
+        let _ = self.session.close().wait();
+    }
+}
+
+/// Neighbours' payloads of the gathered round, in the swapped-out buffers.
+struct HeldInbox<'a> {
+    held: &'a [Vec<f64>],
+}
+
+impl Inbox for HeldInbox<'_> {
+    fn len(&self) -> usize {
+        self.held.len()
+    }
+    fn payload(&self, k: usize) -> &[f64] {
+        &self.held[k][RoundHeader::WORDS..]
+    }
+}
+
+impl Exchange for ZenohExchange {
+    fn degree(&self) -> usize {
+        self.neighbours.len()
+    }
+
+    fn publish_initial(
+        &mut self,
+        header: RoundHeader,
+        write: &mut dyn FnMut(&mut [f64]),
+    ) -> Result<(), ExchangeError> {
+        write(&mut self.outbox[RoundHeader::WORDS..]);
+        self.send(header)
+    }
+
+    fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
+        let started = Instant::now();
+        if round.is_multiple_of(64) {
+            self.check_launcher(round)?;
+        }
+        let held = self.policy.wait_until(
+            self,
+            deadline,
+            |s| s.take_arrived(round),
+            |s, deadline| s.sleep(deadline, round),
+        )?;
+        if held {
+            return Ok(());
+        }
+        Err(ExchangeError::Timeout {
+            agent: self.index,
+            round,
+            missing: self
+                .held_round
+                .iter()
+                .zip(&self.neighbours)
+                .filter(|(r, _)| **r != Some(round))
+                .map(|(_, &j)| j)
+                .collect(),
+            waited: started.elapsed(),
+        })
+    }
+
+    fn neighbour_header(&self, k: usize) -> &RoundHeader {
+        &self.headers[k]
+    }
+
+    fn neighbour_payload(&self, k: usize) -> &[f64] {
+        &self.held[k][RoundHeader::WORDS..]
+    }
+
+    fn compute_and_publish(
+        &mut self,
+        compute: &mut dyn FnMut(&dyn Inbox, &mut [f64]) -> RoundHeader,
+    ) -> Result<(), ExchangeError> {
+        let header = compute(
+            &HeldInbox { held: &self.held },
+            &mut self.outbox[RoundHeader::WORDS..],
+        );
+        self.send(header)
+    }
+
+    fn global_barrier(&mut self, _round: u64, _deadline: Instant) -> Result<(), ExchangeError> {
+        Err(transport(
+            self.index,
+            "the Zenoh transport has no global barrier (use ipc or threads)",
+        ))
+    }
+}

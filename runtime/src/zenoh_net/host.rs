@@ -1,0 +1,187 @@
+//! `admm-ta host --team FILE --name NAME`: what one machine of a multi-host team runs next to
+//! its agents. It runs the host's Zenoh router (listening on the host's endpoint, linking
+//! to the other hosts' routers) and, in a mixed team, the host's bridge. It watches the
+//! team's liveliness tokens: once every agent of the team has shown up and left again, the
+//! run is over and it returns; a failure announced by any agent is reported.
+//!
+//! It waits for the first agents until the team's start-up deadline (naming those that never
+//! came) and for the run no longer than every round's deadline allows.
+
+use crate::ipc::member::{Team, TeamTransport};
+use crate::zenoh_net::links::ZenohLinks;
+use crate::zenoh_net::router::HostRouter;
+use serde::Serialize;
+use std::path::Path;
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
+use zenoh::Wait;
+use zenoh::sample::{Sample, SampleKind};
+
+/// What a host saw of its team's run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HostReport {
+    pub host: String,
+    /// Agents of the whole team seen on the network.
+    pub agents_seen: usize,
+    /// Round messages the bridge forwarded to and from the other hosts (mixed teams).
+    pub forwarded_out: u64,
+    pub forwarded_in: u64,
+}
+
+/// The team's presence as this host sees it.
+#[derive(Default)]
+struct Presence {
+    seen: Vec<bool>,
+    alive: Vec<bool>,
+    failed: Option<usize>,
+}
+
+struct TeamWatch {
+    presence: Mutex<Presence>,
+    changed: Condvar,
+}
+
+impl TeamWatch {
+    fn update(&self, change: impl FnOnce(&mut Presence)) {
+        let mut p = self.presence.lock().unwrap_or_else(|e| e.into_inner());
+        change(&mut p);
+        drop(p);
+        self.changed.notify_all();
+    }
+}
+
+/// Runs host `name` of the team in `team_path` until the team's run is over.
+pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
+    let started = Instant::now();
+    let team = Team::read(team_path)?;
+    if team.file.transport == TeamTransport::Iceoryx2 {
+        return Err(
+            "this team runs on one machine over iceoryx2 (transport = \"iceoryx2\"): it has no hosts"
+                .into(),
+        );
+    }
+    let n = team.file.robots;
+    let host = team.host(name)?.clone();
+    let others: Vec<String> = team
+        .file
+        .hosts
+        .iter()
+        .filter(|h| h.name != host.name)
+        .map(|h| h.endpoint.clone())
+        .collect();
+    let router = HostRouter::open(&host.endpoint, &others)?;
+    let links: ZenohLinks = team.zenoh_links(&host);
+    let watch = Arc::new(TeamWatch {
+        presence: Mutex::new(Presence {
+            seen: vec![false; n],
+            alive: vec![false; n],
+            failed: None,
+        }),
+        changed: Condvar::new(),
+    });
+    let session = router.session();
+    let _presence = {
+        let watch = Arc::clone(&watch);
+        let links = links.clone();
+        session
+            .liveliness()
+            .declare_subscriber(links.alive_all())
+            .history(true)
+            .callback(move |sample: Sample| {
+                let Some(a) = links
+                    .agent_of_alive_key(sample.key_expr().as_str())
+                    .filter(|&a| a < n)
+                else {
+                    return;
+                };
+                let put = sample.kind() == SampleKind::Put;
+                watch.update(|p| {
+                    p.seen[a] |= put;
+                    p.alive[a] = put;
+                });
+            })
+            .wait()
+            .map_err(|e| format!("cannot watch the team's agents: {e}"))?
+    };
+    let _failures = {
+        let watch = Arc::clone(&watch);
+        session
+            .declare_subscriber(links.failure_key())
+            .callback(move |sample: Sample| {
+                let failed = String::from_utf8_lossy(&sample.payload().to_bytes())
+                    .trim()
+                    .parse::<usize>();
+                if let Ok(failed) = failed {
+                    watch.update(|p| {
+                        p.failed.get_or_insert(failed);
+                    });
+                }
+            })
+            .wait()
+            .map_err(|e| format!("cannot watch the team's failures: {e}"))?
+    };
+    let bridge = match team.file.transport {
+        TeamTransport::Mixed => Some(crate::zenoh_net::bridge::Bridge::start(
+            &team, &host, &router,
+        )?),
+        _ => None,
+    };
+    // After the bridge's subscriptions: the other hosts wait for this token before they let
+    // their agents publish to ours.
+    let _token = session
+        .liveliness()
+        .declare_token(links.host_key(&host.name))
+        .wait()
+        .map_err(|e| format!("cannot declare the host's liveliness token: {e}"))?;
+    let startup_deadline = started + Duration::from_secs_f64(team.file.startup_timeout);
+    let run_deadline = startup_deadline
+        + Duration::from_secs_f64(team.file.round_timeout) * (team.file.max_iters as u32 + 2);
+    let mut presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
+    loop {
+        if let Some(bridge) = &bridge {
+            bridge.check()?;
+        }
+        let all_seen = presence.seen.iter().all(|&s| s);
+        let none_alive = presence.alive.iter().all(|&a| !a);
+        if none_alive && (all_seen || presence.failed.is_some()) {
+            break;
+        }
+        let now = Instant::now();
+        if !all_seen && presence.failed.is_none() && now >= startup_deadline {
+            let missing: Vec<usize> = (0..n).filter(|&a| !presence.seen[a]).collect();
+            return Err(format!(
+                "host {}: agent(s) {missing:?} never joined the team's Zenoh network within {:.1?} (not started, or their host unreachable)",
+                host.name,
+                started.elapsed()
+            ));
+        }
+        if now >= run_deadline {
+            let running: Vec<usize> = (0..n).filter(|&a| presence.alive[a]).collect();
+            return Err(format!(
+                "host {}: agent(s) {running:?} still ran after every round's deadline",
+                host.name
+            ));
+        }
+        presence = watch
+            .changed
+            .wait_timeout(presence, Duration::from_millis(20))
+            .unwrap_or_else(|e| e.into_inner())
+            .0;
+    }
+    let failed = presence.failed;
+    let agents_seen = presence.seen.iter().filter(|&&s| s).count();
+    drop(presence);
+    let (forwarded_out, forwarded_in) = bridge.map_or((0, 0), |b| b.finish());
+    if let Some(failed) = failed {
+        return Err(format!(
+            "host {}: the team's run failed: agent {failed} failed (see its output)",
+            host.name
+        ));
+    }
+    Ok(HostReport {
+        host: host.name,
+        agents_seen,
+        forwarded_out,
+        forwarded_in,
+    })
+}

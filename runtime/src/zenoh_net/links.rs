@@ -1,0 +1,100 @@
+//! Where one agent's Zenoh session connects and listens, and the key expressions of a run.
+
+use serde::{Deserialize, Serialize};
+
+/// The Zenoh side of a scenario.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct ZenohLinks {
+    /// Key-expression prefix of the run, e.g. `admm-ta/team/demo`: every key of the run
+    /// lives below it, so runs sharing a Zenoh network never see each other's messages.
+    pub key_prefix: String,
+    /// Endpoints the session connects to: its host's router.
+    pub connect: Vec<String>,
+    /// Endpoints the session listens on (port 0: any free port), so that agents can link to
+    /// each other directly once the router has introduced them.
+    pub listen: Vec<String>,
+}
+
+impl ZenohLinks {
+    /// Key agent `i` publishes its round messages on.
+    pub fn round_key(&self, i: usize) -> String {
+        format!("{}/round/{i}", self.key_prefix)
+    }
+
+    /// Key of agent `i`'s liveliness token (present while it runs).
+    pub fn alive_key(&self, i: usize) -> String {
+        format!("{}/alive/{i}", self.key_prefix)
+    }
+
+    /// Every agent's liveliness token.
+    pub fn alive_all(&self) -> String {
+        format!("{}/alive/*", self.key_prefix)
+    }
+
+    /// The agent whose liveliness token `key` is.
+    pub fn agent_of_alive_key(&self, key: &str) -> Option<usize> {
+        key.strip_prefix(&self.key_prefix)?
+            .strip_prefix("/alive/")?
+            .parse()
+            .ok()
+    }
+
+    /// Key on which the index of the agent that failed is announced (the first one wins).
+    pub fn failure_key(&self) -> String {
+        format!("{}/failed", self.key_prefix)
+    }
+
+    /// Key of host `name`'s liveliness token (its router or bridge is up).
+    pub fn host_key(&self, name: &str) -> String {
+        format!("{}/host/{name}", self.key_prefix)
+    }
+}
+
+/// `tcp/ADDRESS:0`: an endpoint on the address of `endpoint` with any free port (where an
+/// agent of that host listens), or `None` if `endpoint` is not `tcp/ADDRESS:PORT`.
+pub fn any_port_on(endpoint: &str) -> Option<String> {
+    let address = endpoint.strip_prefix("tcp/")?;
+    let (host, port) = address.rsplit_once(':')?;
+    port.parse::<u16>().ok()?;
+    Some(format!("tcp/{host}:0"))
+}
+
+/// Checks that `endpoint` is a Zenoh TCP endpoint `tcp/ADDRESS:PORT` (the only link this
+/// build carries).
+pub fn check_endpoint(endpoint: &str) -> Result<(), String> {
+    any_port_on(endpoint).map(|_| ()).ok_or_else(|| {
+        format!("'{endpoint}' is not a Zenoh TCP endpoint like tcp/192.168.1.10:7447")
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_of_a_run() {
+        let links = ZenohLinks {
+            key_prefix: "admm-ta/team/demo".into(),
+            ..ZenohLinks::default()
+        };
+        assert_eq!(links.round_key(3), "admm-ta/team/demo/round/3");
+        assert_eq!(links.agent_of_alive_key(&links.alive_key(12)), Some(12));
+        assert_eq!(links.agent_of_alive_key("admm-ta/team/other/alive/1"), None);
+        assert_eq!(links.agent_of_alive_key("admm-ta/team/demo/alive/x"), None);
+    }
+
+    #[test]
+    fn endpoints() {
+        assert_eq!(
+            any_port_on("tcp/10.0.0.2:7447").as_deref(),
+            Some("tcp/10.0.0.2:0")
+        );
+        assert_eq!(
+            any_port_on("tcp/[::1]:7447").as_deref(),
+            Some("tcp/[::1]:0")
+        );
+        assert!(check_endpoint("udp/10.0.0.2:7447").is_err());
+        assert!(check_endpoint("tcp/10.0.0.2").is_err());
+        assert!(check_endpoint("tcp/10.0.0.2:99999").is_err());
+    }
+}

@@ -1,0 +1,37 @@
+//! Multi-host teams over **Zenoh**: the same round messages as the `ipc` transport, carried
+//! between machines by the network engine behind ROS 2's `rmw_zenoh`.
+//!
+//! * [`links`] (always built): where an agent's Zenoh session connects and listens, and the
+//!   key expressions of a run — plain data that travels in the scenario.
+//! * `exchange` (feature `zenoh`): [`ZenohExchange`](exchange::ZenohExchange), one agent's
+//!   end: it publishes its payload on `admm-ta/<run>/round/<i>` and subscribes to its
+//!   neighbours' keys; presence is a Zenoh liveliness token per agent.
+//! * `router` (feature `zenoh`): the per-host Zenoh router the host's agents connect to (the
+//!   launcher runs one on loopback for single-machine runs; `admm-ta host` runs one per
+//!   machine of a multi-host team).
+//! * `bridge` (feature `zenoh`): the mixed mode — agents of one host use iceoryx2 among
+//!   themselves and the host's bridge forwards only the payloads that cross hosts.
+//!
+//! Built without the `zenoh` feature, every Zenoh entry point fails with [`not_built`].
+
+pub mod links;
+
+#[cfg(feature = "zenoh")]
+pub mod bridge;
+#[cfg(feature = "zenoh")]
+pub mod exchange;
+#[cfg(feature = "zenoh")]
+pub mod host;
+#[cfg(feature = "zenoh")]
+pub mod router;
+#[cfg(feature = "zenoh")]
+mod session;
+
+/// Whether this build carries the Zenoh transport.
+pub const BUILT: bool = cfg!(feature = "zenoh");
+
+/// The error of a Zenoh entry point in a build without the `zenoh` feature.
+pub fn not_built() -> String {
+    "this admm-ta was built without Zenoh support: rebuild with `cargo build --release --features zenoh`"
+        .into()
+}

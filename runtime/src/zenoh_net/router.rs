@@ -1,0 +1,66 @@
+//! A host's Zenoh router: the host's agents connect to it, and it links to the other hosts'
+//! routers. Agents of one host then link to each other directly (Zenoh's gossip introduces
+//! them), so the router carries start-up discovery and the cross-host traffic.
+
+use crate::zenoh_net::links::ZenohLinks;
+use crate::zenoh_net::session::{self, Role};
+use std::net::TcpListener;
+use zenoh::qos::CongestionControl;
+use zenoh::{Session, Wait};
+
+/// A running router; dropping it closes it.
+pub struct HostRouter {
+    /// Where the host's agents connect.
+    pub endpoint: String,
+    session: Session,
+}
+
+impl HostRouter {
+    /// A router listening on `endpoint` and linking to the routers at `others` (retried in
+    /// the background until they come up).
+    pub fn open(endpoint: &str, others: &[String]) -> Result<Self, String> {
+        let session = session::open(&Role::Router, &[endpoint.to_string()], others)?;
+        Ok(Self {
+            endpoint: endpoint.to_string(),
+            session,
+        })
+    }
+
+    /// A router on a free port of the loopback interface, for a single-machine run.
+    pub fn open_on_loopback() -> Result<Self, String> {
+        // The port is free when asked; another process may take it before Zenoh binds it,
+        // so try a few.
+        let mut last = String::new();
+        for _ in 0..5 {
+            let port = TcpListener::bind("127.0.0.1:0")
+                .and_then(|l| l.local_addr())
+                .map_err(|e| format!("cannot find a free loopback port: {e}"))?
+                .port();
+            match Self::open(&format!("tcp/127.0.0.1:{port}"), &[]) {
+                Ok(router) => return Ok(router),
+                Err(e) => last = e,
+            }
+        }
+        Err(last)
+    }
+
+    /// Announces `agent` as failed on the run of `links`, so that its Zenoh agents stop.
+    pub fn announce_failure(&self, links: &ZenohLinks, agent: usize) {
+        let _ = self
+            .session
+            .put(links.failure_key(), agent.to_string())
+            .congestion_control(CongestionControl::Block)
+            .wait();
+    }
+
+    /// The router's session (the bridge of a mixed-mode host publishes through it).
+    pub fn session(&self) -> &Session {
+        &self.session
+    }
+}
+
+impl Drop for HostRouter {
+    fn drop(&mut self) {
+        let _ = self.session.close().wait();
+    }
+}

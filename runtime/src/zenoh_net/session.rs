@@ -1,0 +1,58 @@
+//! Zenoh session configurations: agents are peers of their host's router, routers link the
+//! hosts. Multicast scouting is off everywhere: a team names its endpoints (robot networks
+//! often drop multicast, and a test must not find another test's sessions).
+
+use std::time::Duration;
+use zenoh::{Config, Session, Wait};
+
+/// What a session is for.
+pub(crate) enum Role {
+    /// An agent: a peer that must reach its router within `within`, or fail.
+    Agent { within: Duration },
+    /// A host's router: keeps trying the other hosts' routers in the background.
+    Router,
+}
+
+fn set(config: &mut Config, key: &str, value: &str) -> Result<(), String> {
+    config
+        .insert_json5(key, value)
+        .map_err(|e| format!("Zenoh configuration {key} = {value}: {e}"))
+}
+
+fn list(items: &[String]) -> String {
+    serde_json::to_string(items).expect("strings serialise")
+}
+
+/// The configuration of a session of `role` listening on `listen` and connecting to
+/// `connect`.
+pub(crate) fn config(role: &Role, listen: &[String], connect: &[String]) -> Result<Config, String> {
+    let mut config = Config::default();
+    let mode = match role {
+        Role::Agent { .. } => "\"peer\"",
+        Role::Router => "\"router\"",
+    };
+    set(&mut config, "mode", mode)?;
+    set(&mut config, "scouting/multicast/enabled", "false")?;
+    set(&mut config, "listen/endpoints", &list(listen))?;
+    set(&mut config, "connect/endpoints", &list(connect))?;
+    match role {
+        Role::Agent { within } => {
+            let ms = within.as_millis().clamp(1, i64::MAX as u128);
+            set(&mut config, "connect/timeout_ms", &ms.to_string())?;
+            set(&mut config, "connect/exit_on_failure", "true")?;
+        }
+        Role::Router => {
+            set(&mut config, "connect/timeout_ms", "-1")?;
+            set(&mut config, "connect/exit_on_failure", "false")?;
+        }
+    }
+    Ok(config)
+}
+
+/// Opens a session of `role`.
+pub(crate) fn open(role: &Role, listen: &[String], connect: &[String]) -> Result<Session, String> {
+    let config = config(role, listen, connect)?;
+    zenoh::open(config).wait().map_err(|e| {
+        format!("cannot open a Zenoh session (listen {listen:?}, connect {connect:?}): {e}")
+    })
+}
