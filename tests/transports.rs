@@ -100,6 +100,18 @@ fn all_transports_with(
     assert_same(&sim, &uds);
     assert_clean(&ipc);
     assert_clean(&uds);
+    #[allow(unused_mut)]
+    let mut distributed = vec![&threads, &ipc, &uds];
+    // The multi-host transport, through a router on loopback.
+    #[cfg(feature = "zenoh")]
+    let zenoh = run(Transport::Zenoh);
+    #[cfg(feature = "zenoh")]
+    {
+        assert_same(&sim, &zenoh);
+        assert_clean(&zenoh);
+        assert!(zenoh.startup_ms.unwrap() > 0.0);
+        distributed.push(&zenoh);
+    }
     if stop == StopRule::Local {
         assert!(sim.converged, "{}: no certified stop", graph.name());
         // CBAA is greedy: conflict-free, not necessarily optimal.
@@ -115,7 +127,7 @@ fn all_transports_with(
             graph.diameter().unwrap()
         );
     }
-    for r in [&threads, &ipc, &uds] {
+    for r in distributed {
         let latency = r.round_latency_us.expect("distributed runs record latency");
         let usage = r.agent_usage.expect("distributed runs record CPU usage");
         assert!(usage.voluntary_switches + usage.involuntary_switches > 0);

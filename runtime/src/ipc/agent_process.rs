@@ -154,10 +154,11 @@ pub fn run_scenario(
             let endpoint = scenario
                 .zenoh_endpoint(&graph, index, supervised)
                 .map_err(|e| e.to_string())?;
-            Endpoint::Zenoh(Box::new(
+            let mut exchange =
                 crate::zenoh_net::exchange::ZenohExchange::connect(&endpoint, deadline)
-                    .map_err(|e| e.to_string())?,
-            ))
+                    .map_err(|e| e.to_string())?;
+            exchange.inject(crate::ipc::fault::fault_for(index)?);
+            Endpoint::Zenoh(Box::new(exchange))
         }
         #[cfg(not(feature = "zenoh"))]
         ProcessTransport::Zenoh => return Err(crate::zenoh_net::not_built()),

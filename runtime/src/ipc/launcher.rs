@@ -185,6 +185,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
                 key_prefix: format!("admm-ta/run/{}", namespace.id),
                 connect: vec![router.endpoint.clone()],
                 listen: vec!["tcp/127.0.0.1:0".into()],
+                hosts: Vec::new(),
             });
             guard.router = Some(router);
         }

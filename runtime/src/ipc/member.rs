@@ -183,6 +183,7 @@ impl Team {
             key_prefix: format!("admm-ta/team/{}", self.file.run),
             connect: vec![host.endpoint.clone()],
             listen: any_port_on(&host.endpoint).into_iter().collect(),
+            hosts: self.file.hosts.iter().map(|h| h.name.clone()).collect(),
         }
     }
 
@@ -241,7 +242,9 @@ impl Team {
         Ok((problem, graph))
     }
 
-    fn solve_config(&self) -> Result<SolveConfig, String> {
+    /// The settings every agent runs with (on the ipc transport; a test may run the same
+    /// problem on another).
+    pub fn solve_config(&self) -> Result<SolveConfig, String> {
         let f = &self.file;
         Ok(SolveConfig {
             method: f.method,
@@ -477,7 +480,11 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
         let startup =
             Duration::from_millis(scenario.startup_timeout_ms).saturating_sub(started.elapsed());
         scenario.startup_timeout_ms = startup.as_millis() as u64;
-        return run_scenario(&scenario, id, &results, &result, false);
+        let report = run_scenario(&scenario, id, &results, &result, false);
+        // Nothing of the run is in it (other agents of this host may still be starting:
+        // only an empty directory goes).
+        let _ = std::fs::remove_dir(&namespace.dir);
+        return report;
     }
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
     let membership = Membership::join(&scenario, &namespace, &[id], deadline)?;

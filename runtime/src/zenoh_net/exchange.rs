@@ -24,9 +24,10 @@
 
 use crate::exchange::{Exchange, ExchangeError};
 use crate::header::{RoundHeader, words_as_bytes, words_as_bytes_mut};
+use crate::ipc::fault::Fault;
 use crate::wait::WaitPolicy;
 use crate::zenoh_net::links::ZenohLinks;
-use crate::zenoh_net::session::{self, Role};
+use crate::zenoh_net::session::{self, Role, alive_agents, missing_hosts};
 use admm_ta_agents::agent::Inbox;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
@@ -42,6 +43,19 @@ const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
 /// How long a neighbour's message may still arrive after its liveliness token vanished (the
 /// token and the message may travel different links).
 const DEPARTURE_GRACE: Duration = Duration::from_millis(300);
+
+/// A gather that waits this long sends the agent's last two messages again, then again at
+/// doubling intervals up to [`RESEND_AT_MOST_EVERY`]. Zenoh propagates a new subscription
+/// asynchronously: a message published right after start-up (seen on loopback with two
+/// routers: a round-0 message published once the receiver's liveliness token was visible)
+/// can find no route yet and is dropped. A neighbour waiting on the lost message cannot
+/// send what this agent waits for, so the waiter re-sends; duplicates are harmless (a
+/// message lands in the slot of its round's parity and is taken only for its own round).
+const RESEND_AFTER: Duration = Duration::from_millis(50);
+const RESEND_AT_MOST_EVERY: Duration = Duration::from_secs(1);
+
+/// How often start-up asks which neighbours are present.
+const PRESENCE_POLL: Duration = Duration::from_millis(50);
 
 /// What one agent needs to join a Zenoh run.
 #[derive(Debug, Clone)]
@@ -108,6 +122,13 @@ pub struct ZenohExchange {
     headers: Vec<RoundHeader>,
     /// Header words + payload of the own message.
     outbox: Vec<f64>,
+    /// The own last two messages as sent, by round parity, to send again.
+    sent: [(Option<u64>, Vec<u8>); 2],
+    /// Messages sent again.
+    resent: u64,
+    /// The round last gathered, and the fault to inject (tests, [`crate::ipc::fault`]).
+    gathered: u64,
+    fault: Option<Fault>,
     /// Generation of the inbound state when last looked at.
     seen: u64,
     launcher: Option<u32>,
@@ -259,6 +280,19 @@ impl ZenohExchange {
             .express(true)
             .wait()
             .map_err(|e| err(format!("cannot declare the publisher: {e}")))?;
+        // Every host up first: each watches the whole run from its start.
+        loop {
+            let missing = missing_hosts(&session, links).map_err(err)?;
+            if missing.is_empty() {
+                break;
+            }
+            if Instant::now() >= deadline {
+                return Err(err(format!(
+                    "the team's host(s) {missing:?} did not come up before the start-up deadline (start `admm-ta host --team FILE --name NAME` on each machine)"
+                )));
+            }
+            std::thread::sleep(PRESENCE_POLL);
+        }
         // Subscriptions first: a neighbour that sees our token can send to us.
         let token = session
             .liveliness()
@@ -274,6 +308,10 @@ impl ZenohExchange {
             held_round: vec![None; degree],
             headers: vec![RoundHeader::default(); degree],
             outbox: vec![0.0; message_words],
+            sent: [(None, Vec::new()), (None, Vec::new())],
+            resent: 0,
+            gathered: 0,
+            fault: None,
             seen: 0,
             launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
             failure_key: links.failure_key(),
@@ -282,15 +320,22 @@ impl ZenohExchange {
             _token: token,
             session,
         };
-        exchange.await_neighbours(deadline)?;
+        exchange.await_neighbours(deadline, links)?;
         Ok(exchange)
     }
 
     /// Start-up rendezvous: every neighbour's token seen.
-    fn await_neighbours(&self, deadline: Instant) -> Result<(), ExchangeError> {
+    fn await_neighbours(&self, deadline: Instant, links: &ZenohLinks) -> Result<(), ExchangeError> {
         let started = Instant::now();
         let mut inbound = self.shared.lock();
         loop {
+            // The subscriber may miss tokens declared while it propagated: ask as well.
+            drop(inbound);
+            let alive = alive_agents(&self.session, links).map_err(|e| transport(self.index, e))?;
+            inbound = self.shared.lock();
+            for (k, j) in self.neighbours.iter().enumerate() {
+                inbound.present[k] |= alive.contains(j);
+            }
             if let Some(failed) = inbound.failed {
                 return Err(ExchangeError::PeerFailed {
                     agent: self.index,
@@ -324,7 +369,7 @@ impl ZenohExchange {
             inbound = self
                 .shared
                 .wake
-                .wait_timeout(inbound, deadline - now)
+                .wait_timeout(inbound, (deadline - now).min(PRESENCE_POLL))
                 .unwrap_or_else(|p| p.into_inner())
                 .0;
         }
@@ -435,23 +480,53 @@ impl ZenohExchange {
         }
     }
 
-    fn send(&mut self, header: RoundHeader) -> Result<(), ExchangeError> {
+    /// Fault injection (tests, [`crate::ipc::fault`]).
+    pub fn inject(&mut self, fault: Option<Fault>) {
+        self.fault = fault;
+    }
+
+    /// Sends the header and the first `payload_len` values of the outbox.
+    fn send(&mut self, header: RoundHeader, payload_len: usize) -> Result<(), ExchangeError> {
         header.write_words(&mut self.outbox[..RoundHeader::WORDS]);
-        // Zenoh takes ownership of what it sends: one copy per round.
+        let (round, bytes) = &mut self.sent[(header.round % 2) as usize];
+        *round = Some(header.round);
+        bytes.clear();
+        bytes.extend_from_slice(words_as_bytes(
+            &self.outbox[..RoundHeader::WORDS + payload_len],
+        ));
+        self.put(header.round)
+    }
+
+    /// Puts the kept message of `round` (Zenoh takes ownership of what it sends: a copy).
+    fn put(&self, round: u64) -> Result<(), ExchangeError> {
+        let bytes = &self.sent[(round % 2) as usize].1;
         self.publisher
-            .put(words_as_bytes(&self.outbox).to_vec())
+            .put(bytes.clone())
             .wait()
-            .map_err(|e| {
-                transport(
-                    self.index,
-                    format!("publishing round {} failed: {e}", header.round),
-                )
-            })
+            .map_err(|e| transport(self.index, format!("publishing round {round} failed: {e}")))
+    }
+
+    /// Sends the own messages of rounds `round − 1` and `round` again (see [`RESEND_AFTER`]).
+    fn resend(&mut self, round: u64) -> Result<(), ExchangeError> {
+        for r in [round.checked_sub(1), Some(round)].into_iter().flatten() {
+            if self.sent[(r % 2) as usize].0 == Some(r) {
+                self.put(r)?;
+                self.resent += 1;
+            }
+        }
+        Ok(())
     }
 }
 
 impl Drop for ZenohExchange {
     fn drop(&mut self) {
+        if self.resent > 0 {
+            // In the agent's log: a sign of start-up races or a lossy network.
+            eprintln!(
+                "agent {}: sent {} message(s) again after waiting {RESEND_AFTER:?} or more",
+                self.index, self.resent
+            );
+        }
         // Flushes what is queued and tells the peers we left (our token vanishes).
         let _ = self.session.close().wait();
     }
@@ -482,7 +557,7 @@ impl Exchange for ZenohExchange {
         write: &mut dyn FnMut(&mut [f64]),
     ) -> Result<(), ExchangeError> {
         write(&mut self.outbox[RoundHeader::WORDS..]);
-        self.send(header)
+        self.send(header, self.outbox.len() - RoundHeader::WORDS)
     }
 
     fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
@@ -490,13 +565,23 @@ impl Exchange for ZenohExchange {
         if round.is_multiple_of(64) {
             self.check_launcher(round)?;
         }
+        let mut resend_at = started + RESEND_AFTER;
+        let mut resend_every = RESEND_AFTER;
         let held = self.policy.wait_until(
             self,
             deadline,
             |s| s.take_arrived(round),
-            |s, deadline| s.sleep(deadline, round),
+            |s, deadline| {
+                if Instant::now() >= resend_at {
+                    s.resend(round)?;
+                    resend_every = (resend_every * 2).min(RESEND_AT_MOST_EVERY);
+                    resend_at = Instant::now() + resend_every;
+                }
+                s.sleep(deadline.min(resend_at), round)
+            },
         )?;
         if held {
+            self.gathered = round;
             return Ok(());
         }
         Err(ExchangeError::Timeout {
@@ -525,11 +610,18 @@ impl Exchange for ZenohExchange {
         &mut self,
         compute: &mut dyn FnMut(&dyn Inbox, &mut [f64]) -> RoundHeader,
     ) -> Result<(), ExchangeError> {
-        let header = compute(
-            &HeldInbox { held: &self.held },
-            &mut self.outbox[RoundHeader::WORDS..],
-        );
-        self.send(header)
+        let fault = self.fault.filter(|f| f.round == self.gathered);
+        if let Some(fault) = fault {
+            fault.strike();
+        }
+        let payload = &mut self.outbox[RoundHeader::WORDS..];
+        let mut header = compute(&HeldInbox { held: &self.held }, payload);
+        let mut len = payload.len();
+        if let Some(fault) = fault {
+            fault.corrupt(payload, &mut header);
+            len = fault.payload_len(len);
+        }
+        self.send(header, len)
     }
 
     fn global_barrier(&mut self, _round: u64, _deadline: Instant) -> Result<(), ExchangeError> {

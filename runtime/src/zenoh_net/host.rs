@@ -2,7 +2,9 @@
 //! its agents. It runs the host's Zenoh router (listening on the host's endpoint, linking
 //! to the other hosts' routers) and, in a mixed team, the host's bridge. It watches the
 //! team's liveliness tokens: once every agent of the team has shown up and left again, the
-//! run is over and it returns; a failure announced by any agent is reported.
+//! run is over and it returns; a failure announced by any agent is reported. Agents declare
+//! their tokens only once every host's token is up, and a host declares its token after its
+//! subscriptions, so no agent can come and go unseen.
 //!
 //! It waits for the first agents until the team's start-up deadline (naming those that never
 //! came) and for the run no longer than every round's deadline allows.

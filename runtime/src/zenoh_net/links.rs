@@ -13,6 +13,10 @@ pub struct ZenohLinks {
     /// Endpoints the session listens on (port 0: any free port), so that agents can link to
     /// each other directly once the router has introduced them.
     pub listen: Vec<String>,
+    /// The team's hosts (multi-host teams): an agent joins once all of them are up, so that
+    /// every host sees the whole run.
+    #[serde(default)]
+    pub hosts: Vec<String>,
 }
 
 impl ZenohLinks {
@@ -42,6 +46,11 @@ impl ZenohLinks {
     /// Key on which the index of the agent that failed is announced (the first one wins).
     pub fn failure_key(&self) -> String {
         format!("{}/failed", self.key_prefix)
+    }
+
+    /// Every host's liveliness token.
+    pub fn host_all(&self) -> String {
+        format!("{}/host/*", self.key_prefix)
     }
 
     /// Key of host `name`'s liveliness token (its router or bridge is up).

@@ -28,7 +28,7 @@ fn list(items: &[String]) -> String {
 pub(crate) fn config(role: &Role, listen: &[String], connect: &[String]) -> Result<Config, String> {
     let mut config = Config::default();
     let mode = match role {
-        Role::Agent { .. } => "\"peer\"",
+        Role::Agent { .. } => "\"client\"",
         Role::Router => "\"router\"",
     };
     set(&mut config, "mode", mode)?;
@@ -55,4 +55,49 @@ pub(crate) fn open(role: &Role, listen: &[String], connect: &[String]) -> Result
     zenoh::open(config).wait().map_err(|e| {
         format!("cannot open a Zenoh session (listen {listen:?}, connect {connect:?}): {e}")
     })
+}
+
+/// The keys below `key` with a liveliness token on the network now.
+fn alive_keys(session: &Session, key: String) -> Result<Vec<String>, String> {
+    let replies = session
+        .liveliness()
+        .get(&key)
+        .timeout(Duration::from_secs(1))
+        .wait()
+        .map_err(|e| format!("cannot ask for the liveliness tokens {key}: {e}"))?;
+    let mut keys = Vec::new();
+    while let Ok(reply) = replies.recv() {
+        if let Ok(sample) = reply.result() {
+            keys.push(sample.key_expr().as_str().to_string());
+        }
+    }
+    Ok(keys)
+}
+
+/// The hosts of `links` whose tokens are not on the network now.
+pub(crate) fn missing_hosts(
+    session: &Session,
+    links: &crate::zenoh_net::links::ZenohLinks,
+) -> Result<Vec<String>, String> {
+    let up = alive_keys(session, links.host_all())?;
+    Ok(links
+        .hosts
+        .iter()
+        .filter(|h| !up.contains(&links.host_key(h)))
+        .cloned()
+        .collect())
+}
+
+/// The agents whose liveliness tokens are on the network now, asked with a liveliness query.
+/// A liveliness subscriber with history can miss tokens declared while the subscriber's own
+/// declaration propagates (seen with a router's local subscriber and clients that connected
+/// during its start-up), so presence checks that must not miss anybody ask.
+pub(crate) fn alive_agents(
+    session: &Session,
+    links: &crate::zenoh_net::links::ZenohLinks,
+) -> Result<Vec<usize>, String> {
+    Ok(alive_keys(session, links.alive_all())?
+        .iter()
+        .filter_map(|k| links.agent_of_alive_key(k))
+        .collect())
 }

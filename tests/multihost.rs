@@ -1,0 +1,300 @@
+//! Teams across machines, on one machine: every "host" is its own process group (its
+//! `admm-ta host` and its agents, started as independent commands) and the hosts talk Zenoh
+//! over 127.0.0.1 only. Two hosts × five agents reach the oracle's optimum with exactly the
+//! iterates of the lockstep simulation, in both multi-host modes (every agent on Zenoh, and
+//! iceoryx2 on each host with a bridge between hosts); an agent that crashes on one host
+//! stops the whole team, on both hosts, with errors naming it.
+
+#![cfg(feature = "zenoh")]
+
+mod common;
+
+use admm_ta_runtime::ipc::member::Team;
+use admm_ta_runtime::solve::{SolveConfig, SolveReport, Transport, solve};
+use std::net::TcpListener;
+use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn admm_ta() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_admm-ta"))
+}
+
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// Writes a team of the 10×10 oracle-style instance over two hosts of five robots.
+fn team_file(dir: &Path, run: &str, transport: &str, costs: &Path, topology: &str) -> PathBuf {
+    let path = dir.join("team.toml");
+    let mut text = format!(
+        "run = \"{run}\"\nrobots = 10\ncosts = \"{}\"\ntopology = \"{topology}\"\nseed = 4\nresults = \"results\"\nstartup_timeout = 30.0\nround_timeout = 5.0\ntransport = \"{transport}\"\n",
+        costs.display()
+    );
+    for (name, agents) in [("alpha", "[0, 1, 2, 3, 4]"), ("beta", "[5, 6, 7, 8, 9]")] {
+        text += &format!(
+            "\n[[hosts]]\nname = \"{name}\"\nagents = {agents}\nendpoint = \"tcp/127.0.0.1:{}\"\n",
+            free_port()
+        );
+    }
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Ten rows of the 20×20 oracle instance's first ten columns: a fixed 10×10 problem.
+fn costs_10x10(dir: &Path) -> PathBuf {
+    let instance = common::oracle_instances()
+        .into_iter()
+        .find(|i| i.name == "case1_uniform_20x20")
+        .unwrap();
+    let text = std::fs::read_to_string(&instance.csv).unwrap();
+    let rows: Vec<String> = text
+        .lines()
+        .take(10)
+        .map(|l| l.split(',').take(10).collect::<Vec<_>>().join(","))
+        .collect();
+    let path = dir.join("costs.csv");
+    std::fs::write(&path, rows.join("\n") + "\n").unwrap();
+    path
+}
+
+/// One host: its `admm-ta host` leads a new process group, and its agents join it.
+struct HostGroup {
+    host: Child,
+    agents: Vec<(usize, Child)>,
+}
+
+fn start_host(team: &Path, name: &str, agents: &[usize], env: &[(&str, &str)]) -> HostGroup {
+    let host = admm_ta()
+        .args(["host", "--team", team.to_str().unwrap(), "--name", name])
+        .envs(env.iter().copied())
+        .process_group(0)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let group = host.id() as i32;
+    let agents = agents
+        .iter()
+        .map(|&id| {
+            let child = admm_ta()
+                .args([
+                    "agent",
+                    "--team",
+                    team.to_str().unwrap(),
+                    "--id",
+                    &id.to_string(),
+                ])
+                .envs(env.iter().copied())
+                .process_group(group)
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap();
+            (id, child)
+        })
+        .collect();
+    HostGroup { host, agents }
+}
+
+/// Waits for every process of the groups, killing them all (and failing) after `limit`.
+fn wait_all(groups: Vec<HostGroup>, limit: Duration) -> (Vec<Output>, Vec<(usize, Output)>) {
+    let started = Instant::now();
+    let pgids: Vec<i32> = groups.iter().map(|g| g.host.id() as i32).collect();
+    let watchdog = std::thread::spawn(move || {
+        while started.elapsed() < limit {
+            std::thread::sleep(Duration::from_millis(50));
+            if pgids
+                .iter()
+                // SAFETY: signal 0 only asks whether the group still has a process.
+                .all(|&g| unsafe { libc::kill(-g, 0) } != 0)
+            {
+                return false;
+            }
+        }
+        for g in pgids {
+            // SAFETY: killing the process groups this test made.
+            unsafe { libc::kill(-g, libc::SIGKILL) };
+        }
+        true
+    });
+    let mut hosts = Vec::new();
+    let mut agents = Vec::new();
+    for g in groups {
+        for (id, child) in g.agents {
+            agents.push((id, child.wait_with_output().unwrap()));
+        }
+        hosts.push(g.host.wait_with_output().unwrap());
+    }
+    if watchdog.join().unwrap() {
+        let outputs: Vec<String> = hosts
+            .iter()
+            .map(text)
+            .chain(
+                agents
+                    .iter()
+                    .map(|(id, o)| format!("agent {id}: {}", text(o))),
+            )
+            .collect();
+        panic!(
+            "the team hung: killed after {limit:?}; output:\n{}",
+            outputs.join("\n")
+        );
+    }
+    (hosts, agents)
+}
+
+fn text(out: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+/// The lockstep simulation of the team's problem with the team's settings.
+fn sim_report(team: &Path) -> SolveReport {
+    let team = Team::read(team).unwrap();
+    let (problem, graph) = team.problem_and_graph().unwrap();
+    let config = SolveConfig {
+        transport: Transport::Sim,
+        ..team.solve_config().unwrap()
+    };
+    solve(&problem, &graph, &config).unwrap()
+}
+
+fn shm_left(prefix: &str) -> Vec<String> {
+    std::fs::read_dir("/dev/shm")
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.starts_with(prefix))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+fn two_hosts_reach_the_optimum_with_the_iterates_of_sim(transport: &str, run: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let costs = costs_10x10(dir.path());
+    let topology = "random:0.4";
+    let team = team_file(dir.path(), run, transport, &costs, topology);
+    let groups = vec![
+        start_host(&team, "alpha", &[0, 1, 2, 3, 4], &[]),
+        start_host(&team, "beta", &[5, 6, 7, 8, 9], &[]),
+    ];
+    let (hosts, agents) = wait_all(groups, Duration::from_secs(90));
+    for out in &hosts {
+        assert!(out.status.success(), "host: {}", text(out));
+    }
+    for (id, out) in &agents {
+        assert!(out.status.success(), "agent {id}: {}", text(out));
+    }
+    let reports: Vec<serde_json::Value> = hosts
+        .iter()
+        .map(|o| serde_json::from_slice(&o.stdout).unwrap())
+        .collect();
+    for r in &reports {
+        assert_eq!(r["agents_seen"], 10, "{r}");
+        let forwarded = r["forwarded_out"].as_u64().unwrap();
+        // Only the mixed mode's bridge forwards; it carries the cross-host messages.
+        assert_eq!(forwarded > 0, transport == "mixed", "{r}");
+    }
+    let out = admm_ta()
+        .args([
+            "collect",
+            "--team",
+            team.to_str().unwrap(),
+            "--check",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(result["optimal"], true, "{result}");
+    let sim = sim_report(&team);
+    assert_eq!(result["assignment"], serde_json::json!(sim.assignment));
+    assert_eq!(result["iterations"], sim.iterations as u64);
+    assert_eq!(
+        result["certified_round"],
+        serde_json::json!(sim.certified_round)
+    );
+    // Bit for bit: every agent's last payload hashes as in the simulation.
+    for id in 0..10 {
+        let path = dir.path().join(format!("results/result-{id}.json"));
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        assert_eq!(
+            report["outcome"]["iterate_digest"], sim.iterate_digests[id],
+            "agent {id}"
+        );
+    }
+    for host in ["alpha", "beta"] {
+        let left = shm_left(&format!("adtat{run}-{host}_"));
+        assert!(left.is_empty(), "{left:?}");
+    }
+}
+
+#[test]
+fn a_two_host_zenoh_team_reaches_the_optimum_with_the_iterates_of_sim() {
+    two_hosts_reach_the_optimum_with_the_iterates_of_sim(
+        "zenoh",
+        &format!("z{}", std::process::id()),
+    );
+}
+
+#[test]
+fn a_two_host_mixed_team_reaches_the_optimum_with_the_iterates_of_sim() {
+    two_hosts_reach_the_optimum_with_the_iterates_of_sim(
+        "mixed",
+        &format!("x{}", std::process::id()),
+    );
+}
+
+#[test]
+fn an_agent_crashing_on_one_host_stops_both_hosts_naming_it() {
+    for transport in ["zenoh", "mixed"] {
+        let dir = tempfile::tempdir().unwrap();
+        let costs = costs_10x10(dir.path());
+        let run = format!("c{}{}", &transport[..1], std::process::id());
+        let team = team_file(dir.path(), &run, transport, &costs, "ring");
+        // Agent 7 (on beta) exits without any cleanup before publishing round 4.
+        let fault = [("ADMM_TA_FAULT", "7:3:exit")];
+        let started = Instant::now();
+        let groups = vec![
+            start_host(&team, "alpha", &[0, 1, 2, 3, 4], &fault),
+            start_host(&team, "beta", &[5, 6, 7, 8, 9], &fault),
+        ];
+        let (hosts, agents) = wait_all(groups, Duration::from_secs(60));
+        for (id, out) in &agents {
+            assert!(!out.status.success(), "{transport}: agent {id} succeeded");
+            if *id != 7 {
+                let message = text(out);
+                assert!(
+                    message.contains("agent 7"),
+                    "{transport}: agent {id}: {message}"
+                );
+            }
+        }
+        for out in &hosts {
+            assert!(!out.status.success(), "{transport}: a host succeeded");
+            assert!(text(out).contains("agent 7 failed"), "{}", text(out));
+        }
+        // Far below the 5 s round deadline times the ring's rounds: detected, not timed out.
+        assert!(
+            started.elapsed() < Duration::from_secs(20),
+            "{transport}: {:?}",
+            started.elapsed()
+        );
+        for host in ["alpha", "beta"] {
+            let left = shm_left(&format!("adtat{run}-{host}_"));
+            assert!(left.is_empty(), "{transport}: {left:?}");
+        }
+    }
+}
