@@ -298,3 +298,46 @@ fn an_agent_crashing_on_one_host_stops_both_hosts_naming_it() {
         }
     }
 }
+
+#[test]
+fn bench_rounds_measures_zenoh_next_to_iceoryx2_and_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = admm_ta()
+        .args([
+            "bench",
+            "rounds",
+            "--agents",
+            "4",
+            "--transports",
+            "threads,ipc,zenoh",
+            "--rounds",
+            "40",
+            "--warmup",
+            "10",
+            "--out",
+            dir.path().to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("| zenoh |"), "{table}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("rounds.json")).unwrap())
+            .unwrap();
+    assert!(v["failures"].as_array().unwrap().is_empty(), "{v}");
+    let zenoh = v["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["transport"] == "zenoh")
+        .expect("a zenoh case");
+    assert_eq!(zenoh["recorded"], 4 * 40);
+    assert!(zenoh["round_us"]["p50"].as_f64().unwrap() > 0.0);
+    // The ratio column is filled for the zenoh case's ipc twin.
+    let ratios = table
+        .lines()
+        .find(|l| l.starts_with("| 4 | complete |") && l.matches('×').count() >= 3)
+        .unwrap_or_else(|| panic!("no ratio row with zenoh / ipc:\n{table}"));
+    assert!(!ratios.ends_with("| - | - |"), "{ratios}");
+}

@@ -200,7 +200,12 @@ fn bad_team_files_are_refused_with_one_line() {
             "run = \"x\"\nrobots = 2\ncosts = \"random\"\ntasks = 3\n",
             "cannot cover",
         ),
-    ] {
+    ]
+    .into_iter()
+    .map(|(t, n)| (t.to_string(), n))
+    .chain(bad_host_tables())
+    {
+        let text = text.as_str();
         let path = dir.path().join("bad.toml");
         std::fs::write(&path, text).unwrap();
         let out = admm_ta()
@@ -219,4 +224,85 @@ fn bad_team_files_are_refused_with_one_line() {
         .output()
         .unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read team file"));
+}
+
+/// Team files whose [[hosts]] cannot describe a team across machines.
+fn bad_host_tables() -> Vec<(String, &'static str)> {
+    let base = "run = \"x\"\nrobots = 3\ncosts = \"random\"\ntasks = 3\n";
+    let host = |name: &str, agents: &str, endpoint: &str| {
+        format!("[[hosts]]\nname = \"{name}\"\nagents = {agents}\nendpoint = \"{endpoint}\"\n")
+    };
+    let a = host("a", "[0, 1]", "tcp/127.0.0.1:7447");
+    let b = host("b", "[2]", "tcp/127.0.0.1:7448");
+    vec![
+        (format!("{base}{a}{b}"), "add transport = \"zenoh\""),
+        (format!("{base}transport = \"zenoh\"\n"), "needs [[hosts]]"),
+        (
+            format!("{base}transport = \"zenoh\"\n{a}"),
+            "robot(s) [2] are on no host",
+        ),
+        (
+            format!(
+                "{base}transport = \"zenoh\"\n{a}{}",
+                host("b", "[2, 1]", "tcp/127.0.0.1:7448")
+            ),
+            "robot 1 is on two hosts",
+        ),
+        (
+            format!(
+                "{base}transport = \"mixed\"\n{a}{}",
+                host("b", "[2, 3]", "tcp/127.0.0.1:7448")
+            ),
+            "lists robot 3",
+        ),
+        (
+            format!(
+                "{base}transport = \"zenoh\"\n{a}{}",
+                host("b", "[2]", "udp/127.0.0.1:7448")
+            ),
+            "not a Zenoh TCP endpoint",
+        ),
+        (
+            format!(
+                "{base}transport = \"zenoh\"\n{a}{}",
+                host("b", "[2]", "tcp/127.0.0.1:7447")
+            ),
+            "the same endpoint",
+        ),
+        (
+            format!(
+                "{base}transport = \"zenoh\"\n{a}{}",
+                host("a", "[2]", "tcp/127.0.0.1:7448")
+            ),
+            "two hosts are called 'a'",
+        ),
+        (
+            format!("{base}transport = \"carrier-pigeon\"\n"),
+            "unknown variant",
+        ),
+    ]
+}
+
+#[test]
+fn host_refuses_what_it_cannot_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("team.toml");
+    std::fs::write(
+        &path,
+        "run = \"h\"\nrobots = 2\ncosts = \"random\"\ntasks = 2\ntransport = \"zenoh\"\n[[hosts]]\nname = \"a\"\nagents = [0, 1]\nendpoint = \"tcp/127.0.0.1:7447\"\n",
+    )
+    .unwrap();
+    let out = admm_ta()
+        .args(["host", "--team", path.to_str().unwrap(), "--name", "gamma"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    let needle = if cfg!(feature = "zenoh") {
+        "no host 'gamma'"
+    } else {
+        "built without Zenoh support"
+    };
+    assert!(err.contains(needle), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
 }
