@@ -189,11 +189,28 @@ fn two_hosts_reach_the_optimum_with_the_iterates_of_sim(transport: &str, run: &s
         start_host(&team, "beta", &[5, 6, 7, 8, 9], &[]),
     ];
     let (hosts, agents) = wait_all(groups, Duration::from_secs(90));
+    let all = || {
+        hosts
+            .iter()
+            .map(text)
+            .chain(
+                agents
+                    .iter()
+                    .map(|(id, o)| format!("agent {id}: {}", text(o))),
+            )
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
     for out in &hosts {
-        assert!(out.status.success(), "host: {}", text(out));
+        assert!(out.status.success(), "host: {}\nall:\n{}", text(out), all());
     }
     for (id, out) in &agents {
-        assert!(out.status.success(), "agent {id}: {}", text(out));
+        assert!(
+            out.status.success(),
+            "agent {id}: {}\nall:\n{}",
+            text(out),
+            all()
+        );
     }
     let reports: Vec<serde_json::Value> = hosts
         .iter()

@@ -43,7 +43,7 @@ use crate::ipc::namespace::RunNamespace;
 use crate::ipc::scenario::{ProcessTransport, Scenario};
 use crate::ipc::transport::{Board, cleanup_dead_nodes, run_config};
 use crate::solve::{self, Method, SolveConfig, StopRule, Transport};
-use crate::zenoh_net::links::{ZenohLinks, any_port_on, check_endpoint};
+use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_topologies::{Graph, TopologySpec, file as topology_file};
@@ -107,8 +107,7 @@ pub struct HostEntry {
     pub name: String,
     /// The robots that run on it.
     pub agents: Vec<usize>,
-    /// Where its Zenoh router listens, `tcp/ADDRESS:PORT`, reachable from the other hosts;
-    /// its agents listen on the same address.
+    /// Where its Zenoh router listens, `tcp/ADDRESS:PORT`, reachable from the other hosts.
     pub endpoint: String,
 }
 
@@ -176,13 +175,13 @@ impl Team {
             })
     }
 
-    /// The Zenoh links of agent `id` (or of a host's bridge, with `host`): its host's router,
-    /// and a listening port on its host's address.
+    /// The Zenoh links of an agent on `host` (or of its bridge): the host's router, and a
+    /// loopback port for direct links with the host's other agents.
     pub fn zenoh_links(&self, host: &HostEntry) -> ZenohLinks {
         ZenohLinks {
             key_prefix: format!("admm-ta/team/{}", self.file.run),
             connect: vec![host.endpoint.clone()],
-            listen: any_port_on(&host.endpoint).into_iter().collect(),
+            listen: vec![crate::zenoh_net::links::AGENT_LISTEN.into()],
             hosts: self.file.hosts.iter().map(|h| h.name.clone()).collect(),
         }
     }

@@ -414,34 +414,40 @@ impl OutThread<'_> {
         loop {
             let stopping = self.shared.stop.load(Ordering::Acquire);
             for (subscribers, publisher) in &senders {
-                for (k, subscriber) in subscribers.iter().enumerate() {
-                    while let Some(sample) = subscriber
+                // Every remote neighbour's copy arrives and one goes out. The spare copies
+                // are dropped first: the agent may publish again as soon as one is
+                // forwarded, and a spare queue still holding two samples would then be full
+                // (the sample discarded, the agent's delivery check failing).
+                let (first, spares) = subscribers.split_first().expect("one per remote neighbour");
+                for spare in spares {
+                    while spare
                         .receive()
                         .map_err(|e| format!("bridge: receive failed: {e:?}"))?
-                    {
-                        // Every remote neighbour's copy arrives; one goes out.
-                        if k > 0 {
-                            continue;
-                        }
-                        sample
-                            .user_header()
-                            .write_words(&mut message[..RoundHeader::WORDS]);
-                        let payload = sample.payload();
-                        if payload.len() != self.layout.payload_len {
-                            return Err(format!(
-                                "bridge: agent {} sent {} values, expected {}",
-                                sample.user_header().sender,
-                                payload.len(),
-                                self.layout.payload_len
-                            ));
-                        }
-                        message[RoundHeader::WORDS..].copy_from_slice(payload);
-                        publisher
-                            .put(words_as_bytes(&message).to_vec())
-                            .wait()
-                            .map_err(|e| format!("bridge: forwarding failed: {e}"))?;
-                        self.shared.forwarded_out.fetch_add(1, Ordering::Relaxed);
+                        .is_some()
+                    {}
+                }
+                while let Some(sample) = first
+                    .receive()
+                    .map_err(|e| format!("bridge: receive failed: {e:?}"))?
+                {
+                    sample
+                        .user_header()
+                        .write_words(&mut message[..RoundHeader::WORDS]);
+                    let payload = sample.payload();
+                    if payload.len() != self.layout.payload_len {
+                        return Err(format!(
+                            "bridge: agent {} sent {} values, expected {}",
+                            sample.user_header().sender,
+                            payload.len(),
+                            self.layout.payload_len
+                        ));
                     }
+                    message[RoundHeader::WORDS..].copy_from_slice(payload);
+                    publisher
+                        .put(words_as_bytes(&message).to_vec())
+                        .wait()
+                        .map_err(|e| format!("bridge: forwarding failed: {e}"))?;
+                    self.shared.forwarded_out.fetch_add(1, Ordering::Relaxed);
                 }
             }
             if !announced_local && let Some(failed) = board.failed() {

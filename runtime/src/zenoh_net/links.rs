@@ -10,8 +10,8 @@ pub struct ZenohLinks {
     pub key_prefix: String,
     /// Endpoints the session connects to: its host's router.
     pub connect: Vec<String>,
-    /// Endpoints the session listens on (port 0: any free port), so that agents can link to
-    /// each other directly once the router has introduced them.
+    /// Endpoints the session listens on ([`AGENT_LISTEN`]), so that agents of one host can
+    /// link to each other directly once the router has introduced them.
     pub listen: Vec<String>,
     /// The team's hosts (multi-host teams): an agent joins once all of them are up, so that
     /// every host sees the whole run.
@@ -59,21 +59,22 @@ impl ZenohLinks {
     }
 }
 
-/// `tcp/ADDRESS:0`: an endpoint on the address of `endpoint` with any free port (where an
-/// agent of that host listens), or `None` if `endpoint` is not `tcp/ADDRESS:PORT`.
-pub fn any_port_on(endpoint: &str) -> Option<String> {
-    let address = endpoint.strip_prefix("tcp/")?;
-    let (host, port) = address.rsplit_once(':')?;
-    port.parse::<u16>().ok()?;
-    Some(format!("tcp/{host}:0"))
-}
+/// Where an agent listens: any free port on loopback. Agents of one host link directly;
+/// traffic between hosts goes through their routers (as `rmw_zenoh` deploys it), so only
+/// the routers' endpoints must be reachable from other machines.
+pub const AGENT_LISTEN: &str = "tcp/127.0.0.1:0";
 
 /// Checks that `endpoint` is a Zenoh TCP endpoint `tcp/ADDRESS:PORT` (the only link this
 /// build carries).
 pub fn check_endpoint(endpoint: &str) -> Result<(), String> {
-    any_port_on(endpoint).map(|_| ()).ok_or_else(|| {
-        format!("'{endpoint}' is not a Zenoh TCP endpoint like tcp/192.168.1.10:7447")
-    })
+    endpoint
+        .strip_prefix("tcp/")
+        .and_then(|address| address.rsplit_once(':'))
+        .filter(|(host, port)| !host.is_empty() && port.parse::<u16>().is_ok())
+        .map(|_| ())
+        .ok_or_else(|| {
+            format!("'{endpoint}' is not a Zenoh TCP endpoint like tcp/192.168.1.10:7447")
+        })
 }
 
 #[cfg(test)]
@@ -94,16 +95,15 @@ mod tests {
 
     #[test]
     fn endpoints() {
-        assert_eq!(
-            any_port_on("tcp/10.0.0.2:7447").as_deref(),
-            Some("tcp/10.0.0.2:0")
-        );
-        assert_eq!(
-            any_port_on("tcp/[::1]:7447").as_deref(),
-            Some("tcp/[::1]:0")
-        );
-        assert!(check_endpoint("udp/10.0.0.2:7447").is_err());
-        assert!(check_endpoint("tcp/10.0.0.2").is_err());
-        assert!(check_endpoint("tcp/10.0.0.2:99999").is_err());
+        assert!(check_endpoint("tcp/10.0.0.2:7447").is_ok());
+        assert!(check_endpoint("tcp/[::1]:7447").is_ok());
+        for bad in [
+            "udp/10.0.0.2:7447",
+            "tcp/10.0.0.2",
+            "tcp/10.0.0.2:99999",
+            "tcp/:7447",
+        ] {
+            assert!(check_endpoint(bad).is_err(), "{bad}");
+        }
     }
 }

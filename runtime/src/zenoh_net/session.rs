@@ -1,5 +1,8 @@
-//! Zenoh session configurations: agents are peers of their host's router, routers link the
-//! hosts. Multicast scouting is off everywhere: a team names its endpoints (robot networks
+//! Zenoh session configurations, as `rmw_zenoh` deploys them: agents are peers that connect
+//! to their host's router and listen on loopback, so that agents of one host link to each
+//! other directly once the router's gossip introduces them (one hop instead of two through
+//! the router: 1.7 vs 2.3 ms per round for 10 agents on a complete graph here, 0.45 vs 0.73
+//! on a ring); routers link the hosts and carry the traffic between them. Multicast scouting is off everywhere: a team names its endpoints (robot networks
 //! often drop multicast, and a test must not find another test's sessions).
 
 use std::time::Duration;
@@ -28,7 +31,7 @@ fn list(items: &[String]) -> String {
 pub(crate) fn config(role: &Role, listen: &[String], connect: &[String]) -> Result<Config, String> {
     let mut config = Config::default();
     let mode = match role {
-        Role::Agent { .. } => "\"client\"",
+        Role::Agent { .. } => "\"peer\"",
         Role::Router => "\"router\"",
     };
     set(&mut config, "mode", mode)?;
