@@ -560,6 +560,11 @@ pub fn run(cli: Cli) -> Result<()> {
                         _ => String::new(),
                     }
                 );
+                let round = result.round_latency_us.round;
+                println!(
+                    "round latency (µs, all agents): p50 {:.1}, p90 {:.1}, p99 {:.1}, max {:.1}",
+                    round.p50, round.p90, round.p99, round.max
+                );
             }
             if result.optimal == Some(false) {
                 bail!("the team's assignment is not optimal");

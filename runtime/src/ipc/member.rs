@@ -42,6 +42,7 @@ use crate::ipc::agent_process::{AgentReport, run_scenario};
 use crate::ipc::namespace::RunNamespace;
 use crate::ipc::scenario::{ProcessTransport, Scenario};
 use crate::ipc::transport::{Board, cleanup_dead_nodes, run_config};
+use crate::latency::{LatencySummary, RoundLatency};
 use crate::solve::{self, Method, SolveConfig, StopRule, Transport};
 use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
 use admm_ta_agents::oracle;
@@ -511,6 +512,8 @@ pub struct TeamResult {
     /// With `check`: the centralized optimum and whether the team found it.
     pub optimal_cost: Option<f64>,
     pub optimal: Option<bool>,
+    /// Round latency over all agents' rounds (µs), on whatever carried the messages.
+    pub round_latency_us: LatencySummary,
 }
 
 /// Reads every agent's result and checks they describe one feasible assignment.
@@ -545,6 +548,12 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
             results.display()
         ));
     }
+    let mut latency = RoundLatency::new();
+    for r in &reports {
+        latency
+            .merge(&r.outcome.latency)
+            .map_err(|e| format!("agent {}'s result: {e}", r.outcome.index))?;
+    }
     let assignment: Vec<usize> = reports.iter().map(|r| r.outcome.task).collect();
     if !problem.is_feasible(&assignment) {
         return Err(format!(
@@ -566,5 +575,6 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
         certified_round: certified[0],
         optimal_cost: optimum,
         optimal: optimum.map(|o| (cost - o).abs() <= 1e-9 * o.abs().max(1.0)),
+        round_latency_us: latency.summary(),
     })
 }
