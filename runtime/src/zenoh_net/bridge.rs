@@ -31,6 +31,7 @@ use crate::ipc::transport::{
 };
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
+use crate::zenoh_net::session::{announce_failure, missing_hosts, watch_failures};
 use crossbeam::channel::{Receiver, RecvTimeoutError, unbounded};
 use iceoryx2::prelude::*;
 use std::collections::{HashMap, HashSet, VecDeque};
@@ -39,7 +40,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use zenoh::qos::CongestionControl;
-use zenoh::sample::{Sample, SampleKind};
+use zenoh::sample::Sample;
 use zenoh::{Session, Wait};
 
 type Svc = ipc::Service;
@@ -163,55 +164,15 @@ impl Bridge {
         }
         {
             let shared = Arc::clone(&shared);
-            subscribers.push(
-                session
-                    .declare_subscriber(links.failure_key())
-                    .callback(move |sample: Sample| {
-                        let failed = String::from_utf8_lossy(&sample.payload().to_bytes())
-                            .trim()
-                            .parse::<usize>();
-                        if let Ok(failed) = failed {
-                            let _ = shared.announced.compare_exchange(
-                                NONE,
-                                failed,
-                                Ordering::AcqRel,
-                                Ordering::Acquire,
-                            );
-                        }
-                    })
-                    .wait()
-                    .map_err(|e| format!("bridge: cannot watch failures: {e}"))?,
-            );
+            subscribers.push(watch_failures(&session, &links, move |failed| {
+                let _ = shared.announced.compare_exchange(
+                    NONE,
+                    failed,
+                    Ordering::AcqRel,
+                    Ordering::Acquire,
+                );
+            })?);
         }
-        let hosts_seen = Arc::new(Mutex::new(HashSet::new()));
-        {
-            let hosts_seen = Arc::clone(&hosts_seen);
-            let prefix = links.host_key("");
-            subscribers.push(
-                session
-                    .liveliness()
-                    .declare_subscriber(links.host_key("*"))
-                    .history(true)
-                    .callback(move |sample: Sample| {
-                        if let Some(name) = sample.key_expr().as_str().strip_prefix(&prefix) {
-                            let mut seen = hosts_seen.lock().unwrap_or_else(|e| e.into_inner());
-                            match sample.kind() {
-                                SampleKind::Put => seen.insert(name.to_string()),
-                                SampleKind::Delete => seen.remove(name),
-                            };
-                        }
-                    })
-                    .wait()
-                    .map_err(|e| format!("bridge: cannot watch the hosts: {e}"))?,
-            );
-        }
-        let other_hosts: Vec<String> = team
-            .file
-            .hosts
-            .iter()
-            .filter(|h| h.name != host.name)
-            .map(|h| h.name.clone())
-            .collect();
         let mut threads = Vec::new();
         {
             let (shared, session, links, scenario, layout) = (
@@ -221,7 +182,6 @@ impl Bridge {
                 scenario.clone(),
                 layout.clone(),
             );
-            let hosts_seen = Arc::clone(&hosts_seen);
             threads.push(
                 std::thread::Builder::new()
                     .name("bridge-out".into())
@@ -233,7 +193,7 @@ impl Bridge {
                             scenario: &scenario,
                             layout: &layout,
                         };
-                        if let Err(e) = out.run(&hosts_seen, &other_hosts, deadline) {
+                        if let Err(e) = out.run(deadline) {
                             shared.fail(e);
                         }
                     })
@@ -331,13 +291,6 @@ fn board(scenario: &Scenario) -> Result<Board, String> {
     Board::open(&scenario.board_shm, scenario.robots)
 }
 
-fn put(session: &Session, key: String, value: String) {
-    let _ = session
-        .put(key, value)
-        .congestion_control(CongestionControl::Block)
-        .wait();
-}
-
 /// Local agents' messages out to Zenoh.
 struct OutThread<'a> {
     shared: &'a Shared,
@@ -348,23 +301,16 @@ struct OutThread<'a> {
 }
 
 impl OutThread<'_> {
-    fn run(
-        &self,
-        hosts_seen: &Mutex<HashSet<String>>,
-        other_hosts: &[String],
-        deadline: Instant,
-    ) -> Result<(), String> {
+    fn run(&self, deadline: Instant) -> Result<(), String> {
         let err = |what: String| crate::exchange::ExchangeError::Transport { agent: 0, what };
         let text = |e: crate::exchange::ExchangeError| match e {
             crate::exchange::ExchangeError::Transport { what, .. } => format!("bridge: {what}"),
             e => e.to_string(),
         };
-        // Every other host subscribed to our agents before we let them start.
+        // Every host (so every other bridge) subscribed to our agents before we let them
+        // start: a host declares its token after its bridge's subscriptions.
         loop {
-            let missing: Vec<&String> = {
-                let seen = hosts_seen.lock().unwrap_or_else(|e| e.into_inner());
-                other_hosts.iter().filter(|h| !seen.contains(*h)).collect()
-            };
+            let missing = missing_hosts(self.session, self.links)?;
             if missing.is_empty() {
                 break;
             }
@@ -376,7 +322,7 @@ impl OutThread<'_> {
                     "bridge: host(s) {missing:?} did not come up within the start-up deadline"
                 ));
             }
-            std::thread::sleep(Duration::from_millis(2));
+            std::thread::sleep(Duration::from_millis(10));
         }
         let node = node(self.scenario, "bridge-out")?;
         let board = board(self.scenario)?;
@@ -452,7 +398,7 @@ impl OutThread<'_> {
             }
             if !announced_local && let Some(failed) = board.failed() {
                 // A local failure (or one we marked from an announcement: harmless echo).
-                put(self.session, self.links.failure_key(), failed.to_string());
+                announce_failure(self.session, self.links, failed);
                 announced_local = true;
             }
             if stopping {

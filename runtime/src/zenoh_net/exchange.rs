@@ -27,7 +27,9 @@ use crate::header::{RoundHeader, words_as_bytes, words_as_bytes_mut};
 use crate::ipc::fault::Fault;
 use crate::wait::WaitPolicy;
 use crate::zenoh_net::links::ZenohLinks;
-use crate::zenoh_net::session::{self, Role, alive_agents, missing_hosts};
+use crate::zenoh_net::session::{
+    self, Role, alive_agents, announce_failure, missing_hosts, watch_failures,
+};
 use admm_ta_agents::agent::Inbox;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
@@ -132,7 +134,7 @@ pub struct ZenohExchange {
     /// Generation of the inbound state when last looked at.
     seen: u64,
     launcher: Option<u32>,
-    failure_key: String,
+    links: ZenohLinks,
     publisher: Publisher<'static>,
     _subscribers: Vec<Subscriber<()>>,
     _token: LivelinessToken,
@@ -229,20 +231,12 @@ impl ZenohExchange {
         {
             let shared = Arc::clone(&shared);
             subscribers.push(
-                session
-                    .declare_subscriber(links.failure_key())
-                    .callback(move |sample: Sample| {
-                        let announced = String::from_utf8_lossy(&sample.payload().to_bytes())
-                            .trim()
-                            .parse::<usize>();
-                        if let Ok(failed) = announced {
-                            shared.deliver(|inbound| {
-                                inbound.failed.get_or_insert(failed);
-                            });
-                        }
-                    })
-                    .wait()
-                    .map_err(|e| err(format!("cannot subscribe to failure announcements: {e}")))?,
+                watch_failures(&session, links, move |failed| {
+                    shared.deliver(|inbound| {
+                        inbound.failed.get_or_insert(failed);
+                    });
+                })
+                .map_err(err)?,
             );
         }
         {
@@ -314,7 +308,7 @@ impl ZenohExchange {
             fault: None,
             seen: 0,
             launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
-            failure_key: links.failure_key(),
+            links: links.clone(),
             publisher,
             _subscribers: subscribers,
             _token: token,
@@ -377,11 +371,7 @@ impl ZenohExchange {
 
     /// Announces `agent` as the one that failed, so that every agent of the run stops.
     pub fn blame(&self, agent: usize) {
-        let _ = self
-            .session
-            .put(self.failure_key.clone(), agent.to_string())
-            .congestion_control(CongestionControl::Block)
-            .wait();
+        announce_failure(&self.session, &self.links, agent);
     }
 
     /// The first neighbour whose round-`round` message is missing (after a timeout).

@@ -12,6 +12,7 @@
 use crate::ipc::member::{Team, TeamTransport};
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
+use crate::zenoh_net::session::watch_failures;
 use serde::Serialize;
 use std::path::Path;
 use std::sync::{Arc, Condvar, Mutex};
@@ -107,20 +108,11 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
     };
     let _failures = {
         let watch = Arc::clone(&watch);
-        session
-            .declare_subscriber(links.failure_key())
-            .callback(move |sample: Sample| {
-                let failed = String::from_utf8_lossy(&sample.payload().to_bytes())
-                    .trim()
-                    .parse::<usize>();
-                if let Ok(failed) = failed {
-                    watch.update(|p| {
-                        p.failed.get_or_insert(failed);
-                    });
-                }
-            })
-            .wait()
-            .map_err(|e| format!("cannot watch the team's failures: {e}"))?
+        watch_failures(session, &links, move |failed| {
+            watch.update(|p| {
+                p.failed.get_or_insert(failed);
+            });
+        })?
     };
     let bridge = match team.file.transport {
         TeamTransport::Mixed => Some(crate::zenoh_net::bridge::Bridge::start(

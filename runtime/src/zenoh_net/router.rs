@@ -5,7 +5,6 @@
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::session::{self, Role};
 use std::net::TcpListener;
-use zenoh::qos::CongestionControl;
 use zenoh::{Session, Wait};
 
 /// A running router; dropping it closes it.
@@ -46,11 +45,7 @@ impl HostRouter {
 
     /// Announces `agent` as failed on the run of `links`, so that its Zenoh agents stop.
     pub fn announce_failure(&self, links: &ZenohLinks, agent: usize) {
-        let _ = self
-            .session
-            .put(links.failure_key(), agent.to_string())
-            .congestion_control(CongestionControl::Block)
-            .wait();
+        session::announce_failure(&self.session, links, agent);
     }
 
     /// The router's session (the bridge of a mixed-mode host publishes through it).

@@ -104,3 +104,36 @@ pub(crate) fn alive_agents(
         .filter_map(|k| links.agent_of_alive_key(k))
         .collect())
 }
+
+/// Announces agent `failed` as the one that failed on the run of `links`: every agent and
+/// host of the run stops (the first announcement is the one they report).
+pub(crate) fn announce_failure(
+    session: &Session,
+    links: &crate::zenoh_net::links::ZenohLinks,
+    failed: usize,
+) {
+    let _ = session
+        .put(links.failure_key(), failed.to_string())
+        .congestion_control(zenoh::qos::CongestionControl::Block)
+        .wait();
+}
+
+/// Calls `on_failure` with every agent announced as failed on the run of `links`.
+pub(crate) fn watch_failures(
+    session: &Session,
+    links: &crate::zenoh_net::links::ZenohLinks,
+    on_failure: impl Fn(usize) + Send + Sync + 'static,
+) -> Result<zenoh::pubsub::Subscriber<()>, String> {
+    session
+        .declare_subscriber(links.failure_key())
+        .callback(move |sample| {
+            let announced = String::from_utf8_lossy(&sample.payload().to_bytes())
+                .trim()
+                .parse::<usize>();
+            if let Ok(failed) = announced {
+                on_failure(failed);
+            }
+        })
+        .wait()
+        .map_err(|e| format!("cannot watch the run's failure announcements: {e}"))
+}
