@@ -11,9 +11,10 @@
 //! place. Publishing copies the message once into the buffer Zenoh takes ownership of.
 //!
 //! Presence and failures, with no shared memory between hosts:
-//! * every agent holds a liveliness token `<run>/alive/<i>`; start-up waits until every
-//!   neighbour's token is seen (a neighbour declares its subscriptions before its token, so
-//!   its round-0 message reaches us), and names the neighbours that never came;
+//! * every agent holds a liveliness token `<run>/alive/<i>`, declared once every host of a
+//!   multi-host team is up (so every host sees the whole run) and after the agent's
+//!   subscriptions (so a neighbour that sees it can send to it); start-up waits until every
+//!   neighbour's token is seen and names the neighbours that never came;
 //! * a neighbour whose token vanishes while its message is still awaited has died or lost
 //!   the network (a killed process closes its links at once; a vanished machine is noticed
 //!   after Zenoh's lease, 10 s by default): the agent stops with an error naming it;
@@ -48,11 +49,11 @@ const DEPARTURE_GRACE: Duration = Duration::from_millis(300);
 
 /// A gather that waits this long sends the agent's last two messages again, then again at
 /// doubling intervals up to [`RESEND_AT_MOST_EVERY`]. Zenoh propagates a new subscription
-/// asynchronously: a message published right after start-up (seen on loopback with two
-/// routers: a round-0 message published once the receiver's liveliness token was visible)
-/// can find no route yet and is dropped. A neighbour waiting on the lost message cannot
-/// send what this agent waits for, so the waiter re-sends; duplicates are harmless (a
-/// message lands in the slot of its round's parity and is taken only for its own round).
+/// asynchronously, so a message published right after start-up can find no route yet and
+/// be dropped (round-0 messages were lost so while a team's routers were still starting).
+/// A neighbour waiting on the lost message cannot send what this agent waits for, so the
+/// waiter re-sends; duplicates are harmless (a message lands in the slot of its round's
+/// parity and is taken only for its own round).
 const RESEND_AFTER: Duration = Duration::from_millis(50);
 const RESEND_AT_MOST_EVERY: Duration = Duration::from_secs(1);
 
