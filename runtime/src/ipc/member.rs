@@ -279,8 +279,12 @@ fn check_hosts(file: &TeamFile) -> Result<(), String> {
     }
     let mut host_of = vec![None; file.robots];
     for (h, host) in file.hosts.iter().enumerate() {
-        RunNamespace::check_team_name(&host.name)
-            .map_err(|e| format!("host name '{}': {e}", host.name))?;
+        if RunNamespace::check_team_name(&host.name).is_err() {
+            return Err(format!(
+                "host name '{}': use 1 to 40 letters, digits and dashes",
+                host.name
+            ));
+        }
         check_endpoint(&host.endpoint).map_err(|e| format!("host '{}': {e}", host.name))?;
         if let Some(other) = file.hosts[..h].iter().find(|o| o.name == host.name) {
             return Err(format!("two hosts are called '{}'", other.name));

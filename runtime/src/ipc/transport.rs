@@ -68,13 +68,12 @@ pub(crate) fn open_round_service<S: iceoryx2::service::Service>(
     node: &Node<S>,
     j: usize,
     degree: usize,
-    err: &dyn Fn(String) -> ExchangeError,
 ) -> Result<
     iceoryx2::service::port_factory::publish_subscribe::PortFactory<S, [f64], RoundHeader>,
-    ExchangeError,
+    String,
 > {
     let name =
-        ServiceName::new(&round_service(j)).map_err(|e| err(format!("bad service name: {e:?}")))?;
+        ServiceName::new(&round_service(j)).map_err(|e| format!("bad service name: {e:?}"))?;
     node.service_builder(&name)
         .publish_subscribe::<[f64]>()
         .user_header::<RoundHeader>()
@@ -86,7 +85,7 @@ pub(crate) fn open_round_service<S: iceoryx2::service::Service>(
         .history_size(0)
         .enable_safe_overflow(false)
         .open_or_create()
-        .map_err(|e| err(format!("cannot open service {}: {e:?}", round_service(j))))
+        .map_err(|e| format!("cannot open service {}: {e:?}", round_service(j)))
 }
 
 /// Opens (or creates) agent `j`'s wake-up event service from `node`; `degree` is `j`'s.
@@ -94,34 +93,32 @@ pub(crate) fn open_wake_service<S: iceoryx2::service::Service>(
     node: &Node<S>,
     j: usize,
     degree: usize,
-    err: &dyn Fn(String) -> ExchangeError,
-) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, ExchangeError> {
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, String> {
     let name =
-        ServiceName::new(&wake_service(j)).map_err(|e| err(format!("bad service name: {e:?}")))?;
+        ServiceName::new(&wake_service(j)).map_err(|e| format!("bad service name: {e:?}"))?;
     node.service_builder(&name)
         .event()
         .max_listeners(1)
         .max_notifiers(degree.max(1))
         .max_nodes(degree + 1)
         .open_or_create()
-        .map_err(|e| err(format!("cannot open service {}: {e:?}", wake_service(j))))
+        .map_err(|e| format!("cannot open service {}: {e:?}", wake_service(j)))
 }
 
 /// Opens (or creates) the bridge's wake-up service of a team of `agents`.
 pub(crate) fn open_bridge_wake_service<S: iceoryx2::service::Service>(
     node: &Node<S>,
     agents: usize,
-    err: &dyn Fn(String) -> ExchangeError,
-) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, ExchangeError> {
-    let name = ServiceName::new(BRIDGE_WAKE_SERVICE)
-        .map_err(|e| err(format!("bad service name: {e:?}")))?;
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, String> {
+    let name =
+        ServiceName::new(BRIDGE_WAKE_SERVICE).map_err(|e| format!("bad service name: {e:?}"))?;
     node.service_builder(&name)
         .event()
         .max_listeners(1)
         .max_notifiers(agents.max(1))
         .max_nodes(agents + 1)
         .open_or_create()
-        .map_err(|e| err(format!("cannot open service {BRIDGE_WAKE_SERVICE}: {e:?}")))
+        .map_err(|e| format!("cannot open service {BRIDGE_WAKE_SERVICE}: {e:?}"))
 }
 
 /// What an agent process needs to know to connect.
@@ -449,8 +446,8 @@ impl IpcExchange {
             .config(config)
             .create::<Svc>()
             .map_err(|e| err(format!("cannot create the iceoryx2 node: {e:?}")))?;
-        let round_of = |j: usize| open_round_service(&node, j, endpoint.degrees[j], &err);
-        let wake_of = |j: usize| open_wake_service(&node, j, endpoint.degrees[j], &err);
+        let round_of = |j: usize| open_round_service(&node, j, endpoint.degrees[j]).map_err(err);
+        let wake_of = |j: usize| open_wake_service(&node, j, endpoint.degrees[j]).map_err(err);
         // Listener before subscribers: a neighbour that sees our subscriber can wake us.
         let t_node = t0.elapsed();
         let own_wake = wake_of(i)?;
@@ -495,7 +492,8 @@ impl IpcExchange {
         };
         let bridge = if endpoint.notify_bridge {
             Some(
-                open_bridge_wake_service(&node, endpoint.degrees.len(), &err)?
+                open_bridge_wake_service(&node, endpoint.degrees.len())
+                    .map_err(err)?
                     .notifier_builder()
                     .create()
                     .map_err(|e| err(format!("cannot create the bridge's notifier: {e:?}")))?,

@@ -302,11 +302,7 @@ struct OutThread<'a> {
 
 impl OutThread<'_> {
     fn run(&self, deadline: Instant) -> Result<(), String> {
-        let err = |what: String| crate::exchange::ExchangeError::Transport { agent: 0, what };
-        let text = |e: crate::exchange::ExchangeError| match e {
-            crate::exchange::ExchangeError::Transport { what, .. } => format!("bridge: {what}"),
-            e => e.to_string(),
-        };
+        let text = |e: String| format!("bridge: {e}");
         // Every host (so every other bridge) subscribed to our agents before we let them
         // start: a host declares its token after its bridge's subscriptions.
         loop {
@@ -326,7 +322,7 @@ impl OutThread<'_> {
         }
         let node = node(self.scenario, "bridge-out")?;
         let board = board(self.scenario)?;
-        let listener = open_bridge_wake_service(&node, self.scenario.robots, &err)
+        let listener = open_bridge_wake_service(&node, self.scenario.robots)
             .map_err(text)?
             .listener_builder()
             .create()
@@ -334,8 +330,7 @@ impl OutThread<'_> {
         // Per local agent with remote neighbours: one subscriber per remote neighbour.
         let mut senders = Vec::new();
         for i in self.layout.local_senders() {
-            let service =
-                open_round_service(&node, i, self.layout.degrees[i], &err).map_err(text)?;
+            let service = open_round_service(&node, i, self.layout.degrees[i]).map_err(text)?;
             let subscribers = (0..self.layout.remote_neighbours(i))
                 .map(|_| {
                     service
@@ -422,17 +417,13 @@ struct InThread<'a> {
 
 impl InThread<'_> {
     fn run(&self, inbox: &Receiver<(usize, Vec<u8>)>, deadline: Instant) -> Result<(), String> {
-        let err = |what: String| crate::exchange::ExchangeError::Transport { agent: 0, what };
-        let text = |e: crate::exchange::ExchangeError| match e {
-            crate::exchange::ExchangeError::Transport { what, .. } => format!("bridge: {what}"),
-            e => e.to_string(),
-        };
+        let text = |e: String| format!("bridge: {e}");
         let node = node(self.scenario, "bridge-in")?;
         let board = board(self.scenario)?;
         let layout = self.layout;
         let mut publishers = HashMap::new();
         for r in layout.remote_senders() {
-            let service = open_round_service(&node, r, layout.degrees[r], &err).map_err(text)?;
+            let service = open_round_service(&node, r, layout.degrees[r]).map_err(text)?;
             let publisher = service
                 .publisher_builder()
                 .initial_max_slice_len(layout.payload_len)
@@ -443,7 +434,7 @@ impl InThread<'_> {
         }
         let mut notifiers = HashMap::new();
         for i in layout.local_senders() {
-            let notifier = open_wake_service(&node, i, layout.degrees[i], &err)
+            let notifier = open_wake_service(&node, i, layout.degrees[i])
                 .map_err(text)?
                 .notifier_builder()
                 .create()
