@@ -173,58 +173,19 @@ impl Bridge {
                 );
             })?);
         }
-        let mut threads = Vec::new();
-        {
-            let (shared, session, links, scenario, layout) = (
-                Arc::clone(&shared),
-                session.clone(),
-                links.clone(),
-                scenario.clone(),
-                layout.clone(),
-            );
-            threads.push(
-                std::thread::Builder::new()
-                    .name("bridge-out".into())
-                    .spawn(move || {
-                        let out = OutThread {
-                            shared: &shared,
-                            session: &session,
-                            links: &links,
-                            scenario: &scenario,
-                            layout: &layout,
-                        };
-                        if let Err(e) = out.run(deadline) {
-                            shared.fail(e);
-                        }
-                    })
-                    .map_err(|e| format!("bridge: cannot start a thread: {e}"))?,
-            );
-        }
-        {
-            let (shared, session, links, scenario) = (
-                Arc::clone(&shared),
-                session.clone(),
-                links.clone(),
-                scenario.clone(),
-            );
-            threads.push(
-                std::thread::Builder::new()
-                    .name("bridge-in".into())
-                    .spawn(move || {
-                        let into = InThread {
-                            shared: &shared,
-                            session: &session,
-                            links: &links,
-                            scenario: &scenario,
-                            layout: &layout,
-                        };
-                        if let Err(e) = into.run(&inbox, deadline) {
-                            shared.fail(e);
-                        }
-                    })
-                    .map_err(|e| format!("bridge: cannot start a thread: {e}"))?,
-            );
-        }
+        let forwarder = Forwarder {
+            shared: Arc::clone(&shared),
+            session,
+            links,
+            scenario,
+            layout,
+        };
+        let threads = vec![
+            forwarder
+                .clone()
+                .spawn("bridge-out", move |f| f.forward_out(deadline))?,
+            forwarder.spawn("bridge-in", move |f| f.forward_in(&inbox, deadline))?,
+        ];
         Ok(Self {
             shared,
             threads,
@@ -291,22 +252,40 @@ fn board(scenario: &Scenario) -> Result<Board, String> {
     Board::open(&scenario.board_shm, scenario.robots)
 }
 
-/// Local agents' messages out to Zenoh.
-struct OutThread<'a> {
-    shared: &'a Shared,
-    session: &'a Session,
-    links: &'a ZenohLinks,
-    scenario: &'a Scenario,
-    layout: &'a Layout,
+/// What the two forwarding threads own.
+#[derive(Clone)]
+struct Forwarder {
+    shared: Arc<Shared>,
+    session: Session,
+    links: ZenohLinks,
+    scenario: Scenario,
+    layout: Layout,
 }
 
-impl OutThread<'_> {
-    fn run(&self, deadline: Instant) -> Result<(), String> {
+impl Forwarder {
+    /// Runs `body` on a thread of its own; its error stops the bridge.
+    fn spawn(
+        self,
+        name: &str,
+        body: impl FnOnce(&Self) -> Result<(), String> + Send + 'static,
+    ) -> Result<JoinHandle<()>, String> {
+        std::thread::Builder::new()
+            .name(name.into())
+            .spawn(move || {
+                if let Err(e) = body(&self) {
+                    self.shared.fail(e);
+                }
+            })
+            .map_err(|e| format!("bridge: cannot start a thread: {e}"))
+    }
+
+    /// Local agents' messages out to Zenoh.
+    fn forward_out(&self, deadline: Instant) -> Result<(), String> {
         let text = |e: String| format!("bridge: {e}");
         // Every host (so every other bridge) subscribed to our agents before we let them
         // start: a host declares its token after its bridge's subscriptions.
         loop {
-            let missing = missing_hosts(self.session, self.links)?;
+            let missing = missing_hosts(&self.session, &self.links)?;
             if missing.is_empty() {
                 break;
             }
@@ -320,8 +299,8 @@ impl OutThread<'_> {
             }
             std::thread::sleep(Duration::from_millis(10));
         }
-        let node = node(self.scenario, "bridge-out")?;
-        let board = board(self.scenario)?;
+        let node = node(&self.scenario, "bridge-out")?;
+        let board = board(&self.scenario)?;
         let listener = open_bridge_wake_service(&node, self.scenario.robots)
             .map_err(text)?
             .listener_builder()
@@ -393,7 +372,7 @@ impl OutThread<'_> {
             }
             if !announced_local && let Some(failed) = board.failed() {
                 // A local failure (or one we marked from an announcement: harmless echo).
-                announce_failure(self.session, self.links, failed);
+                announce_failure(&self.session, &self.links, failed);
                 announced_local = true;
             }
             if stopping {
@@ -404,23 +383,17 @@ impl OutThread<'_> {
                 .map_err(|e| format!("bridge: waiting failed: {e:?}"))?;
         }
     }
-}
 
-/// Remote agents' messages in from Zenoh.
-struct InThread<'a> {
-    shared: &'a Shared,
-    session: &'a Session,
-    links: &'a ZenohLinks,
-    scenario: &'a Scenario,
-    layout: &'a Layout,
-}
-
-impl InThread<'_> {
-    fn run(&self, inbox: &Receiver<(usize, Vec<u8>)>, deadline: Instant) -> Result<(), String> {
+    /// Remote agents' messages in from Zenoh.
+    fn forward_in(
+        &self,
+        inbox: &Receiver<(usize, Vec<u8>)>,
+        deadline: Instant,
+    ) -> Result<(), String> {
         let text = |e: String| format!("bridge: {e}");
-        let node = node(self.scenario, "bridge-in")?;
-        let board = board(self.scenario)?;
-        let layout = self.layout;
+        let node = node(&self.scenario, "bridge-in")?;
+        let board = board(&self.scenario)?;
+        let layout = &self.layout;
         let mut publishers = HashMap::new();
         for r in layout.remote_senders() {
             let service = open_round_service(&node, r, layout.degrees[r]).map_err(text)?;
