@@ -184,7 +184,6 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
             scenario.zenoh = Some(ZenohLinks {
                 key_prefix: format!("admm-ta/run/{}", namespace.id),
                 connect: vec![router.endpoint.clone()],
-                listen: vec![crate::zenoh_net::links::AGENT_LISTEN.into()],
                 hosts: Vec::new(),
             });
             guard.router = Some(router);

@@ -176,13 +176,11 @@ impl Team {
             })
     }
 
-    /// The Zenoh links of an agent on `host` (or of its bridge): the host's router, and a
-    /// loopback port for direct links with the host's other agents.
+    /// The Zenoh links of an agent on `host` (or of its bridge): the host's router.
     pub fn zenoh_links(&self, host: &HostEntry) -> ZenohLinks {
         ZenohLinks {
             key_prefix: format!("admm-ta/team/{}", self.file.run),
             connect: vec![host.endpoint.clone()],
-            listen: vec![crate::zenoh_net::links::AGENT_LISTEN.into()],
             hosts: self.file.hosts.iter().map(|h| h.name.clone()).collect(),
         }
     }

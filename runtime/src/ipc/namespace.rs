@@ -126,7 +126,7 @@ fn sweep_abandoned(runs: &Path) {
         else {
             continue;
         };
-        if launcher_alive(pid) {
+        if process_alive(pid) {
             continue;
         }
         let abandoned = RunNamespace {
@@ -138,8 +138,8 @@ fn sweep_abandoned(runs: &Path) {
     }
 }
 
-/// Whether process `pid` runs (a zombie, killed but not yet reaped, does not).
-fn launcher_alive(pid: u32) -> bool {
+/// Whether process `pid` runs (a zombie, exited but not yet reaped, does not).
+pub(crate) fn process_alive(pid: u32) -> bool {
     std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
         // The state is the first field after the parenthesised command name.
         let state = stat[stat.rfind(')').map_or(0, |i| i + 1)..]

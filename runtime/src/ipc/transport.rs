@@ -175,18 +175,6 @@ pub fn arrivals_target(degree: usize, round: u64) -> u64 {
     degree as u64 * (round / 2 + 1)
 }
 
-/// Whether process `pid` has exited and waits to be reaped (`/proc/PID/stat` state `Z`).
-fn is_zombie(pid: u32) -> bool {
-    std::fs::read_to_string(format!("/proc/{pid}/stat"))
-        .ok()
-        .and_then(|stat| {
-            // The command name in parentheses may contain spaces: the state follows the last ')'.
-            let rest = &stat[stat.rfind(')')? + 1..];
-            rest.split_whitespace().next().map(|state| state == "Z")
-        })
-        .unwrap_or(false)
-}
-
 /// The run-wide shared memory of arrival counters, published rounds, the global barrier and
 /// the failure mark.
 pub struct Board {
@@ -299,8 +287,7 @@ impl Board {
     /// zombie — exited, not yet reaped by whoever started it — does not).
     pub(crate) fn member_alive(&self, agent: usize) -> bool {
         let pid = self.member_pid(agent);
-        // SAFETY: kill with signal 0 only checks whether the process exists.
-        pid != 0 && unsafe { libc::kill(pid as libc::pid_t, 0) } == 0 && !is_zombie(pid)
+        pid != 0 && crate::ipc::namespace::process_alive(pid)
     }
 
     /// Marks agent `failed` as failed (the first mark wins); every agent stops at its next

@@ -39,6 +39,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
+use zenoh::bytes::ZBytes;
 use zenoh::qos::CongestionControl;
 use zenoh::sample::Sample;
 use zenoh::{Session, Wait};
@@ -148,7 +149,8 @@ impl Bridge {
             forwarded_in: AtomicU64::new(0),
         });
         // Zenoh side first: the remote agents' messages, failures, and the other hosts.
-        let (to_in, inbox) = unbounded::<(usize, Vec<u8>)>();
+        // The samples' buffers travel by reference count: copied once, into iceoryx2.
+        let (to_in, inbox) = unbounded::<(usize, ZBytes)>();
         let mut subscribers = Vec::new();
         for r in layout.remote_senders() {
             let to_in = to_in.clone();
@@ -156,7 +158,7 @@ impl Bridge {
                 session
                     .declare_subscriber(links.round_key(r))
                     .callback(move |sample: Sample| {
-                        let _ = to_in.send((r, sample.payload().to_bytes().into_owned()));
+                        let _ = to_in.send((r, sample.payload().clone()));
                     })
                     .wait()
                     .map_err(|e| format!("bridge: cannot subscribe to agent {r}: {e}"))?,
@@ -328,8 +330,8 @@ impl Forwarder {
                 .map_err(|e| format!("bridge: cannot publish agent {i}'s messages: {e}"))?;
             senders.push((subscribers, publisher));
         }
-        let words = RoundHeader::WORDS + self.layout.payload_len;
-        let mut message = vec![0.0; words];
+        let message_bytes = 8 * (RoundHeader::WORDS + self.layout.payload_len);
+        let mut header_words = [0.0; RoundHeader::WORDS];
         let mut announced_local = false;
         loop {
             let stopping = self.shared.stop.load(Ordering::Acquire);
@@ -350,9 +352,6 @@ impl Forwarder {
                     .receive()
                     .map_err(|e| format!("bridge: receive failed: {e:?}"))?
                 {
-                    sample
-                        .user_header()
-                        .write_words(&mut message[..RoundHeader::WORDS]);
                     let payload = sample.payload();
                     if payload.len() != self.layout.payload_len {
                         return Err(format!(
@@ -362,9 +361,13 @@ impl Forwarder {
                             self.layout.payload_len
                         ));
                     }
-                    message[RoundHeader::WORDS..].copy_from_slice(payload);
+                    // Straight from the shared-memory sample into the buffer Zenoh owns.
+                    sample.user_header().write_words(&mut header_words);
+                    let mut message = Vec::with_capacity(message_bytes);
+                    message.extend_from_slice(words_as_bytes(&header_words));
+                    message.extend_from_slice(words_as_bytes(payload));
                     publisher
-                        .put(words_as_bytes(&message).to_vec())
+                        .put(message)
                         .wait()
                         .map_err(|e| format!("bridge: forwarding failed: {e}"))?;
                     self.shared.forwarded_out.fetch_add(1, Ordering::Relaxed);
@@ -387,7 +390,7 @@ impl Forwarder {
     /// Remote agents' messages in from Zenoh.
     fn forward_in(
         &self,
-        inbox: &Receiver<(usize, Vec<u8>)>,
+        inbox: &Receiver<(usize, ZBytes)>,
         deadline: Instant,
     ) -> Result<(), String> {
         let text = |e: String| format!("bridge: {e}");
@@ -414,7 +417,7 @@ impl Forwarder {
                 .map_err(|e| format!("bridge: cannot wake agent {i}: {e:?}"))?;
             notifiers.insert(i, notifier);
         }
-        let mut pending: VecDeque<(usize, Vec<u8>)> = VecDeque::new();
+        let mut pending: VecDeque<(usize, ZBytes)> = VecDeque::new();
         let mut tokens: HashMap<usize, zenoh::liveliness::LivelinessToken> = HashMap::new();
         let mut joined = vec![false; self.scenario.robots];
         let mut marked = false;
@@ -430,7 +433,7 @@ impl Forwarder {
             // yet waits (only at start-up), and so do its later messages.
             let mut blocked = HashSet::new();
             let mut kept = VecDeque::new();
-            while let Some((r, bytes)) = pending.pop_front() {
+            while let Some((r, message)) = pending.pop_front() {
                 let Some((service, publisher, local)) = publishers.get(&r) else {
                     continue;
                 };
@@ -443,9 +446,10 @@ impl Forwarder {
                         ));
                     }
                     blocked.insert(r);
-                    kept.push_back((r, bytes));
+                    kept.push_back((r, message));
                     continue;
                 }
+                let bytes = message.to_bytes();
                 if bytes.len() != words * 8 {
                     return Err(format!(
                         "bridge: agent {r} sent a message of {} bytes, expected {}",

@@ -27,13 +27,14 @@ use crate::exchange::{Exchange, ExchangeError};
 use crate::header::{RoundHeader, words_as_bytes, words_as_bytes_mut};
 use crate::ipc::fault::Fault;
 use crate::wait::WaitPolicy;
-use crate::zenoh_net::links::ZenohLinks;
+use crate::zenoh_net::links::{AGENT_LISTEN, ZenohLinks};
 use crate::zenoh_net::session::{
     self, Role, alive_agents, announce_failure, missing_hosts, watch_failures,
 };
 use admm_ta_agents::agent::Inbox;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
+use zenoh::bytes::ZBytes;
 use zenoh::liveliness::LivelinessToken;
 use zenoh::pubsub::{Publisher, Subscriber};
 use zenoh::qos::CongestionControl;
@@ -125,8 +126,9 @@ pub struct ZenohExchange {
     headers: Vec<RoundHeader>,
     /// Header words + payload of the own message.
     outbox: Vec<f64>,
-    /// The own last two messages as sent, by round parity, to send again.
-    sent: [(Option<u64>, Vec<u8>); 2],
+    /// The own last two messages as sent, by round parity, to send again (a `ZBytes` clone
+    /// shares the buffer: putting it again copies nothing).
+    sent: [(Option<u64>, ZBytes); 2],
     /// Messages sent again.
     resent: u64,
     /// The round last gathered, and the fault to inject (tests, [`crate::ipc::fault`]).
@@ -194,7 +196,7 @@ impl ZenohExchange {
             &Role::Agent {
                 within: deadline.saturating_duration_since(Instant::now()),
             },
-            &links.listen,
+            &[AGENT_LISTEN.to_string()],
             &links.connect,
         )
         .map_err(err)?;
@@ -303,7 +305,7 @@ impl ZenohExchange {
             held_round: vec![None; degree],
             headers: vec![RoundHeader::default(); degree],
             outbox: vec![0.0; message_words],
-            sent: [(None, Vec::new()), (None, Vec::new())],
+            sent: [(None, ZBytes::new()), (None, ZBytes::new())],
             resent: 0,
             gathered: 0,
             fault: None,
@@ -479,20 +481,16 @@ impl ZenohExchange {
     /// Sends the header and the first `payload_len` values of the outbox.
     fn send(&mut self, header: RoundHeader, payload_len: usize) -> Result<(), ExchangeError> {
         header.write_words(&mut self.outbox[..RoundHeader::WORDS]);
-        let (round, bytes) = &mut self.sent[(header.round % 2) as usize];
-        *round = Some(header.round);
-        bytes.clear();
-        bytes.extend_from_slice(words_as_bytes(
-            &self.outbox[..RoundHeader::WORDS + payload_len],
-        ));
+        // Zenoh takes ownership of what it sends: the one copy of the message.
+        let bytes = words_as_bytes(&self.outbox[..RoundHeader::WORDS + payload_len]).to_vec();
+        self.sent[(header.round % 2) as usize] = (Some(header.round), ZBytes::from(bytes));
         self.put(header.round)
     }
 
-    /// Puts the kept message of `round` (Zenoh takes ownership of what it sends: a copy).
+    /// Puts the kept message of `round`.
     fn put(&self, round: u64) -> Result<(), ExchangeError> {
-        let bytes = &self.sent[(round % 2) as usize].1;
         self.publisher
-            .put(bytes.clone())
+            .put(self.sent[(round % 2) as usize].1.clone())
             .wait()
             .map_err(|e| transport(self.index, format!("publishing round {round} failed: {e}")))
     }

@@ -10,9 +10,6 @@ pub struct ZenohLinks {
     pub key_prefix: String,
     /// Endpoints the session connects to: its host's router.
     pub connect: Vec<String>,
-    /// Endpoints the session listens on ([`AGENT_LISTEN`]), so that agents of one host can
-    /// link to each other directly once the router has introduced them.
-    pub listen: Vec<String>,
     /// The team's hosts (multi-host teams): an agent joins once all of them are up, so that
     /// every host sees the whole run.
     #[serde(default)]
