@@ -204,6 +204,12 @@ mod tests {
             std::fs::write(&shm, b"x").unwrap();
         }
         let live = RunNamespace::create().unwrap();
+        // Another test's `create` may be sweeping the dead run at the same moment: this
+        // sweep then skips it (its pid file already gone) while the other finishes.
+        let swept_by = std::time::Instant::now() + std::time::Duration::from_secs(2);
+        while !dead.leftovers().is_empty() && std::time::Instant::now() < swept_by {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
         assert!(dead.leftovers().is_empty(), "{:?}", dead.leftovers());
         assert!(live.dir.exists(), "a live run was swept");
         live.cleanup().unwrap();
