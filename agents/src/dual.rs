@@ -6,7 +6,7 @@
 //! * Case 1: `Σ_i A_i x_i = b` with `A_i = [M_i; I_m]`, `b = 1_{n+m}` (`M_i` has ones in
 //!   row `i`): every robot one task, every task one robot;
 //! * Case 2: `Σ_i M_i x_i = 1_n` and `Σ_i C_i x_i ≤ d` with `C_i = −I_m`, `d = −1_m`:
-//!   every task at least one robot (NOTES.md note 8: `b = 1_n`, not `1_m`).
+//!   every task at least one robot (docs/notes.md, note 8: `b = 1_n`, not `1_m`).
 //!
 //! Each robot keeps its own copy `y_i = (ν_i, λ_i)` of the multipliers (`n + m` numbers in
 //! both cases: Case 1 has `n + m` equality prices, Case 2 `n` equality prices and `m`
@@ -29,7 +29,7 @@
 //! Minimising (11) over `ν` for fixed `x` gives (13) with value `−ρ/(4d)‖θ‖²`; over
 //! `λ ≥ 0` it gives (14) with value `−ρ d ‖max(θ_λ/(2d), 0)‖²`, so the outer problem in `x`
 //! is (15) with the `λ` part as a squared hinge. The paper instead writes `½ λ_iᵀC_i x`
-//! with the previous `λ`: the ½ does not follow from the derivation (NOTES.md note 8) and
+//! with the previous `λ`: the ½ does not follow from the derivation (docs/notes.md, note 8) and
 //! a linear term makes Case 2's x-update non-unique, so we keep the exact hinge, whose
 //! gradient `C_iᵀ λ` is what the paper's term approximates. `θ` is as printed: its sum
 //! holds the *previous* round's `y_i + y_j` (note 8). `b̃/n` splits the right-hand side

@@ -13,7 +13,7 @@
 //!
 //! with `P` the relaxed assignment polytope with *all* entries in [0, 1] (as the paper
 //! does). (8) uses the freshly updated `Q^{k+1}`: it matches the edge-based derivation and
-//! settles about twice as fast as the literal `Q^k` (NOTES.md, note 8). `X_i^0 = Q_i^0 = 0`.
+//! settles about twice as fast as the literal `Q^k` (docs/notes.md, note 8). `X_i^0 = Q_i^0 = 0`.
 //! A robot without neighbours (n = 1) uses its own iterate in place of a neighbour's, which
 //! turns the step into a proximal-point iteration on its local LP.
 //!

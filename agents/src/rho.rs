@@ -7,7 +7,7 @@
 //!
 //! `ρ = 0.5 · spread · √((n − 1) / d̄) / (2 · d̄ · n)`, `d̄` the mean degree.
 //!
-//! On complete graphs (`d̄ = n − 1`) it is the measured optimum of NOTES.md note 10,
+//! On complete graphs (`d̄ = n − 1`) it is the measured optimum of docs/notes.md, note 10,
 //! (0.5 … 1) / (2 d̄ n); we take 0.5, which over 50 seeded 20×20 instances reached the
 //! optimal assignment as fast as 0.75 and 1.0 and settled markedly sooner. Sparse graphs
 //! want a larger ρ than `1/d̄` alone gives; the density factor `√((n − 1)/d̄)` cut the mean

@@ -3,7 +3,7 @@
 //! [`AgreementStop`] stops once, for `rounds` consecutive rounds, every robot's iterate is
 //! near-integral (every entry within the integrality tolerance of a feasible assignment) and
 //! all robots round to the *same* assignment. Near-integrality is what keeps it from stopping on a
-//! fractional face where robots merely agree (NOTES.md note 12: residual-only rules stopped
+//! fractional face where robots merely agree (docs/notes.md, note 12: residual-only rules stopped
 //! at wrong assignments; adding near-integrality gave none). It reads the whole team's
 //! reports, so it is the reference rule of the lockstep simulation; a neighbour-only
 //! version with an agreement protocol belongs to the runtime's distributed transports.
@@ -57,7 +57,7 @@ impl AgreementStop {
     /// Default tolerance 0.2. Measured with `runtime/examples/stop_rules.rs` (10 rounds,
     /// uniform costs): 0 wrong stops in 110 runs (20×20 complete, 30×12 random, 15×15 chain),
     /// stopping 2.5× later than the round the assignment became optimal on average, where
-    /// 0.05 (NOTES.md note 12) also made no wrong stop but took 3.5× longer.
+    /// 0.05 (docs/notes.md, note 12) also made no wrong stop but took 3.5× longer.
     pub fn new(rounds: usize) -> Self {
         Self::with_tolerance(rounds, 0.2)
     }

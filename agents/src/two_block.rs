@@ -1,4 +1,4 @@
-//! Generic two-block ADMM, as in `../shared/reference/admm-tutorial.md` (Boyd et al. 2011):
+//! Generic two-block ADMM, as in Boyd, Parikh, Chu, Peleato & Eckstein, *Distributed Optimization and Statistical Learning via the Alternating Direction Method of Multipliers* (2011), §3:
 //!
 //! ```text
 //! minimise f(x) + g(z)   subject to   A x + B z = c

@@ -73,7 +73,7 @@ fn check_agree(m: usize, n: usize, case: AssignmentCase, z: Mat<f64>) {
         .zip(&reference)
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
-    // clarabel's interior-point answer is only ~1e-8 accurate, ~1e-6 on degenerate inputs (NOTES.md note 11),
+    // clarabel's interior-point answer is only ~1e-8 accurate, ~1e-6 on degenerate inputs (docs/notes.md, note 11),
     // so compare points loosely, objectives tightly, and certify the fast one by its KKT
     // conditions (`kkt_certificate`).
     assert!(gap <= 1e-5, "{m}x{n} {case:?}: max |fast − qp| = {gap:e}");

@@ -6,7 +6,7 @@
 //! * `within` — the paper's criterion: first round whose relaxed objective (the robots' own
 //!   columns) is within 0.1% of the optimum;
 //! * `assign` — the round from which every robot's own rounded task is an optimal
-//!   assignment (shift-invariant, NOTES.md note 9);
+//!   assignment (shift-invariant, docs/notes.md, note 9);
 //! * `stop` — the round at which the decentralized certified stop ended the run, and whether
 //!   its assignment was optimal (a *wrong stop* otherwise).
 //!

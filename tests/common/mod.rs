@@ -3,9 +3,9 @@
 
 use std::path::PathBuf;
 
-/// The shared oracle folder beside the project (`../shared/oracle`).
+/// The oracle instances with their known optima (`tests/fixtures/oracle`, see its README).
 pub fn oracle_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/oracle")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/oracle")
 }
 
 /// One oracle instance with its expected optimum.
@@ -22,7 +22,7 @@ pub struct OracleInstance {
 pub fn oracle_instances() -> Vec<OracleInstance> {
     let dir = oracle_dir();
     let text = std::fs::read_to_string(dir.join("expected.json"))
-        .expect("../shared/oracle/expected.json must exist beside the project");
+        .expect("tests/fixtures/oracle/expected.json is part of the repository");
     let expected: serde_json::Value = serde_json::from_str(&text).unwrap();
     let mut instances: Vec<OracleInstance> = expected
         .as_object()
@@ -44,7 +44,10 @@ pub fn oracle_instances() -> Vec<OracleInstance> {
         })
         .collect();
     instances.sort_by(|a, b| a.name.cmp(&b.name));
-    assert!(instances.len() >= 5, "expected the shared oracle instances");
+    assert!(
+        instances.len() >= 5,
+        "expected the oracle instances of tests/fixtures/oracle"
+    );
     instances
 }
 
