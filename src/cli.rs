@@ -507,7 +507,7 @@ pub fn run(cli: Cli) -> Result<()> {
         } => {
             let (index, result) = match (team, id, run, index, scenario) {
                 (Some(team), Some(id), ..) => {
-                    let report = admm_ta_runtime::ipc::member::run_member(&team, id);
+                    let report = admm_ta_runtime::process::member::run_member(&team, id);
                     if let Ok(r) = &report {
                         println!(
                             "{}",
@@ -523,7 +523,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 }
                 (None, None, Some(run), Some(index), Some(scenario)) => (
                     index,
-                    admm_ta_runtime::ipc::agent_process::run(&run, index, &scenario),
+                    admm_ta_runtime::process::agent::run(&run, index, &scenario),
                 ),
                 _ => bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
             };
@@ -538,8 +538,8 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Host { team, name } => run_host(&team, &name),
         Command::Collect { team, check, json } => {
-            let result =
-                admm_ta_runtime::ipc::member::collect(&team, check).map_err(anyhow::Error::msg)?;
+            let result = admm_ta_runtime::process::member::collect(&team, check)
+                .map_err(anyhow::Error::msg)?;
             if json {
                 println!("{}", serde_json::to_string(&result)?);
             } else {
@@ -685,7 +685,7 @@ pub(crate) fn agent_program() -> Result<PathBuf> {
 #[cfg(feature = "zenoh")]
 fn run_host(team: &std::path::Path, name: &str) -> Result<()> {
     let report =
-        admm_ta_runtime::zenoh_net::host::run_host(team, name).map_err(anyhow::Error::msg)?;
+        admm_ta_runtime::process::host::run_host(team, name).map_err(anyhow::Error::msg)?;
     println!("{}", serde_json::to_string(&report)?);
     Ok(())
 }

@@ -9,7 +9,7 @@
 
 mod common;
 
-use admm_ta_runtime::ipc::member::Team;
+use admm_ta_runtime::process::member::Team;
 use admm_ta_runtime::solve::{SolveConfig, SolveReport, Transport, solve};
 use std::net::TcpListener;
 use std::os::unix::process::CommandExt;

@@ -11,9 +11,9 @@
 //! [`run_surveillance_agent`].
 
 use crate::exchange::{AgentOutcome, AgentPlan, AgentStop, Exchange, ExchangeError, RoundLoop};
-use crate::ipc::launcher::{self, IpcOptions};
-use crate::ipc::scenario::{ProcessTransport, Scenario, Workload};
 use crate::latency::{LatencySummary, RoundLatency};
+use crate::process::launcher::{self, IpcOptions};
+use crate::process::scenario::{ProcessTransport, Scenario, Workload};
 use crate::solve::{SolveError, Transport};
 use crate::threads;
 use crate::wait::WaitStrategy;

@@ -18,10 +18,12 @@
 
 pub mod episodes;
 pub mod exchange;
+pub mod fault;
 pub mod header;
 pub mod ipc;
 pub mod latency;
 pub mod probe_run;
+pub mod process;
 pub mod sim;
 pub mod solve;
 pub mod team;

@@ -16,9 +16,9 @@
 //! ```
 
 use crate::exchange::{AgentPlan, AgentStop};
-use crate::ipc::launcher::{self, IpcOptions};
-use crate::ipc::scenario::{ProcessTransport, Scenario, Workload};
 use crate::latency::{LatencySummary, RoundLatency};
+use crate::process::launcher::{self, IpcOptions};
+use crate::process::scenario::{ProcessTransport, Scenario, Workload};
 use crate::solve::{SolveError, Transport};
 use crate::threads;
 use crate::usage::ThreadUsage;

@@ -1,9 +1,9 @@
 //! One end-to-end solve: build the agents, run them, round, repair, check.
 
 use crate::exchange::{AgentOutcome, AgentPlan, AgentStop, ExchangeError, payload_digest};
-use crate::ipc::launcher::{self, IpcOptions, LaunchError};
-use crate::ipc::scenario::{ProcessTransport, Scenario, ScenarioStop};
 use crate::latency::LatencySummary;
+use crate::process::launcher::{self, IpcOptions, LaunchError};
+use crate::process::scenario::{ProcessTransport, Scenario, ScenarioStop};
 use crate::sim::{LockstepSim, RoundView, SimOutcome};
 use crate::team::Team;
 use crate::threads;

@@ -24,8 +24,8 @@
 //! sample that does not reach every subscriber is an error, never a silently lost round.
 
 use crate::exchange::{Exchange, ExchangeError};
+use crate::fault::Fault;
 use crate::header::{MessageFault, Placement, RoundHeader, check_message};
-use crate::ipc::fault::Fault;
 use crate::wait::{Arrival, CountingBarrier, WaitPolicy};
 use admm_ta_agents::agent::Inbox;
 use iceoryx2::node::NodeView;
@@ -287,7 +287,7 @@ impl Board {
     /// zombie — exited, not yet reaped by whoever started it — does not).
     pub(crate) fn member_alive(&self, agent: usize) -> bool {
         let pid = self.member_pid(agent);
-        pid != 0 && crate::ipc::namespace::process_alive(pid)
+        pid != 0 && crate::process::namespace::process_alive(pid)
     }
 
     /// Marks agent `failed` as failed (the first mark wins); every agent stops at its next
@@ -577,7 +577,7 @@ impl IpcExchange {
             .unwrap_or(self.index)
     }
 
-    /// Fault injection (tests, [`crate::ipc::fault`]).
+    /// Fault injection (tests, [`crate::fault`]).
     pub fn inject(&mut self, fault: Option<Fault>) {
         self.fault = fault;
     }

@@ -24,8 +24,8 @@
 //! There is no global barrier: use `ipc` or `threads` for lockstep benchmarks.
 
 use crate::exchange::{Exchange, ExchangeError};
+use crate::fault::Fault;
 use crate::header::{RoundHeader, words_as_bytes, words_as_bytes_mut};
-use crate::ipc::fault::Fault;
 use crate::wait::WaitPolicy;
 use crate::zenoh_net::links::{AGENT_LISTEN, ZenohLinks};
 use crate::zenoh_net::session::{
@@ -131,7 +131,7 @@ pub struct ZenohExchange {
     sent: [(Option<u64>, ZBytes); 2],
     /// Messages sent again.
     resent: u64,
-    /// The round last gathered, and the fault to inject (tests, [`crate::ipc::fault`]).
+    /// The round last gathered, and the fault to inject (tests, [`crate::fault`]).
     gathered: u64,
     fault: Option<Fault>,
     /// Generation of the inbound state when last looked at.
@@ -473,7 +473,7 @@ impl ZenohExchange {
         }
     }
 
-    /// Fault injection (tests, [`crate::ipc::fault`]).
+    /// Fault injection (tests, [`crate::fault`]).
     pub fn inject(&mut self, fault: Option<Fault>) {
         self.fault = fault;
     }

@@ -9,23 +9,20 @@
 //! * `router` (feature `zenoh`): the per-host Zenoh router the host's agents connect to (the
 //!   launcher runs one on loopback for single-machine runs; `admm-ta host` runs one per
 //!   machine of a multi-host team).
-//! * `bridge` (feature `zenoh`): the mixed mode — agents of one host use iceoryx2 among
-//!   themselves and the host's bridge forwards only the payloads that cross hosts.
+//!
+//! The hosts of a multi-host team and the mixed mode's bridge (iceoryx2 within a host, Zenoh
+//! between hosts) use both transports, so they live above them, in [`crate::process`].
 //!
 //! Built without the `zenoh` feature, every Zenoh entry point fails with [`not_built`].
 
 pub mod links;
 
 #[cfg(feature = "zenoh")]
-pub mod bridge;
-#[cfg(feature = "zenoh")]
 pub mod exchange;
-#[cfg(feature = "zenoh")]
-pub mod host;
 #[cfg(feature = "zenoh")]
 pub mod router;
 #[cfg(feature = "zenoh")]
-mod session;
+pub(crate) mod session;
 
 /// Whether this build carries the Zenoh transport.
 pub const BUILT: bool = cfg!(feature = "zenoh");

@@ -23,12 +23,12 @@
 //! run's failure key, and an announced one is marked on the local board.
 
 use crate::header::{RoundHeader, words_as_bytes};
-use crate::ipc::member::{HostEntry, Membership, Team, member_scenario};
-use crate::ipc::scenario::Scenario;
 use crate::ipc::transport::{
     Board, arrivals_target, open_bridge_wake_service, open_round_service, open_wake_service,
     run_config,
 };
+use crate::process::member::{HostEntry, Membership, Team, member_scenario};
+use crate::process::scenario::Scenario;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::{announce_failure, missing_hosts, watch_failures};

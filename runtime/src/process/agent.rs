@@ -6,8 +6,8 @@
 
 use crate::episodes::{EpisodeRecord, run_surveillance_agent};
 use crate::exchange::{AgentOutcome, Exchange, ExchangeError, run_agent};
-use crate::ipc::scenario::{ProcessTransport, Scenario, Workload};
 use crate::ipc::transport::{IpcExchange, run_config};
+use crate::process::scenario::{ProcessTransport, Scenario, Workload};
 use crate::uds::UdsExchange;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -135,7 +135,7 @@ pub fn run_scenario(
     let mut endpoint = match scenario.transport {
         ProcessTransport::Iceoryx2 => {
             let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
-            let fault = crate::ipc::fault::fault_for(index)?;
+            let fault = crate::fault::fault_for(index)?;
             let mut exchange = IpcExchange::connect(
                 &scenario.endpoint(&graph, index, supervised),
                 &config,
@@ -157,7 +157,7 @@ pub fn run_scenario(
             let mut exchange =
                 crate::zenoh_net::exchange::ZenohExchange::connect(&endpoint, deadline)
                     .map_err(|e| e.to_string())?;
-            exchange.inject(crate::ipc::fault::fault_for(index)?);
+            exchange.inject(crate::fault::fault_for(index)?);
             Endpoint::Zenoh(Box::new(exchange))
         }
         #[cfg(not(feature = "zenoh"))]

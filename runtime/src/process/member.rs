@@ -38,11 +38,11 @@
 //! endpoint = "tcp/192.168.1.11:7447"
 //! ```
 
-use crate::ipc::agent_process::{AgentReport, run_scenario};
-use crate::ipc::namespace::RunNamespace;
-use crate::ipc::scenario::{ProcessTransport, Scenario};
 use crate::ipc::transport::{Board, cleanup_dead_nodes, run_config};
 use crate::latency::{LatencySummary, RoundLatency};
+use crate::process::agent::{AgentReport, run_scenario};
+use crate::process::namespace::RunNamespace;
+use crate::process::scenario::{ProcessTransport, Scenario};
 use crate::solve::{self, Method, SolveConfig, StopRule, Transport};
 use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
 use admm_ta_agents::oracle;

@@ -9,7 +9,7 @@
 //! It waits for the first agents until the team's start-up deadline (naming those that never
 //! came) and for the run no longer than every round's deadline allows.
 
-use crate::ipc::member::{Team, TeamTransport};
+use crate::process::member::{Team, TeamTransport};
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::watch_failures;
@@ -115,7 +115,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
         })?
     };
     let bridge = match team.file.transport {
-        TeamTransport::Mixed => Some(crate::zenoh_net::bridge::Bridge::start(
+        TeamTransport::Mixed => Some(crate::process::bridge::Bridge::start(
             &team, &host, &router,
         )?),
         _ => None,

@@ -11,11 +11,11 @@
 //! happens, the run's namespace ([`RunNamespace`]) is removed when the launcher returns.
 
 use crate::exchange::AgentOutcome;
-use crate::ipc::agent_process::{AgentReport, log_path, result_path};
-use crate::ipc::namespace::RunNamespace;
-use crate::ipc::scenario::{ProcessTransport, Scenario};
 use crate::ipc::transport::{Board, cleanup_dead_nodes, run_config};
 use crate::latency::RoundLatency;
+use crate::process::agent::{AgentReport, log_path, result_path};
+use crate::process::namespace::RunNamespace;
+use crate::process::scenario::{ProcessTransport, Scenario};
 #[cfg(feature = "zenoh")]
 use crate::zenoh_net::links::ZenohLinks;
 use std::path::{Path, PathBuf};
@@ -203,7 +203,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
             std::fs::File::create(log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
         let mut command = Command::new(&options.agent_program);
         if !options.fault_injection {
-            command.env_remove(crate::ipc::fault::FAULT_ENV);
+            command.env_remove(crate::fault::FAULT_ENV);
         }
         let child = command
             .arg("agent")
