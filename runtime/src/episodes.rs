@@ -10,7 +10,8 @@
 //! ipc (one process per robot for the whole run) run the same agent function,
 //! [`run_surveillance_agent`].
 
-use crate::exchange::{AgentOutcome, AgentPlan, AgentStop, Exchange, ExchangeError, RoundLoop};
+use crate::exchange::round_loop::{AgentOutcome, AgentPlan, AgentStop, RoundLoop};
+use crate::exchange::{Exchange, ExchangeError};
 use crate::latency::{LatencySummary, RoundLatency};
 use crate::process::launcher::{self, IpcOptions};
 use crate::process::scenario::{ProcessTransport, Scenario, Workload};

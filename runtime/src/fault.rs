@@ -10,9 +10,9 @@
 //! * `wrong-size`: publishes a payload one value short.
 //!
 //! The launcher passes the environment to its agents, so a test sets it on `admm-ta solve`;
-//! the agent's [`crate::ipc::transport::IpcExchange`] applies it when it publishes.
+//! the agent's [`crate::ipc::exchange::IpcExchange`] applies it when it publishes.
 
-use crate::header::RoundHeader;
+use crate::exchange::header::RoundHeader;
 use std::time::Duration;
 
 /// The environment variable that injects a fault.

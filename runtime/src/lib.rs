@@ -16,12 +16,13 @@
 //! assert!(problem.is_feasible(&report.assignment));
 //! ```
 
+pub mod board;
 pub mod episodes;
 pub mod exchange;
 pub mod fault;
-pub mod header;
 pub mod ipc;
 pub mod latency;
+pub mod liveness;
 pub mod probe_run;
 pub mod process;
 pub mod sim;

@@ -15,7 +15,7 @@
 //! assert_eq!(report.latency.round.count, 4 * 40);
 //! ```
 
-use crate::exchange::{AgentPlan, AgentStop};
+use crate::exchange::round_loop::{AgentPlan, AgentStop};
 use crate::latency::{LatencySummary, RoundLatency};
 use crate::process::launcher::{self, IpcOptions};
 use crate::process::scenario::{ProcessTransport, Scenario, Workload};

@@ -1,6 +1,7 @@
 //! One end-to-end solve: build the agents, run them, round, repair, check.
 
-use crate::exchange::{AgentOutcome, AgentPlan, AgentStop, ExchangeError, payload_digest};
+use crate::exchange::ExchangeError;
+use crate::exchange::round_loop::{AgentOutcome, AgentPlan, AgentStop, payload_digest};
 use crate::latency::LatencySummary;
 use crate::process::launcher::{self, IpcOptions, LaunchError};
 use crate::process::scenario::{ProcessTransport, Scenario, ScenarioStop};
@@ -505,7 +506,8 @@ fn solve_once(
     let (message_bytes, messages_per_agent) = match config.method {
         Method::Hungarian => (0, 0),
         method => (
-            8 * method.payload_len(n, m) + std::mem::size_of::<crate::header::RoundHeader>(),
+            8 * method.payload_len(n, m)
+                + std::mem::size_of::<crate::exchange::header::RoundHeader>(),
             run.rounds,
         ),
     };

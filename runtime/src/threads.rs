@@ -6,9 +6,10 @@
 //! that sees the counter (acquire) reads the slot in place. The neighbour barrier makes this
 //! safe without locks: see [`crate::exchange`].
 
-use crate::exchange::{AgentOutcome, AgentPlan, Exchange, ExchangeError, root_cause, run_agent};
-use crate::header::RoundHeader;
-use crate::ipc::transport::arrivals_target;
+use crate::board::arrivals_target;
+use crate::exchange::header::RoundHeader;
+use crate::exchange::round_loop::{AgentOutcome, AgentPlan, run_agent};
+use crate::exchange::{Exchange, ExchangeError, root_cause};
 use crate::wait::{Arrival, CountingBarrier, WaitPolicy, WaitStrategy};
 use admm_ta_agents::agent::{ConsensusAgent, Inbox};
 use admm_ta_topologies::Graph;
@@ -28,7 +29,7 @@ struct AgentSlots {
     published: CachePadded<AtomicU64>,
     /// Neighbour messages counted for rounds of each parity, cumulative; the last arrival of
     /// a round wakes the agent (one wake-up per round instead of one per neighbour; see
-    /// `ipc::transport` for why this never loses a wake-up).
+    /// [`crate::ipc::exchange`] for why this never loses a wake-up).
     arrivals: CachePadded<[AtomicU64; 2]>,
     slots: [Slot; 2],
 }

@@ -16,9 +16,11 @@
 //! in 20 ms slices, looking at the run's failure mark in between. A neighbour's end of file
 //! is reported as its failure. There is no global barrier.
 
+use crate::board::Board;
+use crate::exchange::header::{
+    RoundHeader, words_as_bytes as as_bytes, words_as_bytes_mut as as_bytes_mut,
+};
 use crate::exchange::{Exchange, ExchangeError};
-use crate::header::{RoundHeader, words_as_bytes as as_bytes, words_as_bytes_mut as as_bytes_mut};
-use crate::ipc::transport::Board;
 use crate::wait::WaitPolicy;
 use admm_ta_agents::agent::Inbox;
 use std::io::{ErrorKind, Read, Write};

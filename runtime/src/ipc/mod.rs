@@ -1,5 +1,12 @@
 //! The `ipc` transport: one OS process per agent over iceoryx2 zero-copy publish-subscribe.
 //!
-//! * [`transport`]: an agent's iceoryx2 ports (the [`crate::exchange::Exchange`]).
+//! * [`exchange`]: an agent's iceoryx2 ports (the [`crate::exchange::Exchange`]);
+//! * [`services`]: the run's iceoryx2 services, named and opened alike by every participant;
+//! * [`nodes`]: the run's iceoryx2 configuration, node names and dead-node scans.
+//!
+//! The run's shared board lives in [`crate::board`] (the `uds` transport and the process
+//! orchestration use it too).
 
-pub mod transport;
+pub mod exchange;
+pub mod nodes;
+pub mod services;

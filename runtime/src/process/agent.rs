@@ -5,8 +5,10 @@
 //! returns (never `process::exit`), so iceoryx2's `Drop`s release its shared memory.
 
 use crate::episodes::{EpisodeRecord, run_surveillance_agent};
-use crate::exchange::{AgentOutcome, Exchange, ExchangeError, run_agent};
-use crate::ipc::transport::{IpcExchange, run_config};
+use crate::exchange::round_loop::{AgentOutcome, run_agent};
+use crate::exchange::{Exchange, ExchangeError};
+use crate::ipc::exchange::IpcExchange;
+use crate::ipc::nodes::run_config;
 use crate::process::scenario::{ProcessTransport, Scenario, Workload};
 use crate::uds::UdsExchange;
 use serde::{Deserialize, Serialize};

@@ -22,11 +22,10 @@
 //! Failures cross hosts both ways: a failure marked on the local board is announced on the
 //! run's failure key, and an announced one is marked on the local board.
 
-use crate::header::{RoundHeader, words_as_bytes};
-use crate::ipc::transport::{
-    Board, arrivals_target, open_bridge_wake_service, open_round_service, open_wake_service,
-    run_config,
-};
+use crate::board::{Board, arrivals_target};
+use crate::exchange::header::{RoundHeader, words_as_bytes};
+use crate::ipc::nodes::run_config;
+use crate::ipc::services::{Svc, open_bridge_wake_service, open_round_service, open_wake_service};
 use crate::process::member::{HostEntry, Membership, Team, member_scenario};
 use crate::process::scenario::Scenario;
 use crate::zenoh_net::links::ZenohLinks;
@@ -43,8 +42,6 @@ use zenoh::bytes::ZBytes;
 use zenoh::qos::CongestionControl;
 use zenoh::sample::Sample;
 use zenoh::{Session, Wait};
-
-type Svc = ipc::Service;
 
 /// Longest sleep of either thread between two looks at failures and the stop flag.
 const SLICE: Duration = Duration::from_millis(20);

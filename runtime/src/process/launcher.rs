@@ -10,8 +10,9 @@
 //! is one line: who failed, how, at which round, and what happened to the others. Whatever
 //! happens, the run's namespace ([`RunNamespace`]) is removed when the launcher returns.
 
-use crate::exchange::AgentOutcome;
-use crate::ipc::transport::{Board, cleanup_dead_nodes, run_config};
+use crate::board::Board;
+use crate::exchange::round_loop::AgentOutcome;
+use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::latency::RoundLatency;
 use crate::process::agent::{AgentReport, log_path, result_path};
 use crate::process::namespace::RunNamespace;

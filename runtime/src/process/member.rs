@@ -38,7 +38,8 @@
 //! endpoint = "tcp/192.168.1.11:7447"
 //! ```
 
-use crate::ipc::transport::{Board, cleanup_dead_nodes, run_config};
+use crate::board::Board;
+use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::latency::{LatencySummary, RoundLatency};
 use crate::process::agent::{AgentReport, run_scenario};
 use crate::process::namespace::RunNamespace;

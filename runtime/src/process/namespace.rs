@@ -2,6 +2,7 @@
 //! concurrent runs and parallel tests never collide, and a cleanup that leaves nothing of
 //! the run behind — not even when an agent was killed and could not clean up itself.
 
+use crate::liveness::process_alive;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -136,17 +137,6 @@ fn sweep_abandoned(runs: &Path) {
         };
         let _ = abandoned.cleanup();
     }
-}
-
-/// Whether process `pid` runs (a zombie, exited but not yet reaped, does not).
-pub(crate) fn process_alive(pid: u32) -> bool {
-    std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
-        // The state is the first field after the parenthesised command name.
-        let state = stat[stat.rfind(')').map_or(0, |i| i + 1)..]
-            .split_whitespace()
-            .next();
-        state != Some("Z")
-    })
 }
 
 fn shm_objects(prefix: &str) -> Vec<PathBuf> {

@@ -4,8 +4,8 @@
 //! numbers as the lockstep simulation.
 
 use crate::episodes::EpisodeSettings;
-use crate::exchange::{AgentPlan, AgentStop};
-use crate::ipc::transport::IpcEndpoint;
+use crate::exchange::round_loop::{AgentPlan, AgentStop};
+use crate::ipc::exchange::IpcEndpoint;
 use crate::team::Team;
 use crate::uds::UdsEndpoint;
 use crate::wait::{WaitPolicy, WaitStrategy};

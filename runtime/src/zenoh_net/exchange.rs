@@ -23,9 +23,9 @@
 //!
 //! There is no global barrier: use `ipc` or `threads` for lockstep benchmarks.
 
+use crate::exchange::header::{RoundHeader, words_as_bytes, words_as_bytes_mut};
 use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::Fault;
-use crate::header::{RoundHeader, words_as_bytes, words_as_bytes_mut};
 use crate::wait::WaitPolicy;
 use crate::zenoh_net::links::{AGENT_LISTEN, ZenohLinks};
 use crate::zenoh_net::session::{

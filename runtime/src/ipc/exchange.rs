@@ -23,103 +23,27 @@
 //! holds at most two unread samples and borrows at most two; safe overflow is off, and a
 //! sample that does not reach every subscriber is an error, never a silently lost round.
 
+use crate::board::{Board, arrivals_target};
+use crate::exchange::header::{MessageFault, Placement, RoundHeader, check_message};
 use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::Fault;
-use crate::header::{MessageFault, Placement, RoundHeader, check_message};
-use crate::wait::{Arrival, CountingBarrier, WaitPolicy};
+use crate::ipc::nodes::{node_name, scan_dead_agents};
+use crate::ipc::services::{
+    SUBSCRIBER_BUFFER, Svc, open_barrier_service, open_bridge_wake_service, open_round_service,
+    open_wake_service,
+};
+use crate::wait::{Arrival, WaitPolicy};
 use admm_ta_agents::agent::Inbox;
-use iceoryx2::node::NodeView;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
-use iceoryx2_bb_posix::shared_memory::{SharedMemory, SharedMemoryBuilder};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
-type Svc = ipc::Service;
 type RoundSample = Sample<Svc, [f64], RoundHeader>;
-
-/// Samples a subscriber may hold unread and borrowed at once (see the module docs).
-const SUBSCRIBER_BUFFER: usize = 2;
-const SUBSCRIBER_BORROWED: usize = 2;
-
-/// Name of agent `i`'s round-message service.
-pub fn round_service(i: usize) -> String {
-    format!("admm-ta/{i}/round")
-}
-
-/// Name of agent `i`'s wake-up event service.
-pub fn wake_service(i: usize) -> String {
-    format!("admm-ta/{i}/wake")
-}
-
-const BARRIER_SERVICE: &str = "admm-ta/barrier";
-
-/// Event service waking a mixed-mode host's bridge ([`crate::zenoh_net`]): agents with
-/// neighbours on other hosts notify it after every publish.
-pub const BRIDGE_WAKE_SERVICE: &str = "admm-ta/bridge/wake";
-
-/// Opens (or creates) agent `j`'s round-message service from `node`; `degree` is `j`'s.
-/// Every participant opens it with these limits (iceoryx2 refuses mismatched ones).
-pub(crate) fn open_round_service<S: iceoryx2::service::Service>(
-    node: &Node<S>,
-    j: usize,
-    degree: usize,
-) -> Result<
-    iceoryx2::service::port_factory::publish_subscribe::PortFactory<S, [f64], RoundHeader>,
-    String,
-> {
-    let name =
-        ServiceName::new(&round_service(j)).map_err(|e| format!("bad service name: {e:?}"))?;
-    node.service_builder(&name)
-        .publish_subscribe::<[f64]>()
-        .user_header::<RoundHeader>()
-        .max_publishers(1)
-        .max_subscribers(degree.max(1))
-        .max_nodes(degree + 1)
-        .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
-        .subscriber_max_borrowed_samples(SUBSCRIBER_BORROWED)
-        .history_size(0)
-        .enable_safe_overflow(false)
-        .open_or_create()
-        .map_err(|e| format!("cannot open service {}: {e:?}", round_service(j)))
-}
-
-/// Opens (or creates) agent `j`'s wake-up event service from `node`; `degree` is `j`'s.
-pub(crate) fn open_wake_service<S: iceoryx2::service::Service>(
-    node: &Node<S>,
-    j: usize,
-    degree: usize,
-) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, String> {
-    let name =
-        ServiceName::new(&wake_service(j)).map_err(|e| format!("bad service name: {e:?}"))?;
-    node.service_builder(&name)
-        .event()
-        .max_listeners(1)
-        .max_notifiers(degree.max(1))
-        .max_nodes(degree + 1)
-        .open_or_create()
-        .map_err(|e| format!("cannot open service {}: {e:?}", wake_service(j)))
-}
-
-/// Opens (or creates) the bridge's wake-up service of a team of `agents`.
-pub(crate) fn open_bridge_wake_service<S: iceoryx2::service::Service>(
-    node: &Node<S>,
-    agents: usize,
-) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, String> {
-    let name =
-        ServiceName::new(BRIDGE_WAKE_SERVICE).map_err(|e| format!("bad service name: {e:?}"))?;
-    node.service_builder(&name)
-        .event()
-        .max_listeners(1)
-        .max_notifiers(agents.max(1))
-        .max_nodes(agents + 1)
-        .open_or_create()
-        .map_err(|e| format!("cannot open service {BRIDGE_WAKE_SERVICE}: {e:?}"))
-}
 
 /// What an agent process needs to know to connect.
 #[derive(Debug, Clone)]
@@ -142,12 +66,6 @@ pub struct IpcEndpoint {
     pub notify_bridge: bool,
 }
 
-/// Bytes of the board: the global barrier's line, one line per agent (two arrival counters
-/// and the last round it published), then the failure line (failed agent, team shape).
-fn board_size(agents: usize) -> usize {
-    LINE * (agents + 2)
-}
-
 /// How long a waiting agent sleeps before it looks for failed agents again.
 const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
 /// A waiting agent scans the run's iceoryx2 nodes for dead ones once it has waited this
@@ -156,200 +74,6 @@ const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
 /// rounds a hundredfold. (Under the launcher a dead agent is found within milliseconds by
 /// `waitpid` anyway; the scan is for agents started without one.)
 const DEAD_NODE_SCAN_EVERY: Duration = Duration::from_millis(500);
-
-/// iceoryx2 node name of agent `i` (how others recognise it among dead nodes).
-pub fn node_name(i: usize) -> String {
-    format!("agent-{i}")
-}
-
-/// Agent index of an iceoryx2 node name made by [`node_name`].
-pub fn agent_of_node(name: &str) -> Option<usize> {
-    name.strip_prefix("agent-")?.parse().ok()
-}
-
-const LINE: usize = 64;
-
-/// Cumulative arrival count, for the parity of `round`, once all round-`round` messages of
-/// an agent with `degree` neighbours are counted.
-pub fn arrivals_target(degree: usize, round: u64) -> u64 {
-    degree as u64 * (round / 2 + 1)
-}
-
-/// The run-wide shared memory of arrival counters, published rounds, the global barrier and
-/// the failure mark.
-pub struct Board {
-    memory: SharedMemory,
-    agents: usize,
-}
-
-impl Board {
-    /// Opens the board `shm` of a run of `agents` (created by the launcher).
-    pub fn open(shm: &str, agents: usize) -> Result<Self, String> {
-        let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
-        let memory = SharedMemoryBuilder::new(&name)
-            .is_memory_locked(false)
-            .open_existing(iceoryx2_bb_posix::access_mode::AccessMode::ReadWrite)
-            .map_err(|e| format!("cannot open the run's board {shm}: {e:?}"))?;
-        if memory.size() < board_size(agents) {
-            return Err(format!("the run's board {shm} is too small"));
-        }
-        Ok(Self { memory, agents })
-    }
-
-    /// Creates the board of a run (the launcher, which owns it: it is removed when dropped),
-    /// zeroed, with the team's shape `(agents, tasks, payload length)` recorded so that an
-    /// agent of another shape is refused.
-    pub fn create(
-        shm: &str,
-        agents: usize,
-        tasks: usize,
-        payload_len: usize,
-    ) -> Result<Self, String> {
-        Self::create_owned(shm, agents, tasks, payload_len, true)
-    }
-
-    /// A fresh zeroed board with the team's shape; `owned`: removed when dropped.
-    fn create_owned(
-        shm: &str,
-        agents: usize,
-        tasks: usize,
-        payload_len: usize,
-        owned: bool,
-    ) -> Result<Self, String> {
-        let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
-        let memory = SharedMemoryBuilder::new(&name)
-            .is_memory_locked(false)
-            .creation_mode(iceoryx2_bb_posix::creation_mode::CreationMode::PurgeAndCreate)
-            .size(board_size(agents))
-            .permission(iceoryx2_bb_posix::permission::Permission::OWNER_READ_WRITE)
-            .zero_memory(true)
-            .has_ownership(owned)
-            .create()
-            .map_err(|e| format!("{e:?}"))?;
-        let board = Self { memory, agents };
-        let line = LINE * (agents + 1);
-        board.word(line + 8).store(tasks as u64, Ordering::Relaxed);
-        board
-            .word(line + 16)
-            .store(payload_len as u64, Ordering::Release);
-        Ok(board)
-    }
-
-    fn word(&self, offset: usize) -> &AtomicU64 {
-        debug_assert!(offset.is_multiple_of(8) && offset + 8 <= board_size(self.agents));
-        // SAFETY: the segment is zeroed, page-aligned and `board_size` large (checked on
-        // open); the offset is 8-aligned and inside it; every process only uses atomics.
-        unsafe { &*(self.memory.base_address().as_ptr().add(offset) as *const AtomicU64) }
-    }
-
-    /// Opens the board of an independently started team, creating it if nobody has yet (or
-    /// if the one there is left from a dead team: none of the agents recorded on it is
-    /// alive). Call it under a lock that the team's other agents take too.
-    pub fn open_or_create_for_team(
-        shm: &str,
-        agents: usize,
-        tasks: usize,
-        payload_len: usize,
-    ) -> Result<Self, String> {
-        // A dead team's board (nobody recorded on it alive) is taken over.
-        if let Ok(board) = Self::open(shm, agents)
-            && (0..agents).any(|i| board.member_alive(i))
-        {
-            board.check_shape(tasks, payload_len)?;
-            return Ok(board);
-        }
-        // The last agent out removes it (with the team's other files), not its creator.
-        Self::create_owned(shm, agents, tasks, payload_len, false)
-            .map_err(|e| format!("cannot create the team's board {shm}: {e}"))
-    }
-
-    /// Records agent `agent`'s process id (independently started teams).
-    pub fn set_member_pid(&self, agent: usize, pid: u32) {
-        self.word(LINE * (agent + 1) + 24)
-            .store(u64::from(pid), Ordering::Release);
-    }
-
-    fn member_pid(&self, agent: usize) -> u32 {
-        self.word(LINE * (agent + 1) + 24).load(Ordering::Acquire) as u32
-    }
-
-    /// Counts agent `agent` of an independently started team out (call it under the team's
-    /// lock); `true` when no other agent of the team is left alive — every one finished, or
-    /// the others died or never came — so this one removes the team's shared memory.
-    pub fn member_left(&self, agent: usize) -> bool {
-        self.set_member_pid(agent, 0);
-        let line = LINE * (self.agents + 1);
-        let finished = self.word(line + 24).fetch_add(1, Ordering::AcqRel) + 1;
-        finished >= self.agents as u64 || !(0..self.agents).any(|i| self.member_alive(i))
-    }
-
-    /// Agent `agent` of an independently started team has joined and its process lives (a
-    /// zombie — exited, not yet reaped by whoever started it — does not).
-    pub(crate) fn member_alive(&self, agent: usize) -> bool {
-        let pid = self.member_pid(agent);
-        pid != 0 && crate::process::namespace::process_alive(pid)
-    }
-
-    /// Marks agent `failed` as failed (the first mark wins); every agent stops at its next
-    /// wait. Returns the agent already marked, if another was first.
-    pub fn mark_failed(&self, failed: usize) -> Option<usize> {
-        let line = LINE * (self.agents + 1);
-        match self.word(line).compare_exchange(
-            0,
-            failed as u64 + 1,
-            Ordering::AcqRel,
-            Ordering::Acquire,
-        ) {
-            Ok(_) => None,
-            Err(first) => Some(first as usize - 1),
-        }
-    }
-
-    /// The agent marked as failed, if any.
-    pub fn failed(&self) -> Option<usize> {
-        let marked = self.word(LINE * (self.agents + 1)).load(Ordering::Acquire);
-        (marked != 0).then(|| marked as usize - 1)
-    }
-
-    /// Refuses an agent whose scenario does not match the running team's shape.
-    fn check_shape(&self, tasks: usize, payload_len: usize) -> Result<(), String> {
-        let line = LINE * (self.agents + 1);
-        let running = (
-            self.word(line + 8).load(Ordering::Relaxed),
-            self.word(line + 16).load(Ordering::Acquire),
-        );
-        if running != (tasks as u64, payload_len as u64) {
-            return Err(format!(
-                "this agent's scenario is {} robots × {tasks} tasks (payload {payload_len}) but the running team is {} robots × {} tasks (payload {})",
-                self.agents, self.agents, running.0, running.1
-            ));
-        }
-        Ok(())
-    }
-
-    /// Last round agent `agent` published (0 before its first step).
-    pub fn published_round(&self, agent: usize) -> u64 {
-        self.word(LINE * (agent + 1) + 16).load(Ordering::Relaxed)
-    }
-
-    pub(crate) fn set_published_round(&self, agent: usize, round: u64) {
-        self.word(LINE * (agent + 1) + 16)
-            .store(round, Ordering::Relaxed);
-    }
-
-    fn barrier(&self) -> &CountingBarrier {
-        // SAFETY: the launcher created the segment zeroed and `board_size` large (checked on
-        // open); the mapping is page-aligned, and every process only touches it through
-        // atomics.
-        unsafe { &*(self.memory.base_address().as_ptr() as *const CountingBarrier) }
-    }
-
-    /// Agent `agent`'s arrival counter for rounds of parity `round % 2`.
-    pub(crate) fn arrivals(&self, agent: usize, round: u64) -> &AtomicU64 {
-        debug_assert!(agent < self.agents);
-        self.word(LINE * (agent + 1) + 8 * (round % 2) as usize)
-    }
-}
 
 struct BarrierPorts {
     listener: Listener<Svc>,
@@ -391,23 +115,6 @@ fn transport(agent: usize, what: impl std::fmt::Display) -> ExchangeError {
         agent,
         what: what.to_string(),
     }
-}
-
-/// The iceoryx2 configuration of a run: its own prefix and root directory, and no dead-node
-/// scans (the launcher owns cleanup; the scans made start-up of a 50-agent complete graph
-/// several times slower).
-pub fn run_config(prefix: &str, root: &std::path::Path) -> Result<Config, String> {
-    let mut config = Config::default();
-    config.global.prefix = FileName::new(prefix.as_bytes())
-        .map_err(|e| format!("bad iceoryx2 prefix {prefix:?}: {e:?}"))?;
-    let root = format!("{}/", root.display());
-    config.global.set_root_path(
-        &Path::new(root.as_bytes()).map_err(|e| format!("bad iceoryx2 root {root:?}: {e:?}"))?,
-    );
-    config.global.node.cleanup_dead_nodes_on_creation = false;
-    config.global.node.cleanup_dead_nodes_on_destruction = false;
-    config.global.service.cleanup_dead_nodes_on_open = false;
-    Ok(config)
 }
 
 impl IpcExchange {
@@ -572,7 +279,7 @@ impl IpcExchange {
     /// The agent that published the fewest rounds: after a timeout, the one everybody is
     /// waiting for, directly or through a chain of blocked neighbours.
     pub fn laggard(&self) -> usize {
-        (0..self.board.agents)
+        (0..self.board.agents())
             .min_by_key(|&a| (self.board.published_round(a), a))
             .unwrap_or(self.index)
     }
@@ -768,63 +475,12 @@ impl IpcExchange {
     }
 }
 
-/// Looks for a dead agent among the run's iceoryx2 nodes; marks the first found on the board
-/// and removes its stale resources. Returns its index.
-fn scan_dead_agents(config: &Config, me: usize, board: &Board) -> Option<usize> {
-    let mut dead = None;
-    let _ = Node::<Svc>::list(config, |state| {
-        if let NodeState::Dead(view) = state {
-            let agent = view
-                .details()
-                .as_ref()
-                .and_then(|d| agent_of_node(d.name().as_str()));
-            if let Some(agent) = agent.filter(|&a| a != me) {
-                // Whoever gets there first cleans up; the others find the node gone.
-                let _ = view.try_remove_stale_resources();
-                dead = Some(agent);
-                return CallbackProgression::Stop;
-            }
-        }
-        CallbackProgression::Continue
-    });
-    let agent = dead?;
-    Some(board.mark_failed(agent).unwrap_or(agent))
-}
-
-/// Removes the stale resources of every dead node of the run; returns how many it removed.
-/// A node killed before it wrote its details is left to the namespace cleanup: iceoryx2
-/// would clean it with its *global* configuration (another prefix and root, and a warning
-/// on stderr that broke the launcher's one-line error once in the fault tests).
-pub fn cleanup_dead_nodes(config: &Config) -> usize {
-    let mut removed = 0;
-    let _ = Node::<Svc>::list(config, |state| {
-        if let NodeState::Dead(view) = state
-            && view.details().is_some()
-            && view.try_remove_stale_resources().is_ok()
-        {
-            removed += 1;
-        }
-        CallbackProgression::Continue
-    });
-    removed
-}
-
 fn open_barrier(
     node: &Node<Svc>,
     parties: usize,
     err: &dyn Fn(String) -> ExchangeError,
 ) -> Result<BarrierPorts, ExchangeError> {
-    let service = node
-        .service_builder(
-            &ServiceName::new(BARRIER_SERVICE)
-                .map_err(|e| err(format!("bad service name: {e:?}")))?,
-        )
-        .event()
-        .max_listeners(parties)
-        .max_notifiers(parties)
-        .max_nodes(parties)
-        .open_or_create()
-        .map_err(|e| err(format!("cannot open the barrier service: {e:?}")))?;
+    let service = open_barrier_service(node, parties).map_err(err)?;
     Ok(BarrierPorts {
         listener: service
             .listener_builder()
@@ -938,7 +594,7 @@ impl Exchange for IpcExchange {
             return Err(transport(i, "this run has no global barrier"));
         };
         let started = Instant::now();
-        let (state, parties) = (self.board.barrier(), self.board.agents);
+        let (state, parties) = (self.board.barrier(), self.board.agents());
         match state.arrive(parties) {
             Arrival::Released => {
                 barrier

@@ -1,0 +1,215 @@
+//! The run's *board*: a small shared-memory segment every agent process of a run maps (and
+//! the launcher, the members of an independently started team, a mixed host's bridge). It
+//! holds, in cache lines of 64 bytes:
+//!
+//! * the global barrier's counters (line 0);
+//! * per agent (line `1 + i`): its two arrival counters (rounds of each parity, see
+//!   [`arrivals_target`]), the last round it published, and its process id (members of an
+//!   independently started team);
+//! * the failure line: the agent marked as failed (the first mark wins), the team's shape
+//!   (tasks and payload length, so an agent of another shape is refused) and the count of
+//!   members that left.
+//!
+//! Every process only touches it through atomics. The `ipc` and `uds` transports, the
+//! launcher and the team members all use it, so it sits below all of them.
+
+use crate::liveness::process_alive;
+use crate::wait::CountingBarrier;
+use iceoryx2::prelude::*;
+use iceoryx2_bb_posix::shared_memory::{SharedMemory, SharedMemoryBuilder};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Bytes of the board: the global barrier's line, one line per agent (two arrival counters
+/// and the last round it published), then the failure line (failed agent, team shape).
+fn board_size(agents: usize) -> usize {
+    LINE * (agents + 2)
+}
+
+const LINE: usize = 64;
+
+/// Cumulative arrival count, for the parity of `round`, once all round-`round` messages of
+/// an agent with `degree` neighbours are counted.
+pub fn arrivals_target(degree: usize, round: u64) -> u64 {
+    degree as u64 * (round / 2 + 1)
+}
+
+/// The run-wide shared memory of arrival counters, published rounds, the global barrier and
+/// the failure mark.
+pub struct Board {
+    memory: SharedMemory,
+    agents: usize,
+}
+
+impl Board {
+    /// Agents of the run.
+    pub fn agents(&self) -> usize {
+        self.agents
+    }
+
+    /// Opens the board `shm` of a run of `agents` (created by the launcher).
+    pub fn open(shm: &str, agents: usize) -> Result<Self, String> {
+        let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
+        let memory = SharedMemoryBuilder::new(&name)
+            .is_memory_locked(false)
+            .open_existing(iceoryx2_bb_posix::access_mode::AccessMode::ReadWrite)
+            .map_err(|e| format!("cannot open the run's board {shm}: {e:?}"))?;
+        if memory.size() < board_size(agents) {
+            return Err(format!("the run's board {shm} is too small"));
+        }
+        Ok(Self { memory, agents })
+    }
+
+    /// Creates the board of a run (the launcher, which owns it: it is removed when dropped),
+    /// zeroed, with the team's shape `(agents, tasks, payload length)` recorded so that an
+    /// agent of another shape is refused.
+    pub fn create(
+        shm: &str,
+        agents: usize,
+        tasks: usize,
+        payload_len: usize,
+    ) -> Result<Self, String> {
+        Self::create_owned(shm, agents, tasks, payload_len, true)
+    }
+
+    /// A fresh zeroed board with the team's shape; `owned`: removed when dropped.
+    fn create_owned(
+        shm: &str,
+        agents: usize,
+        tasks: usize,
+        payload_len: usize,
+        owned: bool,
+    ) -> Result<Self, String> {
+        let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
+        let memory = SharedMemoryBuilder::new(&name)
+            .is_memory_locked(false)
+            .creation_mode(iceoryx2_bb_posix::creation_mode::CreationMode::PurgeAndCreate)
+            .size(board_size(agents))
+            .permission(iceoryx2_bb_posix::permission::Permission::OWNER_READ_WRITE)
+            .zero_memory(true)
+            .has_ownership(owned)
+            .create()
+            .map_err(|e| format!("{e:?}"))?;
+        let board = Self { memory, agents };
+        let line = LINE * (agents + 1);
+        board.word(line + 8).store(tasks as u64, Ordering::Relaxed);
+        board
+            .word(line + 16)
+            .store(payload_len as u64, Ordering::Release);
+        Ok(board)
+    }
+
+    fn word(&self, offset: usize) -> &AtomicU64 {
+        debug_assert!(offset.is_multiple_of(8) && offset + 8 <= board_size(self.agents));
+        // SAFETY: the segment is zeroed, page-aligned and `board_size` large (checked on
+        // open); the offset is 8-aligned and inside it; every process only uses atomics.
+        unsafe { &*(self.memory.base_address().as_ptr().add(offset) as *const AtomicU64) }
+    }
+
+    /// Opens the board of an independently started team, creating it if nobody has yet (or
+    /// if the one there is left from a dead team: none of the agents recorded on it is
+    /// alive). Call it under a lock that the team's other agents take too.
+    pub fn open_or_create_for_team(
+        shm: &str,
+        agents: usize,
+        tasks: usize,
+        payload_len: usize,
+    ) -> Result<Self, String> {
+        // A dead team's board (nobody recorded on it alive) is taken over.
+        if let Ok(board) = Self::open(shm, agents)
+            && (0..agents).any(|i| board.member_alive(i))
+        {
+            board.check_shape(tasks, payload_len)?;
+            return Ok(board);
+        }
+        // The last agent out removes it (with the team's other files), not its creator.
+        Self::create_owned(shm, agents, tasks, payload_len, false)
+            .map_err(|e| format!("cannot create the team's board {shm}: {e}"))
+    }
+
+    /// Records agent `agent`'s process id (independently started teams).
+    pub fn set_member_pid(&self, agent: usize, pid: u32) {
+        self.word(LINE * (agent + 1) + 24)
+            .store(u64::from(pid), Ordering::Release);
+    }
+
+    fn member_pid(&self, agent: usize) -> u32 {
+        self.word(LINE * (agent + 1) + 24).load(Ordering::Acquire) as u32
+    }
+
+    /// Counts agent `agent` of an independently started team out (call it under the team's
+    /// lock); `true` when no other agent of the team is left alive — every one finished, or
+    /// the others died or never came — so this one removes the team's shared memory.
+    pub fn member_left(&self, agent: usize) -> bool {
+        self.set_member_pid(agent, 0);
+        let line = LINE * (self.agents + 1);
+        let finished = self.word(line + 24).fetch_add(1, Ordering::AcqRel) + 1;
+        finished >= self.agents as u64 || !(0..self.agents).any(|i| self.member_alive(i))
+    }
+
+    /// Agent `agent` of an independently started team has joined and its process lives (a
+    /// zombie — exited, not yet reaped by whoever started it — does not).
+    pub(crate) fn member_alive(&self, agent: usize) -> bool {
+        let pid = self.member_pid(agent);
+        pid != 0 && process_alive(pid)
+    }
+
+    /// Marks agent `failed` as failed (the first mark wins); every agent stops at its next
+    /// wait. Returns the agent already marked, if another was first.
+    pub fn mark_failed(&self, failed: usize) -> Option<usize> {
+        let line = LINE * (self.agents + 1);
+        match self.word(line).compare_exchange(
+            0,
+            failed as u64 + 1,
+            Ordering::AcqRel,
+            Ordering::Acquire,
+        ) {
+            Ok(_) => None,
+            Err(first) => Some(first as usize - 1),
+        }
+    }
+
+    /// The agent marked as failed, if any.
+    pub fn failed(&self) -> Option<usize> {
+        let marked = self.word(LINE * (self.agents + 1)).load(Ordering::Acquire);
+        (marked != 0).then(|| marked as usize - 1)
+    }
+
+    /// Refuses an agent whose scenario does not match the running team's shape.
+    pub(crate) fn check_shape(&self, tasks: usize, payload_len: usize) -> Result<(), String> {
+        let line = LINE * (self.agents + 1);
+        let running = (
+            self.word(line + 8).load(Ordering::Relaxed),
+            self.word(line + 16).load(Ordering::Acquire),
+        );
+        if running != (tasks as u64, payload_len as u64) {
+            return Err(format!(
+                "this agent's scenario is {} robots × {tasks} tasks (payload {payload_len}) but the running team is {} robots × {} tasks (payload {})",
+                self.agents, self.agents, running.0, running.1
+            ));
+        }
+        Ok(())
+    }
+
+    /// Last round agent `agent` published (0 before its first step).
+    pub fn published_round(&self, agent: usize) -> u64 {
+        self.word(LINE * (agent + 1) + 16).load(Ordering::Relaxed)
+    }
+
+    pub(crate) fn set_published_round(&self, agent: usize, round: u64) {
+        self.word(LINE * (agent + 1) + 16)
+            .store(round, Ordering::Relaxed);
+    }
+
+    pub(crate) fn barrier(&self) -> &CountingBarrier {
+        // SAFETY: the launcher created the segment zeroed and `board_size` large (checked on
+        // open); the mapping is page-aligned, and every process only touches it through
+        // atomics.
+        unsafe { &*(self.memory.base_address().as_ptr() as *const CountingBarrier) }
+    }
+
+    /// Agent `agent`'s arrival counter for rounds of parity `round % 2`.
+    pub(crate) fn arrivals(&self, agent: usize, round: u64) -> &AtomicU64 {
+        debug_assert!(agent < self.agents);
+        self.word(LINE * (agent + 1) + 8 * (round % 2) as usize)
+    }
+}
