@@ -2,7 +2,7 @@
 //! its tables printed and its files written.
 
 use crate::cli::{BarrierArg, Bench, StepArg, WaitArg, agent_program, transport};
-use admm_ta_runtime::solve::Transport;
+use admm_ta_runtime::transport::Transport;
 use admm_ta_topologies::TopologySpec;
 use anyhow::{Context, Result, bail};
 

@@ -3,7 +3,8 @@
 
 use crate::cli::{Experiment, FigureArgs, MethodArg, agent_program, transport};
 use admm_ta_bench::figures::FigureConfig;
-use admm_ta_runtime::solve::{Method, Transport};
+use admm_ta_runtime::solve::Method;
+use admm_ta_runtime::transport::Transport;
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::time::Duration;

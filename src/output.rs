@@ -1,6 +1,6 @@
 //! Human and JSON renderings of a solve report.
 
-use admm_ta_runtime::solve::SolveReport;
+use admm_ta_runtime::solve::report::SolveReport;
 use anyhow::Result;
 
 pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
@@ -54,7 +54,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         println!(
             "stop: {} — all robots certified the assignment of round {r}",
             match report.stop {
-                admm_ta_runtime::solve::StopRule::Local => "local (decentralized)",
+                admm_ta_runtime::options::StopRule::Local => "local (decentralized)",
                 _ => "certified",
             }
         );
@@ -119,7 +119,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
                 "NOT optimal"
             }
         );
-        if report.transport != admm_ta_runtime::solve::Transport::Sim {
+        if report.transport != admm_ta_runtime::transport::Transport::Sim {
             return Ok(());
         }
         println!(

@@ -9,8 +9,11 @@
 
 mod common;
 
+use admm_ta_runtime::options::SolveConfig;
 use admm_ta_runtime::process::member::Team;
-use admm_ta_runtime::solve::{SolveConfig, SolveReport, Transport, solve};
+use admm_ta_runtime::solve::report::SolveReport;
+use admm_ta_runtime::solve::solve;
+use admm_ta_runtime::transport::Transport;
 use std::net::TcpListener;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};

@@ -6,7 +6,9 @@ mod common;
 
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::solve::{Method, SolveConfig, SolveReport, solve};
+use admm_ta_runtime::options::SolveConfig;
+use admm_ta_runtime::solve::report::SolveReport;
+use admm_ta_runtime::solve::{Method, solve};
 use admm_ta_topologies::{Graph, generate};
 use common::{oracle_instances, relative_gap};
 

@@ -4,9 +4,11 @@
 //! its own namespace, and must leave nothing behind.
 
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::solve::{
-    Method, SolveConfig, SolveError, SolveReport, StopRule, Transport, solve,
-};
+use admm_ta_runtime::options::{SolveConfig, StopRule};
+use admm_ta_runtime::solve::error::SolveError;
+use admm_ta_runtime::solve::report::SolveReport;
+use admm_ta_runtime::solve::{Method, solve};
+use admm_ta_runtime::transport::Transport;
 use admm_ta_topologies::{Graph, TopologySpec};
 use std::path::PathBuf;
 use std::time::Duration;

@@ -16,7 +16,7 @@ use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rho;
 use admm_ta_runtime::sim::LockstepSim;
-use admm_ta_runtime::team::Team;
+use admm_ta_runtime::workload::plan::AgentFactory;
 use admm_ta_topologies::generate;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -32,7 +32,7 @@ fn agent_in_flight(method: Method, n: usize) -> (MethodAgent, Vec<Vec<Vec<f64>>>
             .unwrap();
     let graph = generate::complete(n).unwrap();
     let rho = rho::default_rho_for(method, problem.costs(), graph.mean_degree());
-    let team = Team {
+    let team = AgentFactory {
         problem: &problem,
         graph: &graph,
         settings: AgentSettings::new(method, rho, 1, f64::INFINITY),

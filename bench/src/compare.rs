@@ -3,7 +3,10 @@
 
 use admm_ta_agents::method::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::solve::{SolveConfig, SolveError, Transport, solve};
+use admm_ta_runtime::options::SolveConfig;
+use admm_ta_runtime::solve::error::SolveError;
+use admm_ta_runtime::solve::solve;
+use admm_ta_runtime::transport::Transport;
 use admm_ta_topologies::TopologySpec;
 use serde::Serialize;
 use std::path::PathBuf;

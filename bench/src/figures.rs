@@ -18,9 +18,11 @@
 use crate::plot::{Chart, Legend, PlotError, Scale, Series};
 use admm_ta_agents::method::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::solve::{
-    OracleCheck, SolveConfig, SolveError, SolveReport, StopRule, TracePoint, Transport, solve,
-};
+use admm_ta_runtime::options::{SolveConfig, StopRule};
+use admm_ta_runtime::solve::error::SolveError;
+use admm_ta_runtime::solve::report::{OracleCheck, SolveReport, TracePoint};
+use admm_ta_runtime::solve::solve;
+use admm_ta_runtime::transport::Transport;
 use admm_ta_topologies::TopologySpec;
 use serde::Serialize;
 use std::path::{Path, PathBuf};

@@ -16,7 +16,9 @@
 
 use admm_ta_agents::method::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::solve::{SolveConfig, SolveError, StopRule, solve};
+use admm_ta_runtime::options::{SolveConfig, StopRule};
+use admm_ta_runtime::solve::error::SolveError;
+use admm_ta_runtime::solve::solve;
 use admm_ta_topologies::TopologySpec;
 use serde::Serialize;
 use std::sync::Mutex;

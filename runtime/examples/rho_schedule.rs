@@ -6,7 +6,7 @@ use admm_ta_agents::primal::PrimalSettings;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rounding::argmax_assignment;
 use admm_ta_runtime::sim::LockstepSim;
-use admm_ta_runtime::solve::primal_team;
+use admm_ta_runtime::workload::plan::primal_team;
 use admm_ta_topologies::TopologySpec;
 
 fn main() {

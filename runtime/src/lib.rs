@@ -8,7 +8,8 @@
 //!
 //! ```
 //! use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-//! use admm_ta_runtime::solve::{SolveConfig, solve};
+//! use admm_ta_runtime::options::SolveConfig;
+//! use admm_ta_runtime::solve::solve;
 //! use admm_ta_topologies::generate;
 //! let problem = TaskAssignmentProblem::new(CostMatrix::uniform(6, 6, 1).unwrap(), CaseChoice::Auto).unwrap();
 //! let graph = generate::complete(6).unwrap();
@@ -23,13 +24,15 @@ pub mod fault;
 pub mod ipc;
 pub mod latency;
 pub mod liveness;
+pub mod options;
 pub mod probe_run;
 pub mod process;
 pub mod sim;
 pub mod solve;
-pub mod team;
 pub mod threads;
+pub mod transport;
 pub mod uds;
 pub mod usage;
 pub mod wait;
+pub mod workload;
 pub mod zenoh_net;

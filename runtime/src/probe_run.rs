@@ -6,7 +6,7 @@
 //! ```
 //! use admm_ta_agents::probe::ProbeStep;
 //! use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
-//! use admm_ta_runtime::solve::Transport;
+//! use admm_ta_runtime::transport::Transport;
 //! use admm_ta_topologies::generate;
 //! let graph = generate::ring(4).unwrap();
 //! let run = ProbeRun { transport: Transport::Threads, rounds: 50, warmup_rounds: 10,
@@ -19,8 +19,9 @@ use crate::exchange::round_loop::{AgentPlan, AgentStop};
 use crate::latency::{LatencySummary, RoundLatency};
 use crate::process::launcher::{self, IpcOptions};
 use crate::process::scenario::{ProcessTransport, Scenario, Workload};
-use crate::solve::{SolveError, Transport};
+use crate::solve::error::SolveError;
 use crate::threads;
+use crate::transport::Transport;
 use crate::usage::ThreadUsage;
 use crate::wait::WaitStrategy;
 use admm_ta_agents::probe::{ProbeAgent, ProbeStep};

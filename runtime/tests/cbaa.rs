@@ -6,7 +6,8 @@ mod common;
 
 use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
-use admm_ta_runtime::solve::{SolveConfig, solve};
+use admm_ta_runtime::options::SolveConfig;
+use admm_ta_runtime::solve::solve;
 
 #[test]
 fn cbaa_always_ends_conflict_free_on_any_connected_graph() {

@@ -8,7 +8,8 @@ mod common;
 use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::solve::{SolveConfig, solve};
+use admm_ta_runtime::options::SolveConfig;
+use admm_ta_runtime::solve::solve;
 
 fn always_optimal(method: Method) {
     let mut runs = 0;

@@ -7,8 +7,10 @@ use admm_ta_agents::primal::{PrimalSettings, ProjectionPath};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rho::default_rho;
 use admm_ta_agents::stopping::NeverStop;
+use admm_ta_runtime::options::{SolveConfig, StopRule};
 use admm_ta_runtime::sim::LockstepSim;
-use admm_ta_runtime::solve::{SolveConfig, StopRule, primal_team, solve};
+use admm_ta_runtime::solve::solve;
+use admm_ta_runtime::workload::plan::primal_team;
 use admm_ta_topologies::{Graph, TopologySpec, generate};
 
 fn agents(

@@ -6,7 +6,8 @@ mod common;
 
 use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
-use admm_ta_runtime::solve::{SolveConfig, solve};
+use admm_ta_runtime::options::SolveConfig;
+use admm_ta_runtime::solve::solve;
 
 #[test]
 fn the_local_stop_never_certifies_a_wrong_assignment() {

@@ -4,13 +4,13 @@
 //! round loop and writes its outcome as `result-I.json` into the run directory. It always
 //! returns (never `process::exit`), so iceoryx2's `Drop`s release its shared memory.
 
-use crate::episodes::{EpisodeRecord, run_surveillance_agent};
 use crate::exchange::round_loop::{AgentOutcome, run_agent};
 use crate::exchange::{Exchange, ExchangeError};
 use crate::ipc::exchange::IpcExchange;
 use crate::ipc::nodes::run_config;
 use crate::process::scenario::{ProcessTransport, Scenario, Workload};
 use crate::uds::UdsExchange;
+use crate::workload::episode::{EpisodeRecord, run_surveillance_agent};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};

@@ -81,7 +81,7 @@ pub struct IpcRun {
     /// Files of the run still present after cleanup (should be none).
     pub leftovers: Vec<PathBuf>,
     /// Each agent's episodes, in a repeated-assignment run.
-    pub episodes: Vec<Vec<crate::episodes::EpisodeRecord>>,
+    pub episodes: Vec<Vec<crate::workload::episode::EpisodeRecord>>,
 }
 
 /// How long the other agents have to stop by themselves after a failure before they are

@@ -41,11 +41,14 @@
 use crate::board::Board;
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::latency::{LatencySummary, RoundLatency};
+use crate::options::{SolveConfig, StopRule};
 use crate::process::agent::{AgentReport, run_scenario};
 use crate::process::namespace::RunNamespace;
+use crate::process::scenario::agent_scenario;
 use crate::process::scenario::{ProcessTransport, Scenario};
-use crate::solve::{self, Method, SolveConfig, StopRule, Transport};
+use crate::transport::Transport;
 use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
+use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_topologies::{Graph, TopologySpec, file as topology_file};
@@ -374,8 +377,7 @@ pub(crate) fn member_scenario(
 ) -> Result<(Scenario, RunNamespace), String> {
     let (problem, graph) = team.problem_and_graph()?;
     let config = team.solve_config()?;
-    let mut scenario =
-        solve::agent_scenario(&problem, &graph, &config).map_err(|e| e.to_string())?;
+    let mut scenario = agent_scenario(&problem, &graph, &config).map_err(|e| e.to_string())?;
     let namespace = match host {
         Some(host) => RunNamespace::for_team(&format!("{}-{}", team.file.run, host.name))?,
         None => RunNamespace::for_team(&team.file.run)?,

@@ -3,15 +3,18 @@
 //! values travel as their bit patterns, so every process computes with exactly the same
 //! numbers as the lockstep simulation.
 
-use crate::episodes::EpisodeSettings;
 use crate::exchange::round_loop::{AgentPlan, AgentStop};
 use crate::ipc::exchange::IpcEndpoint;
-use crate::team::Team;
+use crate::options::{SolveConfig, StopRule};
+use crate::transport::Transport;
 use crate::uds::UdsEndpoint;
 use crate::wait::{WaitPolicy, WaitStrategy};
+use crate::workload::episode::EpisodeSettings;
+use crate::workload::plan::{AgentFactory, Plan, prepare};
 use crate::zenoh_net::links::ZenohLinks;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::local_stop::LocalCertifiedStop;
+use admm_ta_agents::local_stop::LocalStopError;
 use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
 use admm_ta_agents::primal::ProjectionPath;
 use admm_ta_agents::probe::{ProbeAgent, ProbeStep};
@@ -62,10 +65,10 @@ pub enum ProcessTransport {
 
 impl ProcessTransport {
     /// The process transport of `transport` (iceoryx2 for ipc and the in-process ones).
-    pub fn for_transport(transport: crate::solve::Transport) -> Self {
+    pub fn for_transport(transport: Transport) -> Self {
         match transport {
-            crate::solve::Transport::Uds => Self::Uds,
-            crate::solve::Transport::Zenoh => Self::Zenoh,
+            Transport::Uds => Self::Uds,
+            Transport::Zenoh => Self::Zenoh,
             _ => Self::Iceoryx2,
         }
     }
@@ -141,6 +144,10 @@ pub enum ScenarioError {
     BadIndex { index: usize, robots: usize },
     #[error("scenario is inconsistent: {0}")]
     Inconsistent(String),
+    #[error(transparent)]
+    Plan(#[from] crate::workload::plan::PlanError),
+    #[error(transparent)]
+    LocalStop(#[from] LocalStopError),
 }
 
 impl Scenario {
@@ -350,7 +357,7 @@ impl Scenario {
         }
         let problem = self.problem()?;
         let graph = self.graph()?;
-        let team = Team {
+        let team = AgentFactory {
             problem: &problem,
             graph: &graph,
             settings: self.settings(),
@@ -362,4 +369,68 @@ impl Scenario {
         };
         Ok(team.agent(index))
     }
+}
+
+/// The scenario an agent process of `problem` on `graph` runs with `config` (run id, prefix,
+/// root and board name still to be filled in): what `solve --transport ipc` hands its
+/// agents, and what an independently started agent (`admm-ta agent --team`) builds itself.
+pub fn agent_scenario(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    config: &SolveConfig,
+) -> Result<Scenario, ScenarioError> {
+    let prepared = prepare(problem, graph, config)?;
+    Ok(scenario_of(problem, graph, config, &prepared)?)
+}
+
+pub(crate) fn scenario_of(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    config: &SolveConfig,
+    prepared: &Plan<'_>,
+) -> Result<Scenario, LocalStopError> {
+    let (n, m) = (problem.robots(), problem.tasks());
+    let team = &prepared.agents;
+    LocalCertifiedStop::new(prepared.diameter, n, prepared.tolerance)?;
+    Ok(Scenario {
+        run_id: String::new(),
+        iceoryx_prefix: String::new(),
+        iceoryx_root: PathBuf::new(),
+        robots: n,
+        tasks: m,
+        case: problem.case(),
+        cost_bits: problem
+            .costs()
+            .values()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect(),
+        edges: graph.edges().collect(),
+        topology: graph.name().to_string(),
+        method: config.method,
+        rho_bits: team.settings.rho.to_bits(),
+        gamma_factor_bits: team.settings.gamma_factor.to_bits(),
+        adaptive_rho: config.adaptive_rho,
+        epsilon_bits: team.epsilon.map(f64::to_bits),
+        seed: config.seed,
+        qp_projection: config.projection == ProjectionPath::Qp,
+        stop: match config.stop {
+            StopRule::MaxIters => ScenarioStop::MaxIters,
+            _ => ScenarioStop::Local {
+                tolerance_bits: prepared.tolerance.to_bits(),
+            },
+        },
+        max_rounds: config.max_iters as u64,
+        diameter: prepared.diameter,
+        round_timeout_ms: config.round_timeout.as_millis() as u64,
+        startup_timeout_ms: config.startup_timeout.as_millis() as u64,
+        board_shm: String::new(),
+        global_barrier: config.global_barrier,
+        workload: Default::default(),
+        transport: ProcessTransport::for_transport(config.transport),
+        wait: config.wait,
+        warmup_rounds: config.warmup_rounds,
+        zenoh: None,
+        local_agents: None,
+    })
 }

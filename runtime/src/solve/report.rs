@@ -1,0 +1,108 @@
+//! What a solve reports.
+
+use crate::latency::LatencySummary;
+use crate::options::StopRule;
+use crate::transport::Transport;
+use crate::usage::ThreadUsage;
+use admm_ta_agents::method::Method;
+use serde::Serialize;
+
+/// A failed robot and how the survivors went on (`--on-failure continue`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Degraded {
+    /// The failure of the first run, as the launcher reported it.
+    pub failure: String,
+    pub failed_robot: usize,
+    /// Original index of each robot of `assignment` (the survivors, in order).
+    pub survivors: Vec<usize>,
+    /// Rounds of the first run lost to the failure (the failed robot's last published round).
+    pub lost_rounds: u64,
+}
+
+/// Comparison with the centralized optimum, and how fast the run got there.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OracleCheck {
+    pub optimal_cost: f64,
+    /// `(cost − optimal) / |optimal|` (absolute gap when the optimum is 0).
+    pub gap: f64,
+    pub optimal: bool,
+    /// First round whose relaxed objective (robots' own columns) is within 0.1% of the
+    /// optimum: the paper's criterion (not shift-invariant).
+    pub rounds_within_0_1pct: Option<usize>,
+    /// Round from which the relaxed objective stays within 0.1% until the end.
+    pub rounds_settled_0_1pct: Option<usize>,
+    /// Round from which every robot's own argmax is an optimal assignment until the end
+    /// (shift-invariant).
+    pub rounds_to_optimal_assignment: Option<usize>,
+    /// Every round's objectives, when [`crate::options::SolveConfig::trace`] asked for them (sim only).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub trace: Vec<TracePoint>,
+}
+
+/// The team's objectives after one round.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TracePoint {
+    pub round: usize,
+    /// `Σ_i α_iᵀ x_i` over the robots' own relaxed columns (the paper's Fig. 1 quantity).
+    pub relaxed_cost: f64,
+    /// Cost of the robots' own rounded choices, when they form a feasible assignment.
+    pub assignment_cost: Option<f64>,
+}
+
+/// The outcome of a solve.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SolveReport {
+    /// Task index per robot (always feasible).
+    pub assignment: Vec<usize>,
+    pub cost: f64,
+    pub iterations: usize,
+    /// The stop rule fired before the iteration limit.
+    pub converged: bool,
+    /// The robots' own choices conflicted and were repaired.
+    pub repaired: bool,
+    pub method: Method,
+    pub transport: Transport,
+    pub rho: f64,
+    pub robots: usize,
+    pub tasks: usize,
+    pub case: u8,
+    pub topology: String,
+    /// Tie-breaking perturbation added to the costs (`null`: none).
+    pub perturbation: Option<f64>,
+    /// Mean Newton steps of the projection per robot and round.
+    pub mean_projection_steps: f64,
+    /// Bytes of one message (payload and header); every agent publishes one per round.
+    pub message_bytes: usize,
+    /// Messages each agent published (one per round; 0 for the centralized method).
+    pub messages_per_agent: usize,
+    /// `messages_per_agent · message_bytes`.
+    pub bytes_per_agent: usize,
+    pub wall_time_ms: f64,
+    pub stop: StopRule,
+    /// Round whose assignment the local stop certified (`iterations − diameter`).
+    pub certified_round: Option<usize>,
+    pub global_barrier: bool,
+    /// Per-round latency percentiles of the agents (threads and ipc), in microseconds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub round_latency_us: Option<LatencySummary>,
+    /// CPU time and context switches of all agents together over the recorded rounds
+    /// (threads, ipc, uds).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub agent_usage: Option<ThreadUsage>,
+    /// Time for all agent processes to start and connect (ipc).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub startup_ms: Option<f64>,
+    /// The ipc run's id: its iceoryx2 prefix is `adta<id>_`, its directory
+    /// `<tmp>/admm-ta-runs/<id>`; both are gone when the solve returns.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub run_id: Option<String>,
+    /// Hash of each agent's last published payload (to compare transports).
+    #[serde(skip)]
+    pub iterate_digests: Vec<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub check: Option<OracleCheck>,
+    /// Set when a robot failed and the survivors re-solved without it: `assignment`,
+    /// `robots`, `cost` and `check` are then the survivors'.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub degraded: Option<Degraded>,
+}

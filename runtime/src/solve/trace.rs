@@ -1,0 +1,112 @@
+//! The oracle tracer: a checked solve follows the run against the centralized optimum
+//! (the paper's 0.1 % criterion, the round from which the assignment is optimal).
+
+use crate::sim::RoundView;
+use crate::solve::report::{OracleCheck, TracePoint};
+use admm_ta_agents::oracle::OptimalAssignment;
+use admm_ta_agents::problem::TaskAssignmentProblem;
+use admm_ta_agents::rounding;
+
+/// `Σ_i α_iᵀ x_i` over the robots' own relaxed columns.
+pub(crate) fn relaxed_objective(problem: &TaskAssignmentProblem, view: &RoundView<'_>) -> f64 {
+    (0..problem.robots())
+        .map(|i| {
+            view.columns
+                .own_column(i)
+                .iter()
+                .zip(problem.costs().row(i))
+                .map(|(x, a)| x * a)
+                .sum::<f64>()
+        })
+        .sum()
+}
+
+/// `(value − optimum)/|optimum|` (absolute difference when the optimum is 0).
+pub(crate) fn relative_gap(value: f64, optimum: f64) -> f64 {
+    let diff = value - optimum;
+    if optimum != 0.0 {
+        diff / optimum.abs()
+    } else {
+        diff
+    }
+}
+
+/// The paper's criterion: within 0.1% of the optimum.
+pub(crate) fn within_0_1pct(value: f64, optimum: f64) -> bool {
+    relative_gap(value, optimum).abs() <= 1e-3
+}
+
+/// Follows the run against the optimum (only when checking).
+pub(crate) struct Tracer<'p> {
+    problem: &'p TaskAssignmentProblem,
+    optimal_cost: f64,
+    first_within: Option<usize>,
+    settled_within: Option<usize>,
+    optimal_since: Option<usize>,
+    decisions: Vec<usize>,
+    pub(crate) record: bool,
+    trace: Vec<TracePoint>,
+}
+
+impl<'p> Tracer<'p> {
+    pub(crate) fn new(problem: &'p TaskAssignmentProblem, optimum: &OptimalAssignment) -> Self {
+        Self {
+            problem,
+            optimal_cost: optimum.cost,
+            first_within: None,
+            settled_within: None,
+            optimal_since: None,
+            decisions: vec![0; problem.robots()],
+            record: false,
+            trace: Vec::new(),
+        }
+    }
+
+    fn relative_gap(&self, cost: f64) -> f64 {
+        relative_gap(cost, self.optimal_cost)
+    }
+
+    pub(crate) fn observe(&mut self, view: &RoundView<'_>) {
+        for i in 0..self.problem.robots() {
+            self.decisions[i] = rounding::argmax(view.columns.own_column(i));
+        }
+        let relaxed_cost = relaxed_objective(self.problem, view);
+        if within_0_1pct(relaxed_cost, self.optimal_cost) {
+            self.first_within.get_or_insert(view.round);
+            self.settled_within.get_or_insert(view.round);
+        } else {
+            self.settled_within = None;
+        }
+        let assignment_cost = self
+            .problem
+            .is_feasible(&self.decisions)
+            .then(|| self.problem.cost_of(&self.decisions).ok())
+            .flatten();
+        if self.record {
+            self.trace.push(TracePoint {
+                round: view.round,
+                relaxed_cost,
+                assignment_cost,
+            });
+        }
+        let optimal = self.relative_gap(assignment_cost.unwrap_or(f64::INFINITY)) <= 1e-9;
+        if optimal {
+            self.optimal_since.get_or_insert(view.round);
+        } else {
+            self.optimal_since = None;
+        }
+    }
+
+    pub(crate) fn finish(self, cost: f64) -> OracleCheck {
+        let gap = self.relative_gap(cost);
+        OracleCheck {
+            optimal_cost: self.optimal_cost,
+            gap,
+            optimal: gap <= 1e-9,
+            rounds_within_0_1pct: self.first_within,
+            rounds_settled_0_1pct: self.settled_within,
+            rounds_to_optimal_assignment: self.optimal_since,
+            trace: self.trace,
+        }
+    }
+}
