@@ -1,8 +1,8 @@
 //! `admm-ta bench rounds`: the round-latency sweep's arguments checked, its progress shown,
 //! its tables printed and its files written.
 
-use crate::cli::{BarrierArg, Bench, StepArg, WaitArg, agent_program, transport};
-use admm_ta_runtime::transport::Transport;
+use crate::cli::{BarrierArg, Bench, StepArg, WaitArg, agent_program};
+use admm_ta_runtime::transport::{Capabilities, Execution, Transport};
 use admm_ta_topologies::TopologySpec;
 use anyhow::{Context, Result, bail};
 
@@ -40,14 +40,14 @@ pub(crate) fn run_bench(bench: Bench) -> Result<()> {
                 .collect::<Result<Vec<_>>>()
         })
         .transpose()?;
-    let transports: Option<Vec<Transport>> =
-        transports.map(|t| t.into_iter().map(transport).collect());
+    let concurrent = |c: Capabilities| c.execution != Execution::Lockstep;
     if transports
         .as_ref()
-        .is_some_and(|t| t.contains(&Transport::Sim))
+        .is_some_and(|t| t.iter().any(|t| !concurrent(t.capabilities())))
     {
         bail!(
-            "--transports: round latency needs agents that run concurrently: threads, ipc, uds or zenoh"
+            "--transports: round latency needs agents that run concurrently: {}",
+            Transport::names_where(concurrent, "or")
         );
     }
     let mut config = RoundsConfig::new(quick);

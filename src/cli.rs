@@ -10,6 +10,7 @@ use admm_ta_runtime::transport::Transport;
 use admm_ta_runtime::wait::WaitStrategy;
 use admm_ta_topologies::{TopologySpec, file as topology_file};
 use anyhow::{Context, Result, bail};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use std::time::Duration;
@@ -35,8 +36,8 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// sim | threads | ipc (20 agent processes).
-        #[arg(long, value_enum, default_value = "ipc")]
-        transport: TransportArg,
+        #[arg(long, default_value = "ipc", value_parser = transport_parser())]
+        transport: Transport,
     },
     /// Run one agent: of a team started independently (`--team FILE --id I`: any order, any
     /// supervisor; see the README), or of a launcher's run (`--run --index --scenario`, started
@@ -127,8 +128,8 @@ pub(crate) enum Bench {
         payloads: Option<Vec<String>>,
         /// Transports, comma-separated: threads, ipc, uds, zenoh (default: threads, ipc, uds;
         /// zenoh needs a build with `--features zenoh`).
-        #[arg(long, value_enum, value_delimiter = ',')]
-        transports: Option<Vec<TransportArg>>,
+        #[arg(long, value_delimiter = ',', value_parser = transport_parser())]
+        transports: Option<Vec<Transport>>,
         /// Wait strategies, comma-separated: auto, block, spin-then-block, spin.
         #[arg(long, value_enum, value_delimiter = ',')]
         waits: Option<Vec<WaitArg>>,
@@ -245,8 +246,8 @@ pub(crate) enum Experiment {
         #[arg(long, value_enum, value_delimiter = ',')]
         methods: Vec<MethodArg>,
         /// Transports, comma-separated.
-        #[arg(long, value_enum, value_delimiter = ',', default_values = ["sim", "ipc"])]
-        transports: Vec<TransportArg>,
+        #[arg(long, value_delimiter = ',', default_values = ["sim", "ipc"], value_parser = transport_parser())]
+        transports: Vec<Transport>,
         /// complete | chain | ring | star | grid | random:P | geometric:R
         #[arg(long, default_value = "complete")]
         topology: String,
@@ -270,8 +271,8 @@ pub(crate) enum Experiment {
         #[arg(long)]
         scenario: Option<PathBuf>,
         /// ipc (one process per robot for the whole run), threads or uds.
-        #[arg(long, value_enum, default_value = "ipc")]
-        transport: TransportArg,
+        #[arg(long, default_value = "ipc", value_parser = transport_parser())]
+        transport: Transport,
         /// Start every episode from zero iterates instead of the previous episode's.
         #[arg(long)]
         cold_start: bool,
@@ -343,8 +344,8 @@ struct SolveArgs {
     /// iceoryx2 zero-copy), uds (a process per agent, payloads copied through Unix-domain
     /// sockets: a baseline) or zenoh (a process per agent, Zenoh through a router on
     /// loopback: the multi-host transport; needs `--features zenoh`).
-    #[arg(long, value_enum, default_value = "sim")]
-    transport: TransportArg,
+    #[arg(long, default_value = "sim", value_parser = transport_parser())]
+    transport: Transport,
     /// ADMM penalty ρ: auto (scale-free rule from the cost spread and the graph's mean
     /// degree d̄: primal 0.5·spread·√((n−1)/d̄)/(2·d̄·n), dual 5/(spread·d̄), inexact dual
     /// 10/(spread·d̄)) or a positive number.
@@ -450,16 +451,10 @@ impl MethodArg {
     }
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub(crate) enum TransportArg {
-    Sim,
-    Threads,
-    Ipc,
-    /// Agent processes copying payloads through Unix-domain sockets (benchmark baseline).
-    Uds,
-    /// Agent processes talking Zenoh through a router on loopback (multi-host transport;
-    /// needs a build with `--features zenoh`).
-    Zenoh,
+/// Parses a transport by its name ([`Transport::ALL`]), listing the names in errors and help.
+fn transport_parser() -> impl TypedValueParser<Value = Transport> {
+    PossibleValuesParser::new(Transport::ALL.map(Transport::name))
+        .map(|name| name.parse::<Transport>().expect("one of the listed names"))
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -611,7 +606,7 @@ fn run_solve(args: SolveArgs) -> Result<()> {
     };
     let config = SolveConfig {
         method: args.method.method(),
-        transport: transport(args.transport),
+        transport: args.transport,
         rho: parse_rho(&args.rho)?,
         adaptive_rho: args.adaptive_rho,
         gamma_factor: args.gamma_factor,
@@ -644,21 +639,15 @@ fn run_solve(args: SolveArgs) -> Result<()> {
         wait: args.wait.strategy(),
         warmup_rounds: 0,
     };
-    if config.on_failure == OnFailure::Continue && config.transport != Transport::Ipc {
-        bail!("--on-failure continue applies to agent processes: use --transport ipc");
+    if config.on_failure == OnFailure::Continue && !config.transport.capabilities().failure_recovery
+    {
+        bail!(
+            "--on-failure continue applies to agent processes: use --transport {}",
+            Transport::names_where(|c| c.failure_recovery, "or")
+        );
     }
     let report = solve::solve(&problem, &graph, &config)?;
     output::print_report(&report, args.json)
-}
-
-pub(crate) fn transport(arg: TransportArg) -> Transport {
-    match arg {
-        TransportArg::Sim => Transport::Sim,
-        TransportArg::Threads => Transport::Threads,
-        TransportArg::Ipc => Transport::Ipc,
-        TransportArg::Uds => Transport::Uds,
-        TransportArg::Zenoh => Transport::Zenoh,
-    }
 }
 
 /// `auto` (None) or a positive finite ρ.
@@ -697,12 +686,12 @@ fn run_host(_team: &std::path::Path, _name: &str) -> Result<()> {
     bail!(admm_ta_runtime::zenoh_net::not_built())
 }
 
-fn run_demo(json: bool, transport_arg: TransportArg) -> Result<()> {
+fn run_demo(json: bool, transport: Transport) -> Result<()> {
     let problem = TaskAssignmentProblem::new(CostMatrix::uniform(20, 20, 2019)?, CaseChoice::Auto)?;
     let graph = TopologySpec::Complete.build(20, 0)?;
     let config = SolveConfig {
         check: true,
-        transport: transport(transport_arg),
+        transport,
         agent_program: Some(agent_program()?),
         ..SolveConfig::default()
     };

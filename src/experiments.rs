@@ -1,10 +1,10 @@
 //! `admm-ta experiment NAME`: the paper's experiments and the comparisons beyond it, each
 //! printing a table and writing JSON and SVG.
 
-use crate::cli::{Experiment, FigureArgs, MethodArg, agent_program, transport};
+use crate::cli::{Experiment, FigureArgs, MethodArg, agent_program};
 use admm_ta_bench::figures::FigureConfig;
 use admm_ta_runtime::solve::Method;
-use admm_ta_runtime::transport::Transport;
+use admm_ta_runtime::transport::Execution;
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -90,7 +90,7 @@ pub(crate) fn run_experiment(experiment: Experiment) -> Result<()> {
                 robots,
                 seeds,
                 methods,
-                transports: transports.into_iter().map(transport).collect(),
+                transports,
                 topology: topology.parse()?,
                 adaptive_rho,
                 max_iters,
@@ -172,7 +172,7 @@ pub(crate) fn run_experiment(experiment: Experiment) -> Result<()> {
         Experiment::Surveillance {
             episodes,
             scenario,
-            transport: transport_arg,
+            transport,
             cold_start,
             max_iters,
             out,
@@ -193,12 +193,12 @@ pub(crate) fn run_experiment(experiment: Experiment) -> Result<()> {
                 None => SurveillanceScenario::default(),
             };
             let config = admm_ta_runtime::episodes::EpisodeRunConfig {
-                transport: transport(transport_arg),
+                transport,
                 max_rounds: max_iters,
                 agent_program: Some(agent_program()?),
                 ..Default::default()
             };
-            if config.transport == Transport::Sim {
+            if config.transport.capabilities().execution == Execution::Lockstep {
                 bail!("--transport: the team runs on threads, ipc or uds");
             }
             let bar = indicatif::ProgressBar::new(episodes as u64).with_style(

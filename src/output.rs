@@ -1,6 +1,7 @@
 //! Human and JSON renderings of a solve report.
 
 use admm_ta_runtime::solve::report::SolveReport;
+use admm_ta_runtime::transport::Execution;
 use anyhow::Result;
 
 pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
@@ -119,7 +120,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
                 "NOT optimal"
             }
         );
-        if report.transport != admm_ta_runtime::transport::Transport::Sim {
+        if report.transport.capabilities().execution != Execution::Lockstep {
             return Ok(());
         }
         println!(

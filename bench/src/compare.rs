@@ -6,7 +6,7 @@ use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveConfig;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::solve;
-use admm_ta_runtime::transport::Transport;
+use admm_ta_runtime::transport::{Execution, Transport};
 use admm_ta_topologies::TopologySpec;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -49,7 +49,9 @@ pub fn run(
     for &n in &config.robots {
         for &method in &config.methods {
             for &transport in &config.transports {
-                if method == Method::Hungarian && transport != Transport::Sim {
+                if method == Method::Hungarian
+                    && transport.capabilities().execution != Execution::Lockstep
+                {
                     continue;
                 }
                 let mut row = CompareRow {

@@ -286,9 +286,7 @@ pub fn cases(config: &RoundsConfig) -> Vec<Case> {
                     for &wait in &waits {
                         for &global_barrier in &barriers {
                             for &transport in &transports {
-                                if global_barrier
-                                    && matches!(transport, Transport::Uds | Transport::Zenoh)
-                                {
+                                if global_barrier && !transport.capabilities().global_barrier {
                                     continue;
                                 }
                                 let payload = if config.step == StepKind::Primal {

@@ -13,10 +13,10 @@
 use crate::exchange::round_loop::{AgentPlan, AgentStop};
 use crate::latency::{LatencySummary, RoundLatency};
 use crate::process::launcher::{self, IpcOptions};
-use crate::process::scenario::{ProcessTransport, Scenario, Workload};
+use crate::process::scenario::{Scenario, Workload};
 use crate::solve::error::SolveError;
 use crate::threads;
-use crate::transport::Transport;
+use crate::transport::{Execution, Transport};
 use crate::wait::WaitStrategy;
 use crate::workload::episode::{EpisodeRecord, EpisodeSettings, run_surveillance_agent};
 use admm_ta_agents::method::MethodAgent;
@@ -85,9 +85,9 @@ pub fn run_episodes(
         global_barrier: false,
         warmup_rounds: 0,
     };
-    match config.transport {
-        Transport::Sim => Err(SolveError::NotDistributed),
-        Transport::Threads => {
+    match config.transport.capabilities().execution {
+        Execution::Lockstep => Err(SolveError::NotDistributed),
+        Execution::Threads => {
             let mut agents: Vec<MethodAgent> =
                 (0..n).map(|i| settings.agent(i, graph.degree(i))).collect();
             let plans: Vec<AgentPlan> = (0..n).map(plan).collect();
@@ -113,7 +113,7 @@ pub fn run_episodes(
                 wall: started.elapsed(),
             })
         }
-        Transport::Ipc | Transport::Uds | Transport::Zenoh => {
+        Execution::Processes => {
             let program = config
                 .agent_program
                 .clone()
@@ -130,7 +130,7 @@ pub fn run_episodes(
                 max_rounds: config.max_rounds,
                 diameter: settings.diameter,
                 workload: Workload::Episodes(Box::new(settings.clone())),
-                transport: ProcessTransport::for_transport(config.transport),
+                transport: config.transport,
                 wait: config.wait,
                 ..Scenario::blank(graph, settings.model.tasks())
             };

@@ -18,10 +18,10 @@
 use crate::exchange::round_loop::{AgentPlan, AgentStop};
 use crate::latency::{LatencySummary, RoundLatency};
 use crate::process::launcher::{self, IpcOptions};
-use crate::process::scenario::{ProcessTransport, Scenario, Workload};
+use crate::process::scenario::{Scenario, Workload};
 use crate::solve::error::SolveError;
 use crate::threads;
-use crate::transport::Transport;
+use crate::transport::{Execution, Transport};
 use crate::usage::ThreadUsage;
 use crate::wait::WaitStrategy;
 use admm_ta_agents::probe::{ProbeAgent, ProbeStep};
@@ -82,13 +82,17 @@ pub struct ProbeReport {
 /// Runs `run` on `graph`.
 pub fn run_probe(graph: &Graph, run: &ProbeRun) -> Result<ProbeReport, SolveError> {
     let n = graph.robots();
-    if run.global_barrier && matches!(run.transport, Transport::Uds | Transport::Zenoh) {
+    let capabilities = run.transport.capabilities();
+    if run.global_barrier
+        && capabilities.execution != Execution::Lockstep
+        && !capabilities.global_barrier
+    {
         return Err(SolveError::BarrierNeedsAgents);
     }
     let started = Instant::now();
-    let (latency, outcomes_usage, startup) = match run.transport {
-        Transport::Sim => return Err(SolveError::NotDistributed),
-        Transport::Threads => {
+    let (latency, outcomes_usage, startup) = match capabilities.execution {
+        Execution::Lockstep => return Err(SolveError::NotDistributed),
+        Execution::Threads => {
             let mut agents: Vec<ProbeAgent> = (0..n)
                 .map(|i| ProbeAgent::new(i, run.payload_len, run.step))
                 .collect();
@@ -115,7 +119,7 @@ pub fn run_probe(graph: &Graph, run: &ProbeRun) -> Result<ProbeReport, SolveErro
                 None,
             )
         }
-        Transport::Ipc | Transport::Uds | Transport::Zenoh => {
+        Execution::Processes => {
             let program = run
                 .agent_program
                 .clone()
@@ -127,7 +131,7 @@ pub fn run_probe(graph: &Graph, run: &ProbeRun) -> Result<ProbeReport, SolveErro
                     payload_len: run.payload_len,
                     step: run.step,
                 },
-                transport: ProcessTransport::for_transport(run.transport),
+                transport: run.transport,
                 wait: run.wait,
                 warmup_rounds: run.warmup_rounds,
                 ..Scenario::blank(graph, 1)

@@ -9,7 +9,7 @@
 //! It waits for the first agents until the team's start-up deadline (naming those that never
 //! came) and for the run no longer than every round's deadline allows.
 
-use crate::process::member::{Team, TeamTransport};
+use crate::process::member::Team;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::watch_failures;
@@ -57,7 +57,7 @@ impl TeamWatch {
 pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
     let started = Instant::now();
     let team = Team::read(team_path)?;
-    if team.file.transport == TeamTransport::Iceoryx2 {
+    if !team.file.transport.across_hosts() {
         return Err(
             "this team runs on one machine over iceoryx2 (transport = \"iceoryx2\"): it has no hosts"
                 .into(),
@@ -114,11 +114,12 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
             });
         })?
     };
-    let bridge = match team.file.transport {
-        TeamTransport::Mixed => Some(crate::process::bridge::Bridge::start(
+    let bridge = if team.file.transport.bridged() {
+        Some(crate::process::bridge::Bridge::start(
             &team, &host, &router,
-        )?),
-        _ => None,
+        )?)
+    } else {
+        None
     };
     // After the bridge's subscriptions: the other hosts wait for this token before they let
     // their agents publish to ours.

@@ -15,10 +15,9 @@ use crate::exchange::round_loop::AgentOutcome;
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::latency::RoundLatency;
 use crate::process::agent::{AgentReport, log_path, result_path};
+use crate::process::connect::{LauncherSupport, SupportError};
 use crate::process::namespace::RunNamespace;
-use crate::process::scenario::{ProcessTransport, Scenario};
-#[cfg(feature = "zenoh")]
-use crate::zenoh_net::links::ZenohLinks;
+use crate::process::scenario::Scenario;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
@@ -42,8 +41,8 @@ pub enum LaunchError {
     RunDirectory(std::io::Error),
     #[error("cannot create the run's shared board: {0}")]
     Board(String),
-    #[error("cannot start the run's Zenoh router: {0}")]
-    Zenoh(String),
+    #[error(transparent)]
+    Support(#[from] SupportError),
     #[error("cannot start agent process {index} ({program}): {source}")]
     Spawn {
         index: usize,
@@ -94,9 +93,8 @@ struct RunGuard {
     namespace: RunNamespace,
     children: Vec<Option<Child>>,
     board: Option<Board>,
-    /// The Zenoh agents' router (Zenoh runs), closed after the children are gone.
-    #[cfg(feature = "zenoh")]
-    router: Option<crate::zenoh_net::router::HostRouter>,
+    /// What the transport needs (a Zenoh run's router), stopped after the children are gone.
+    support: Option<LauncherSupport>,
 }
 
 impl Drop for RunGuard {
@@ -158,8 +156,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
         namespace: namespace.clone(),
         children: Vec::new(),
         board: None,
-        #[cfg(feature = "zenoh")]
-        router: None,
+        support: None,
     };
     scenario.run_id = namespace.id.clone();
     scenario.iceoryx_prefix = namespace.prefix.clone();
@@ -177,21 +174,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
         )
         .map_err(LaunchError::Board)?,
     );
-    if scenario.transport == ProcessTransport::Zenoh {
-        #[cfg(feature = "zenoh")]
-        {
-            let router = crate::zenoh_net::router::HostRouter::open_on_loopback()
-                .map_err(LaunchError::Zenoh)?;
-            scenario.zenoh = Some(ZenohLinks {
-                key_prefix: format!("admm-ta/run/{}", namespace.id),
-                connect: vec![router.endpoint.clone()],
-                hosts: Vec::new(),
-            });
-            guard.router = Some(router);
-        }
-        #[cfg(not(feature = "zenoh"))]
-        return Err(LaunchError::Zenoh(crate::zenoh_net::not_built()));
-    }
+    guard.support = Some(LauncherSupport::start(&mut scenario, &namespace)?);
     let run_dir = namespace.dir.clone();
     let scenario_path = run_dir.join("scenario.json");
     let text = serde_json::to_string(&scenario).expect("a scenario serialises");
@@ -257,10 +240,9 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
                 // An agent may have found a dead or misbehaving peer first: then that peer
                 // is the one.
                 failed = Some(board.mark_failed(index).unwrap_or(index));
-                // Zenoh agents do not read the board: tell them through the router.
-                #[cfg(feature = "zenoh")]
-                if let (Some(router), Some(links)) = (&guard.router, &scenario.zenoh) {
-                    router.announce_failure(links, failed.unwrap_or(index));
+                // Agents that do not read the board (Zenoh's) learn it another way.
+                if let Some(support) = &guard.support {
+                    support.announce_failure(failed.unwrap_or(index));
                 }
                 grace_ends = Some(std::time::Instant::now() + FAILURE_GRACE);
             }

@@ -44,8 +44,8 @@ use crate::latency::{LatencySummary, RoundLatency};
 use crate::options::{SolveConfig, StopRule};
 use crate::process::agent::{AgentReport, run_scenario};
 use crate::process::namespace::RunNamespace;
+use crate::process::scenario::Scenario;
 use crate::process::scenario::agent_scenario;
-use crate::process::scenario::{ProcessTransport, Scenario};
 use crate::transport::Transport;
 use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
 use admm_ta_agents::method::Method;
@@ -83,25 +83,59 @@ pub struct TeamFile {
     pub max_iters: usize,
     #[serde(default)]
     pub adaptive_rho: bool,
-    /// What carries the messages.
+    /// How the team is deployed and what carries its messages.
     #[serde(default)]
-    pub transport: TeamTransport,
+    pub transport: Deployment,
     /// The machines of a zenoh or mixed team.
     #[serde(default)]
     pub hosts: Vec<HostEntry>,
 }
 
-/// What carries a team's messages.
+/// How an independently started team is deployed: on one machine or across several, and
+/// what carries its messages (a team file's `transport` key).
+///
+/// It is not a [`Transport`]: `mixed` is two transports at once (iceoryx2 among the agents of
+/// a host, Zenoh between hosts through each host's bridge), and a deployment decides more
+/// than an agent's exchange — whether the team has hosts, a shared board per host, bridges.
+/// [`Deployment::agent_transport`] is the exchange each agent runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum TeamTransport {
-    /// Every agent on this machine, iceoryx2 zero-copy.
+pub enum Deployment {
+    /// Every agent on this machine, iceoryx2 zero-copy (`iceoryx2`, or `ipc` as on the
+    /// command line).
     #[default]
+    #[serde(alias = "ipc")]
     Iceoryx2,
     /// Every agent a Zenoh peer of its host's router.
     Zenoh,
     /// iceoryx2 among the agents of a host; the host's bridge carries what crosses hosts.
     Mixed,
+}
+
+impl Deployment {
+    /// The transport every agent's exchange runs.
+    pub fn agent_transport(self) -> Transport {
+        match self {
+            Self::Iceoryx2 | Self::Mixed => Transport::Ipc,
+            Self::Zenoh => Transport::Zenoh,
+        }
+    }
+
+    /// The team spans machines, named by its `[[hosts]]`.
+    pub fn across_hosts(self) -> bool {
+        self != Self::Iceoryx2
+    }
+
+    /// The agents of a host share a board in shared memory (iceoryx2 and mixed teams); a
+    /// Zenoh team's presence, failures and cleanup travel on Zenoh instead.
+    pub fn host_board(self) -> bool {
+        self != Self::Zenoh
+    }
+
+    /// Each host runs a bridge between its agents' iceoryx2 services and the other hosts.
+    pub fn bridged(self) -> bool {
+        self == Self::Mixed
+    }
 }
 
 /// One machine of a multi-host team.
@@ -265,7 +299,7 @@ impl Team {
 /// Checks the hosts of a team file: a zenoh or mixed team puts every robot on exactly one
 /// named host with a distinct TCP endpoint; an iceoryx2 team has no hosts.
 fn check_hosts(file: &TeamFile) -> Result<(), String> {
-    if file.transport == TeamTransport::Iceoryx2 {
+    if !file.transport.across_hosts() {
         if !file.hosts.is_empty() {
             return Err(
                 "[[hosts]] are for teams across machines: add transport = \"zenoh\" or \"mixed\""
@@ -312,7 +346,7 @@ fn check_hosts(file: &TeamFile) -> Result<(), String> {
             }
         }
     }
-    if file.transport == TeamTransport::Mixed
+    if file.transport.bridged()
         && let Some(host) = file
             .hosts
             .iter()
@@ -466,10 +500,12 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
             "--id {id} is out of range for a team of {n} robots"
         ));
     }
-    let host = match team.file.transport {
-        TeamTransport::Mixed => team.host_of(id),
-        _ => None,
-    };
+    let host = team
+        .file
+        .transport
+        .bridged()
+        .then(|| team.host_of(id))
+        .flatten();
     let (mut scenario, namespace) = member_scenario(&team, host)?;
     let results = team.results_dir();
     std::fs::create_dir_all(&results)
@@ -477,10 +513,10 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
     let result = member_result(&results, id);
     // A result of an earlier run must not pass for this one's.
     let _ = std::fs::remove_file(&result);
-    if team.file.transport == TeamTransport::Zenoh {
+    scenario.transport = team.file.transport.agent_transport();
+    if !team.file.transport.host_board() {
         // No shared memory: presence, failures and cleanup are Zenoh's.
         let host = team.host_of(id).expect("checked: every robot is on a host");
-        scenario.transport = ProcessTransport::Zenoh;
         scenario.zenoh = Some(team.zenoh_links(host));
         let startup =
             Duration::from_millis(scenario.startup_timeout_ms).saturating_sub(started.elapsed());

@@ -1,14 +1,12 @@
 //! The scenario file the launcher writes into the run directory: everything an agent
-//! process needs to rebuild its own agent, its plan and its iceoryx2 endpoint. Floating-point
+//! process needs to rebuild its own agent, its plan and its end of the transport. Floating-point
 //! values travel as their bit patterns, so every process computes with exactly the same
 //! numbers as the lockstep simulation.
 
 use crate::exchange::round_loop::{AgentPlan, AgentStop};
-use crate::ipc::exchange::IpcEndpoint;
 use crate::options::{SolveConfig, StopRule};
 use crate::transport::Transport;
-use crate::uds::UdsEndpoint;
-use crate::wait::{WaitPolicy, WaitStrategy};
+use crate::wait::WaitStrategy;
 use crate::workload::episode::EpisodeSettings;
 use crate::workload::plan::{AgentFactory, Plan, prepare};
 use crate::zenoh_net::links::ZenohLinks;
@@ -49,31 +47,6 @@ pub enum Workload {
     Episodes(Box<EpisodeSettings>),
 }
 
-/// What carries the messages between the agent processes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ProcessTransport {
-    /// iceoryx2 zero-copy publish-subscribe.
-    #[default]
-    Iceoryx2,
-    /// Unix-domain sockets that copy every payload (a benchmark baseline, [`crate::uds`]).
-    Uds,
-    /// Zenoh publish-subscribe through the host's router, across machines
-    /// ([`crate::zenoh_net`]; needs the `zenoh` feature).
-    Zenoh,
-}
-
-impl ProcessTransport {
-    /// The process transport of `transport` (iceoryx2 for ipc and the in-process ones).
-    pub fn for_transport(transport: Transport) -> Self {
-        match transport {
-            Transport::Uds => Self::Uds,
-            Transport::Zenoh => Self::Zenoh,
-            _ => Self::Iceoryx2,
-        }
-    }
-}
-
 /// One run, as the agents see it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Scenario {
@@ -105,8 +78,8 @@ pub struct Scenario {
     pub global_barrier: bool,
     #[serde(default)]
     pub workload: Workload,
-    #[serde(default)]
-    pub transport: ProcessTransport,
+    /// A process transport.
+    pub transport: Transport,
     #[serde(default)]
     pub wait: WaitStrategy,
     /// Rounds before latency is recorded.
@@ -185,7 +158,7 @@ impl Scenario {
             board_shm: String::new(),
             global_barrier: false,
             workload: Workload::Method,
-            transport: ProcessTransport::Iceoryx2,
+            transport: Transport::Ipc,
             wait: WaitStrategy::Auto,
             warmup_rounds: 0,
             zenoh: None,
@@ -276,39 +249,6 @@ impl Scenario {
         }
     }
 
-    /// Agent `index`'s Unix-domain socket endpoint (the `uds` baseline).
-    pub fn uds_endpoint(&self, graph: &Graph, index: usize, run_dir: &Path) -> UdsEndpoint {
-        UdsEndpoint {
-            index,
-            neighbours: graph.neighbours(index).to_vec(),
-            payload_len: self.payload_len(),
-            policy: WaitPolicy::new(self.wait, self.robots),
-            socket_dir: run_dir.to_path_buf(),
-            board_shm: self.board_shm.clone(),
-            agents: self.robots,
-        }
-    }
-
-    /// Agent `index`'s Zenoh endpoint; `supervised` as for [`Self::endpoint`].
-    #[cfg(feature = "zenoh")]
-    pub fn zenoh_endpoint(
-        &self,
-        graph: &Graph,
-        index: usize,
-        supervised: bool,
-    ) -> Result<crate::zenoh_net::exchange::ZenohEndpoint, ScenarioError> {
-        Ok(crate::zenoh_net::exchange::ZenohEndpoint {
-            index,
-            neighbours: graph.neighbours(index).to_vec(),
-            payload_len: self.payload_len(),
-            policy: WaitPolicy::new(self.wait, self.robots),
-            links: self.zenoh.clone().ok_or_else(|| {
-                ScenarioError::Inconsistent("a Zenoh run without Zenoh endpoints".into())
-            })?,
-            supervised,
-        })
-    }
-
     /// Agent `index` of a one-shot workload: the method's agent or a benchmark probe
     /// (episode runs build theirs from [`EpisodeSettings::agent`], to change its costs).
     pub fn workload_agent(&self, index: usize) -> Result<Box<dyn ConsensusAgent>, ScenarioError> {
@@ -324,26 +264,6 @@ impl Scenario {
             Workload::Episodes(_) => Err(ScenarioError::Inconsistent(
                 "an episode run's agents come from its episode settings".into(),
             )),
-        }
-    }
-
-    /// Agent `index`'s iceoryx2 endpoint; `supervised`: started by a launcher (the agent
-    /// stops when its launcher is gone).
-    pub fn endpoint(&self, graph: &Graph, index: usize, supervised: bool) -> IpcEndpoint {
-        IpcEndpoint {
-            index,
-            neighbours: graph.neighbours(index).to_vec(),
-            degrees: (0..graph.robots()).map(|j| graph.degree(j)).collect(),
-            payload_len: self.payload_len(),
-            tasks: self.tasks,
-            policy: WaitPolicy::new(self.wait, self.robots),
-            board_shm: self.board_shm.clone(),
-            global_barrier: self.global_barrier,
-            supervised,
-            notify_bridge: self
-                .local_agents
-                .as_ref()
-                .is_some_and(|local| graph.neighbours(index).iter().any(|j| !local.contains(j))),
         }
     }
 
@@ -427,7 +347,7 @@ pub(crate) fn scenario_of(
         board_shm: String::new(),
         global_barrier: config.global_barrier,
         workload: Default::default(),
-        transport: ProcessTransport::for_transport(config.transport),
+        transport: config.transport,
         wait: config.wait,
         warmup_rounds: config.warmup_rounds,
         zenoh: None,

@@ -2,6 +2,7 @@
 
 use crate::exchange::ExchangeError;
 use crate::process::launcher::LaunchError;
+use crate::transport::{Execution, Transport};
 use crate::workload::plan::PlanError;
 use admm_ta_agents::local_stop::LocalStopError;
 use std::path::PathBuf;
@@ -23,14 +24,25 @@ pub enum CannotContinue {
 #[derive(Debug, thiserror::Error)]
 pub enum SolveError {
     #[error(
-        "--stop {stop} needs the whole team's state: it runs on the sim transport only (use --stop local or max-iters)"
+        "--stop {stop} needs the whole team's state: it runs on the {} transport only (use --stop local or max-iters)",
+        Transport::names_where(|c| c.execution == Execution::Lockstep, "or")
     )]
     CentralStop { stop: &'static str },
-    #[error("--global-barrier needs the threads or ipc transport (sim, uds and zenoh have none)")]
+    #[error(
+        "--global-barrier needs the {} transport ({} have none)",
+        Transport::names_where(|c| c.global_barrier, "or"),
+        Transport::names_where(|c| !c.global_barrier, "and")
+    )]
     BarrierNeedsAgents,
-    #[error("round latency is measured on a distributed transport: threads, ipc, uds or zenoh")]
+    #[error(
+        "round latency is measured on a distributed transport: {}",
+        Transport::names_where(|c| c.execution != Execution::Lockstep, "or")
+    )]
     NotDistributed,
-    #[error("the ipc, uds and zenoh transports need the admm-ta binary to start agents from")]
+    #[error(
+        "the {} transports need the admm-ta binary to start agents from",
+        Transport::names_where(|c| c.execution == Execution::Processes, "and")
+    )]
     NoAgentProgram,
     #[error(transparent)]
     LocalStop(#[from] LocalStopError),
@@ -45,7 +57,8 @@ pub enum SolveError {
     #[error(transparent)]
     Plan(#[from] PlanError),
     #[error(
-        "--method hungarian is the centralized solver: it runs in this process, with --transport sim"
+        "--method hungarian is the centralized solver: it runs in this process, with --transport {}",
+        Transport::names_where(|c| c.execution == Execution::Lockstep, "or")
     )]
     CentralizedMethod,
     #[error(

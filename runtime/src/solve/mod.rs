@@ -20,7 +20,7 @@ use crate::solve::lockstep::run_until_certified;
 use crate::solve::report::{Degraded, SolveReport};
 use crate::solve::trace::{Tracer, relaxed_objective, within_0_1pct};
 use crate::threads;
-use crate::transport::Transport;
+use crate::transport::Execution;
 use crate::usage::ThreadUsage;
 use crate::workload::plan::{Plan, prepare};
 use admm_ta_agents::agent::ConsensusAgent;
@@ -140,22 +140,18 @@ fn solve_once(
             gib: bytes / (1u64 << 30) as f64,
         });
     }
-    if config.method == Method::Hungarian && config.transport != Transport::Sim {
+    let capabilities = config.transport.capabilities();
+    if config.method == Method::Hungarian && capabilities.execution != Execution::Lockstep {
         return Err(SolveError::CentralizedMethod);
     }
     let prepared = prepare(problem, graph, config)?;
     let rho = prepared.rho;
     let optimum = (config.check || config.stop == StopRule::Oracle)
         .then(|| oracle::solve(problem).expect("validated costs have an optimum"));
-    if config.global_barrier
-        && matches!(
-            config.transport,
-            Transport::Sim | Transport::Uds | Transport::Zenoh
-        )
-    {
+    if config.global_barrier && !capabilities.global_barrier {
         return Err(SolveError::BarrierNeedsAgents);
     }
-    if config.transport != Transport::Sim
+    if capabilities.execution != Execution::Lockstep
         && matches!(
             config.stop,
             StopRule::Certified | StopRule::Agreement | StopRule::Oracle
@@ -256,8 +252,8 @@ fn run_agents(
     let n = problem.robots();
     let (team, tolerance, diameter) = (&prepared.agents, prepared.tolerance, prepared.diameter);
     let local_stop = || LocalCertifiedStop::new(diameter, n, tolerance);
-    let run = match config.transport {
-        Transport::Sim => {
+    let run = match config.transport.capabilities().execution {
+        Execution::Lockstep => {
             let mut sim = LockstepSim::new(team.agents(), graph);
             let mut projection_steps = 0usize;
             let mut observer = |view: &RoundView<'_>| {
@@ -312,7 +308,7 @@ fn run_agents(
                 iterate_digests: (0..n).map(|i| payload_digest(sim.payload(i))).collect(),
             }
         }
-        Transport::Threads => {
+        Execution::Threads => {
             let stop = match config.stop {
                 StopRule::MaxIters => AgentStop::MaxIters,
                 _ => AgentStop::Local(local_stop()?),
@@ -337,7 +333,7 @@ fn run_agents(
             }
             RunResult::from_outcomes(&outcomes, Some(latency.summary()), None)
         }
-        Transport::Ipc | Transport::Uds | Transport::Zenoh => {
+        Execution::Processes => {
             local_stop()?;
             let program = config
                 .agent_program

@@ -1,0 +1,226 @@
+//! The one place that maps a process transport to its exchange: how an agent process
+//! connects its end of the run's transport (and whom it blames when the run fails), and
+//! what a launcher keeps running for the transport while its agents run (the Zenoh router).
+//!
+//! A new process transport adds one arm to each `match` here; nothing else in the process
+//! orchestration names a transport.
+
+use crate::exchange::{Exchange, ExchangeError};
+use crate::fault::fault_for;
+use crate::ipc::exchange::{IpcEndpoint, IpcExchange};
+use crate::ipc::nodes::run_config;
+use crate::process::namespace::RunNamespace;
+use crate::process::scenario::Scenario;
+use crate::transport::Transport;
+use crate::uds::{UdsEndpoint, UdsExchange};
+use crate::wait::WaitPolicy;
+use admm_ta_topologies::Graph;
+use std::path::Path;
+use std::time::Instant;
+
+/// This agent's end of the run's transport.
+pub(crate) enum Endpoint {
+    // Boxed: they are large, and the enum is built once.
+    Ipc(Box<IpcExchange>),
+    Uds(Box<UdsExchange>),
+    #[cfg(feature = "zenoh")]
+    Zenoh(Box<crate::zenoh_net::exchange::ZenohExchange>),
+}
+
+/// Connects agent `index` of `scenario` (on `graph`) to its neighbours, waiting for them
+/// until `deadline`; `supervised`: a launcher started it (it stops when the launcher is
+/// gone). `run_dir` holds the uds sockets. Errors are one line.
+pub(crate) fn connect(
+    scenario: &Scenario,
+    graph: &Graph,
+    index: usize,
+    run_dir: &Path,
+    supervised: bool,
+    deadline: Instant,
+) -> Result<Endpoint, String> {
+    let fault = if scenario.transport.capabilities().fault_injection {
+        fault_for(index)?
+    } else {
+        None
+    };
+    let policy = WaitPolicy::new(scenario.wait, scenario.robots);
+    let neighbours = graph.neighbours(index).to_vec();
+    match scenario.transport {
+        Transport::Ipc => {
+            let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
+            let endpoint = IpcEndpoint {
+                index,
+                degrees: (0..graph.robots()).map(|j| graph.degree(j)).collect(),
+                payload_len: scenario.payload_len(),
+                tasks: scenario.tasks,
+                policy,
+                board_shm: scenario.board_shm.clone(),
+                global_barrier: scenario.global_barrier,
+                supervised,
+                notify_bridge: scenario
+                    .local_agents
+                    .as_ref()
+                    .is_some_and(|local| neighbours.iter().any(|j| !local.contains(j))),
+                neighbours,
+            };
+            let mut exchange =
+                IpcExchange::connect(&endpoint, &config, deadline).map_err(|e| e.to_string())?;
+            exchange.inject(fault);
+            Ok(Endpoint::Ipc(Box::new(exchange)))
+        }
+        Transport::Uds => {
+            let endpoint = UdsEndpoint {
+                index,
+                neighbours,
+                payload_len: scenario.payload_len(),
+                policy,
+                socket_dir: run_dir.to_path_buf(),
+                board_shm: scenario.board_shm.clone(),
+                agents: scenario.robots,
+            };
+            Ok(Endpoint::Uds(Box::new(UdsExchange::connect(
+                &endpoint, deadline,
+            )?)))
+        }
+        #[cfg(feature = "zenoh")]
+        Transport::Zenoh => {
+            let endpoint = crate::zenoh_net::exchange::ZenohEndpoint {
+                index,
+                neighbours,
+                payload_len: scenario.payload_len(),
+                policy,
+                links: scenario
+                    .zenoh
+                    .clone()
+                    .ok_or("scenario is inconsistent: a Zenoh run without Zenoh endpoints")?,
+                supervised,
+            };
+            let mut exchange =
+                crate::zenoh_net::exchange::ZenohExchange::connect(&endpoint, deadline)
+                    .map_err(|e| e.to_string())?;
+            exchange.inject(fault);
+            Ok(Endpoint::Zenoh(Box::new(exchange)))
+        }
+        #[cfg(not(feature = "zenoh"))]
+        Transport::Zenoh => Err(crate::transport::ZenohNotBuilt.to_string()),
+        Transport::Sim | Transport::Threads => Err(format!(
+            "scenario is inconsistent: the {} transport runs no agent processes",
+            scenario.transport
+        )),
+    }
+}
+
+/// The neighbour an exchange error is the fault of, if any.
+fn culprit(error: &ExchangeError) -> Option<usize> {
+    match error {
+        ExchangeError::BadPayload { neighbour, .. }
+        | ExchangeError::WrongLength { neighbour, .. }
+        | ExchangeError::OutOfOrder { neighbour, .. }
+        | ExchangeError::WrongSender { neighbour, .. } => Some(*neighbour),
+        _ => None,
+    }
+}
+
+impl Endpoint {
+    pub(crate) fn exchange(&mut self) -> &mut dyn Exchange {
+        match self {
+            Self::Ipc(e) => e.as_mut(),
+            Self::Uds(e) => e.as_mut(),
+            #[cfg(feature = "zenoh")]
+            Self::Zenoh(e) => e.as_mut(),
+        }
+    }
+
+    /// Points the launcher and the other agents at the agent that caused `error`.
+    pub(crate) fn blame_for(&self, error: &ExchangeError) {
+        match self {
+            Self::Ipc(exchange) => {
+                let culprit = match error {
+                    // Blocked neighbours time out too: blame the agent everybody waits for.
+                    ExchangeError::Timeout { .. } => Some(exchange.laggard()),
+                    e => culprit(e),
+                };
+                if let Some(culprit) = culprit {
+                    exchange.blame(culprit);
+                }
+            }
+            Self::Uds(_) => {}
+            // No launcher sees every host: whoever fails first tells the others.
+            #[cfg(feature = "zenoh")]
+            Self::Zenoh(exchange) => {
+                let culprit = match error {
+                    ExchangeError::Aborted { .. } => return,
+                    // Possibly seen only by us (its token vanished): pass it on.
+                    ExchangeError::PeerFailed { failed, .. } => Some(*failed),
+                    ExchangeError::Timeout { round, .. } => exchange.first_missing(*round),
+                    e => culprit(e),
+                };
+                exchange.blame(culprit.unwrap_or(error.agent()));
+            }
+        }
+    }
+}
+
+/// What a launcher's run needs besides the agents and the board, kept running until every
+/// agent is gone: the loopback router of a Zenoh run.
+pub(crate) struct LauncherSupport {
+    #[cfg(feature = "zenoh")]
+    router: Option<(
+        crate::zenoh_net::router::HostRouter,
+        crate::zenoh_net::links::ZenohLinks,
+    )>,
+}
+
+/// Why a launcher could not start what its run's transport needs.
+#[derive(Debug, thiserror::Error)]
+pub enum SupportError {
+    #[error("cannot start the run's Zenoh router: {0}")]
+    ZenohRouter(String),
+    #[error("cannot start the run's Zenoh router")]
+    NotBuilt(#[from] crate::transport::ZenohNotBuilt),
+}
+
+impl LauncherSupport {
+    /// Starts what `scenario`'s transport needs in the run of `namespace`, and tells the
+    /// scenario where to find it.
+    pub(crate) fn start(
+        scenario: &mut Scenario,
+        namespace: &RunNamespace,
+    ) -> Result<Self, SupportError> {
+        match scenario.transport {
+            #[cfg(feature = "zenoh")]
+            Transport::Zenoh => {
+                let router = crate::zenoh_net::router::HostRouter::open_on_loopback()
+                    .map_err(SupportError::ZenohRouter)?;
+                let links = crate::zenoh_net::links::ZenohLinks {
+                    key_prefix: format!("admm-ta/run/{}", namespace.id),
+                    connect: vec![router.endpoint.clone()],
+                    hosts: Vec::new(),
+                };
+                scenario.zenoh = Some(links.clone());
+                Ok(Self {
+                    router: Some((router, links)),
+                })
+            }
+            #[cfg(not(feature = "zenoh"))]
+            Transport::Zenoh => {
+                let _ = namespace;
+                Err(crate::transport::ZenohNotBuilt.into())
+            }
+            Transport::Sim | Transport::Threads | Transport::Ipc | Transport::Uds => Ok(Self {
+                #[cfg(feature = "zenoh")]
+                router: None,
+            }),
+        }
+    }
+
+    /// Tells agents that do not read the run's board (Zenoh agents) that `agent` failed.
+    pub(crate) fn announce_failure(&self, agent: usize) {
+        #[cfg(feature = "zenoh")]
+        if let Some((router, links)) = &self.router {
+            router.announce_failure(links, agent);
+        }
+        #[cfg(not(feature = "zenoh"))]
+        let _ = agent;
+    }
+}
