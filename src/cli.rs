@@ -4,7 +4,7 @@ use crate::output;
 use admm_ta_agents::primal::ProjectionPath;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::ties::Perturbation;
-use admm_ta_runtime::options::{OnFailure, SolveConfig, StopRule};
+use admm_ta_runtime::options::{OnFailure, SolveOptions, StopRule};
 use admm_ta_runtime::solve::{self, Method};
 use admm_ta_runtime::transport::Transport;
 use admm_ta_runtime::wait::WaitStrategy;
@@ -13,7 +13,6 @@ use anyhow::{Context, Result, bail};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
-use std::time::Duration;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -604,68 +603,53 @@ fn run_solve(args: SolveArgs) -> Result<()> {
             _ => bail!("--perturb must be auto, off or a positive number, got '{value}'"),
         },
     };
-    let config = SolveConfig {
-        method: args.method.method(),
-        transport: args.transport,
-        rho: parse_rho(&args.rho)?,
-        adaptive_rho: args.adaptive_rho,
-        gamma_factor: args.gamma_factor,
-        max_iters: args.max_iters,
-        stop: match args.stop {
+    let options = SolveOptions::builder()
+        .method(args.method.method())
+        .transport(args.transport)
+        .rho(parse_rho(&args.rho)?)
+        .adaptive_rho(args.adaptive_rho)
+        .gamma_factor(args.gamma_factor)
+        .max_iters(args.max_iters)
+        .stop(match args.stop {
             StopArg::Local => StopRule::Local,
             StopArg::Agreement => StopRule::Agreement,
             StopArg::Certified => StopRule::Certified,
             StopArg::MaxIters => StopRule::MaxIters,
             StopArg::Oracle => StopRule::Oracle,
-        },
-        stop_rounds: args.stop_rounds,
-        seed: args.seed,
-        perturbation,
-        projection: match args.projection {
+        })
+        .stop_rounds(args.stop_rounds)
+        .seed(args.seed)
+        .perturbation(perturbation)
+        .projection(match args.projection {
             ProjectionArg::Fast => ProjectionPath::Fast,
             ProjectionArg::Qp => ProjectionPath::Qp,
-        },
-        check: args.check,
-        trace: args.trace,
-        global_barrier: args.global_barrier,
-        round_timeout: seconds("--round-timeout", args.round_timeout)?,
-        startup_timeout: seconds("--startup-timeout", args.startup_timeout)?,
-        agent_program: Some(agent_program()?),
-        on_failure: match args.on_failure {
+        })
+        .check(args.check)
+        .trace(args.trace)
+        .global_barrier(args.global_barrier)
+        .round_timeout_secs(args.round_timeout)
+        .startup_timeout_secs(args.startup_timeout)
+        .agent_program(agent_program()?)
+        .on_failure(match args.on_failure {
             OnFailureArg::Abort => OnFailure::Abort,
             OnFailureArg::Continue => OnFailure::Continue,
-        },
-        fault_injection: true,
-        wait: args.wait.strategy(),
-        warmup_rounds: 0,
-    };
-    if config.on_failure == OnFailure::Continue && !config.transport.capabilities().failure_recovery
-    {
-        bail!(
-            "--on-failure continue applies to agent processes: use --transport {}",
-            Transport::names_where(|c| c.failure_recovery, "or")
-        );
-    }
-    let report = solve::solve(&problem, &graph, &config)?;
+        })
+        .fault_injection(true)
+        .wait(args.wait.strategy())
+        .build()?;
+    let report = solve::solve(&problem, &graph, &options)?;
     output::print_report(&report, args.json)
 }
 
-/// `auto` (None) or a positive finite ρ.
+/// `auto` (None) or a number (the options check that it is a positive one).
 fn parse_rho(text: &str) -> Result<Option<f64>> {
     if text == "auto" {
         return Ok(None);
     }
     match text.parse::<f64>() {
-        Ok(rho) if rho > 0.0 && rho.is_finite() => Ok(Some(rho)),
-        _ => bail!("--rho (ρ) must be auto or a positive number, got '{text}'"),
+        Ok(rho) => Ok(Some(rho)),
+        Err(_) => bail!("--rho (ρ) must be auto or a positive number, got '{text}'"),
     }
-}
-
-fn seconds(flag: &str, value: f64) -> Result<Duration> {
-    if !(value > 0.0 && value.is_finite() && value < 1e6) {
-        bail!("{flag} must be a positive number of seconds, got {value}");
-    }
-    Ok(Duration::from_secs_f64(value))
 }
 
 /// This binary: agent processes are started from it.
@@ -683,24 +667,23 @@ fn run_host(team: &std::path::Path, name: &str) -> Result<()> {
 
 #[cfg(not(feature = "zenoh"))]
 fn run_host(_team: &std::path::Path, _name: &str) -> Result<()> {
-    bail!(admm_ta_runtime::zenoh_net::not_built())
+    bail!(admm_ta_runtime::transport::ZenohNotBuilt)
 }
 
 fn run_demo(json: bool, transport: Transport) -> Result<()> {
     let problem = TaskAssignmentProblem::new(CostMatrix::uniform(20, 20, 2019)?, CaseChoice::Auto)?;
     let graph = TopologySpec::Complete.build(20, 0)?;
-    let config = SolveConfig {
-        check: true,
-        transport,
-        agent_program: Some(agent_program()?),
-        ..SolveConfig::default()
-    };
+    let options = SolveOptions::builder()
+        .check(true)
+        .transport(transport)
+        .agent_program(agent_program()?)
+        .build()?;
     if !json {
         println!(
             "demo: 20 robots, 20 tasks, uniform [0,1) costs (seed 2019), complete graph, transport {}\n",
-            config.transport.name()
+            options.transport().name()
         );
     }
-    let report = solve::solve(&problem, &graph, &config)?;
+    let report = solve::solve(&problem, &graph, &options)?;
     output::print_report(&report, json)
 }

@@ -3,6 +3,7 @@
 
 use crate::cli::{Experiment, FigureArgs, MethodArg, agent_program};
 use admm_ta_bench::figures::FigureConfig;
+use admm_ta_runtime::options::run::RunOptions;
 use admm_ta_runtime::solve::Method;
 use admm_ta_runtime::transport::Execution;
 use anyhow::{Context, Result, bail};
@@ -192,15 +193,16 @@ pub(crate) fn run_experiment(experiment: Experiment) -> Result<()> {
                 }
                 None => SurveillanceScenario::default(),
             };
-            let config = admm_ta_runtime::episodes::EpisodeRunConfig {
-                transport,
-                max_rounds: max_iters,
-                agent_program: Some(agent_program()?),
-                ..Default::default()
-            };
-            if config.transport.capabilities().execution == Execution::Lockstep {
+            if transport.capabilities().execution == Execution::Lockstep {
                 bail!("--transport: the team runs on threads, ipc or uds");
             }
+            let config = admm_ta_runtime::episodes::EpisodeRunConfig {
+                max_rounds: max_iters,
+                options: RunOptions::builder()
+                    .transport(transport)
+                    .agent_program(agent_program()?)
+                    .build()?,
+            };
             let bar = indicatif::ProgressBar::new(episodes as u64).with_style(
                 indicatif::ProgressStyle::with_template(
                     "{bar:30} {pos}/{len} cold-start comparisons, {elapsed} elapsed, ~{eta} left",

@@ -9,7 +9,6 @@
 
 mod common;
 
-use admm_ta_runtime::options::SolveConfig;
 use admm_ta_runtime::process::member::Team;
 use admm_ta_runtime::solve::report::SolveReport;
 use admm_ta_runtime::solve::solve;
@@ -164,10 +163,13 @@ fn text(out: &Output) -> String {
 fn sim_report(team: &Path) -> SolveReport {
     let team = Team::read(team).unwrap();
     let (problem, graph) = team.problem_and_graph().unwrap();
-    let config = SolveConfig {
-        transport: Transport::Sim,
-        ..team.solve_config().unwrap()
-    };
+    let config = team
+        .solve_options()
+        .unwrap()
+        .to_builder()
+        .transport(Transport::Sim)
+        .build()
+        .unwrap();
     solve(&problem, &graph, &config).unwrap()
 }
 

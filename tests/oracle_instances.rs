@@ -6,7 +6,7 @@ mod common;
 
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::options::SolveConfig;
+use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::report::SolveReport;
 use admm_ta_runtime::solve::{Method, solve};
 use admm_ta_topologies::{Graph, generate};
@@ -79,12 +79,12 @@ fn run(
     graph: &Graph,
     max_iters: usize,
 ) -> SolveReport {
-    let config = SolveConfig {
-        method,
-        check: true,
-        max_iters,
-        ..SolveConfig::default()
-    };
+    let config = SolveOptions::builder()
+        .method(method)
+        .check(true)
+        .max_iters(max_iters)
+        .build()
+        .unwrap();
     solve(problem, graph, &config).unwrap()
 }
 

@@ -4,7 +4,10 @@
 //! its own namespace, and must leave nothing behind.
 
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::options::{SolveConfig, StopRule};
+use admm_ta_runtime::options::error::ConfigError;
+use admm_ta_runtime::options::run::RunOptions;
+use admm_ta_runtime::options::{SolveOptions, SolveOptionsBuilder, StopRule};
+use admm_ta_runtime::runner::RunError;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::report::SolveReport;
 use admm_ta_runtime::solve::{Method, solve};
@@ -28,15 +31,13 @@ fn graph(spec: &str, robots: usize, seed: u64) -> Graph {
         .unwrap()
 }
 
-fn config(transport: Transport, stop: StopRule, max_iters: usize) -> SolveConfig {
-    SolveConfig {
-        transport,
-        stop,
-        max_iters,
-        check: true,
-        agent_program: Some(PathBuf::from(env!("CARGO_BIN_EXE_admm-ta"))),
-        ..SolveConfig::default()
-    }
+fn config(transport: Transport, stop: StopRule, max_iters: usize) -> SolveOptionsBuilder {
+    SolveOptions::builder()
+        .transport(transport)
+        .stop(stop)
+        .max_iters(max_iters)
+        .check(true)
+        .agent_program(PathBuf::from(env!("CARGO_BIN_EXE_admm-ta")))
 }
 
 /// Nothing of an ipc run may remain in /dev/shm or the run directory.
@@ -85,10 +86,10 @@ fn all_transports_with(
     max_iters: usize,
 ) {
     let run = |transport| {
-        let config = SolveConfig {
-            method,
-            ..config(transport, stop, max_iters)
-        };
+        let config = config(transport, stop, max_iters)
+            .method(method)
+            .build()
+            .unwrap();
         solve(problem, graph, &config).unwrap()
     };
     let (sim, threads, ipc, uds) = (
@@ -212,15 +213,22 @@ fn transports_agree_on_a_random_graph_to_the_round_limit() {
 #[test]
 fn a_global_barrier_changes_timing_not_iterates() {
     let (p, g) = (problem(6, 6, 8), graph("ring", 6, 0));
-    let plain = solve(&p, &g, &config(Transport::Sim, StopRule::Local, 2000)).unwrap();
+    let plain = solve(
+        &p,
+        &g,
+        &config(Transport::Sim, StopRule::Local, 2000)
+            .build()
+            .unwrap(),
+    )
+    .unwrap();
     for transport in [Transport::Threads, Transport::Ipc] {
         let barrier = solve(
             &p,
             &g,
-            &SolveConfig {
-                global_barrier: true,
-                ..config(transport, StopRule::Local, 2000)
-            },
+            &config(transport, StopRule::Local, 2000)
+                .global_barrier(true)
+                .build()
+                .unwrap(),
         )
         .unwrap();
         assert_same(&plain, &barrier);
@@ -239,7 +247,14 @@ fn concurrent_ipc_runs_do_not_collide() {
             .map(|seed| {
                 s.spawn(move || {
                     let (p, g) = (problem(6, 6, seed), graph("complete", 6, 0));
-                    solve(&p, &g, &config(Transport::Ipc, StopRule::Local, 2000)).unwrap()
+                    solve(
+                        &p,
+                        &g,
+                        &config(Transport::Ipc, StopRule::Local, 2000)
+                            .build()
+                            .unwrap(),
+                    )
+                    .unwrap()
                 })
             })
             .collect();
@@ -254,19 +269,20 @@ fn concurrent_ipc_runs_do_not_collide() {
 #[test]
 fn a_failing_agent_is_reported_and_cleaned_up() {
     let (p, g) = (problem(4, 4, 1), graph("complete", 4, 0));
-    let broken = SolveConfig {
-        agent_program: Some(PathBuf::from("/bin/false")),
-        ..config(Transport::Ipc, StopRule::Local, 100)
-    };
+    let broken = config(Transport::Ipc, StopRule::Local, 100)
+        .agent_program(Some(PathBuf::from("/bin/false")))
+        .build()
+        .unwrap();
     let err = solve(&p, &g, &broken).unwrap_err();
     assert!(
-        matches!(err, SolveError::Launch(_)) && err.to_string().contains("failed (exit code 1)"),
+        matches!(err, SolveError::Run(RunError::Launch(_)))
+            && err.to_string().contains("failed (exit code 1)"),
         "{err}"
     );
-    let missing = SolveConfig {
-        agent_program: Some(PathBuf::from("/nonexistent/admm-ta")),
-        ..config(Transport::Ipc, StopRule::Local, 100)
-    };
+    let missing = config(Transport::Ipc, StopRule::Local, 100)
+        .agent_program(Some(PathBuf::from("/nonexistent/admm-ta")))
+        .build()
+        .unwrap();
     let err = solve(&p, &g, &missing).unwrap_err().to_string();
     assert!(err.contains("cannot start agent process 0"), "{err}");
 }
@@ -291,11 +307,11 @@ fn an_agent_that_never_connects_fails_the_run_within_the_deadline() {
     let err = solve(
         &p,
         &g,
-        &SolveConfig {
-            agent_program: Some(script),
-            startup_timeout: Duration::from_secs(1),
-            ..config(Transport::Ipc, StopRule::Local, 100)
-        },
+        &config(Transport::Ipc, StopRule::Local, 100)
+            .agent_program(Some(script))
+            .startup_timeout(Duration::from_secs(1))
+            .build()
+            .unwrap(),
     )
     .unwrap_err()
     .to_string();
@@ -309,27 +325,38 @@ fn an_agent_that_never_connects_fails_the_run_within_the_deadline() {
 #[test]
 fn central_stop_rules_are_refused_on_distributed_transports() {
     let (p, g) = (problem(4, 4, 1), graph("complete", 4, 0));
+    // The options refuse them before any solve can start.
     for transport in [Transport::Threads, Transport::Ipc] {
-        let err = solve(&p, &g, &config(transport, StopRule::Certified, 100)).unwrap_err();
+        let err = config(transport, StopRule::Certified, 100)
+            .build()
+            .unwrap_err();
         assert!(err.to_string().contains("sim transport only"), "{err}");
     }
-    let err = solve(
-        &p,
-        &g,
-        &SolveConfig {
-            global_barrier: true,
-            ..config(Transport::Sim, StopRule::Local, 100)
-        },
-    )
-    .unwrap_err();
+    let err = config(Transport::Sim, StopRule::Local, 100)
+        .global_barrier(true)
+        .build()
+        .unwrap_err();
     assert!(err.to_string().contains("threads or ipc"), "{err}");
+    // A solve with options built on the way reports the same.
+    let solved = config(Transport::Threads, StopRule::Certified, 100)
+        .build()
+        .map_err(SolveError::from)
+        .and_then(|options| solve(&p, &g, &options));
+    assert!(matches!(solved, Err(SolveError::Config(_))));
 }
 
 #[test]
 fn every_wait_strategy_gives_the_same_iterates_on_every_distributed_transport() {
     use admm_ta_runtime::wait::WaitStrategy;
     let (p, g) = (problem(6, 6, 9), graph("ring", 6, 0));
-    let reference = solve(&p, &g, &config(Transport::Sim, StopRule::MaxIters, 40)).unwrap();
+    let reference = solve(
+        &p,
+        &g,
+        &config(Transport::Sim, StopRule::MaxIters, 40)
+            .build()
+            .unwrap(),
+    )
+    .unwrap();
     for wait in [
         WaitStrategy::Block,
         WaitStrategy::SpinThenBlock,
@@ -339,11 +366,11 @@ fn every_wait_strategy_gives_the_same_iterates_on_every_distributed_transport() 
             let report = solve(
                 &p,
                 &g,
-                &SolveConfig {
-                    wait,
-                    warmup_rounds: 10,
-                    ..config(transport, StopRule::MaxIters, 40)
-                },
+                &config(transport, StopRule::MaxIters, 40)
+                    .wait(wait)
+                    .warmup_rounds(10)
+                    .build()
+                    .unwrap(),
             )
             .unwrap();
             assert_same(&reference, &report);
@@ -367,25 +394,31 @@ fn the_socket_baseline_moves_payloads_larger_than_the_socket_buffers() {
     use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
     let g = graph("complete", 6, 0);
     for transport in [Transport::Threads, Transport::Ipc, Transport::Uds] {
+        let options = RunOptions::builder()
+            .transport(transport)
+            .warmup_rounds(5)
+            .round_timeout(Duration::from_secs(20))
+            .agent_program(PathBuf::from(env!("CARGO_BIN_EXE_admm-ta")))
+            .build()
+            .unwrap();
         let run = ProbeRun {
-            transport,
             rounds: 30,
-            warmup_rounds: 5,
-            round_timeout: Duration::from_secs(20),
-            agent_program: Some(PathBuf::from(env!("CARGO_BIN_EXE_admm-ta"))),
-            ..ProbeRun::new(200 * 200, ProbeStep::Average)
+            ..ProbeRun::new(200 * 200, ProbeStep::Average, options)
         };
         let report = run_probe(&g, &run).unwrap();
         assert_eq!(report.latency.round.count, 6 * 25, "{transport:?}");
         assert!(report.usage.cpu_ns > 0);
     }
-    let refused = run_probe(
-        &g,
-        &ProbeRun {
-            transport: Transport::Uds,
-            global_barrier: true,
-            ..ProbeRun::new(4, ProbeStep::Touch)
-        },
-    );
-    assert!(matches!(refused, Err(SolveError::BarrierNeedsAgents)));
+    // No global barrier over sockets: refused before any run.
+    let refused = RunOptions::builder()
+        .transport(Transport::Uds)
+        .global_barrier(true)
+        .build();
+    assert_eq!(refused, Err(ConfigError::BarrierNeedsAgents));
+    // A lockstep team measures no latency.
+    let lockstep = ProbeRun::new(4, ProbeStep::Touch, RunOptions::default());
+    assert!(matches!(
+        run_probe(&g, &lockstep),
+        Err(RunError::NotDistributed)
+    ));
 }

@@ -3,7 +3,7 @@
 
 use admm_ta_agents::method::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::options::SolveConfig;
+use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::solve;
 use admm_ta_runtime::transport::{Execution, Transport};
@@ -75,20 +75,16 @@ pub fn run(
                         .topology
                         .build(n, seed)
                         .expect("generated topologies are connected");
-                    let report = solve(
-                        &problem,
-                        &graph,
-                        &SolveConfig {
-                            method,
-                            transport,
-                            seed,
-                            check: true,
-                            adaptive_rho: config.adaptive_rho,
-                            max_iters: config.max_iters,
-                            agent_program: config.agent_program.clone(),
-                            ..SolveConfig::default()
-                        },
-                    )?;
+                    let options = SolveOptions::builder()
+                        .method(method)
+                        .transport(transport)
+                        .seed(seed)
+                        .check(true)
+                        .adaptive_rho(config.adaptive_rho)
+                        .max_iters(config.max_iters)
+                        .agent_program(config.agent_program.clone())
+                        .build()?;
+                    let report = solve(&problem, &graph, &options)?;
                     let check = report.check.expect("checked run");
                     row.runs += 1;
                     row.mean_rounds += report.iterations as f64;

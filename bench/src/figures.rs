@@ -18,7 +18,8 @@
 use crate::plot::{Chart, Legend, PlotError, Scale, Series};
 use admm_ta_agents::method::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::options::{SolveConfig, StopRule};
+use admm_ta_runtime::options::{SolveOptions, SolveOptionsBuilder, StopRule};
+use admm_ta_runtime::runner::RunError;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::report::{OracleCheck, SolveReport, TracePoint};
 use admm_ta_runtime::solve::solve;
@@ -63,6 +64,8 @@ pub enum FigureError {
     #[error(transparent)]
     Solve(#[from] SolveError),
     #[error(transparent)]
+    Run(#[from] RunError),
+    #[error(transparent)]
     Plot(#[from] PlotError),
     #[error("{0}")]
     Setup(String),
@@ -95,22 +98,19 @@ impl FigureConfig {
         problem: &TaskAssignmentProblem,
         graph_spec: &str,
         seed: u64,
-        config: SolveConfig,
+        options: SolveOptionsBuilder,
     ) -> Result<(SolveReport, OracleCheck), FigureError> {
         let graph = topology(graph_spec, problem.robots(), seed)?;
-        let report = solve(
-            problem,
-            &graph,
-            &SolveConfig {
-                seed,
-                check: true,
-                adaptive_rho: self.adaptive_rho,
-                max_iters: self.max_iters,
-                agent_program: self.agent_program.clone(),
-                fault_injection: false,
-                ..config
-            },
-        )?;
+        let options = options
+            .seed(seed)
+            .check(true)
+            .adaptive_rho(self.adaptive_rho)
+            .max_iters(self.max_iters)
+            .agent_program(self.agent_program.clone())
+            .fault_injection(false)
+            .build()
+            .map_err(SolveError::from)?;
+        let report = solve(problem, &graph, &options)?;
         let check = report.check.clone().expect("checked run");
         Ok((report, check))
     }
@@ -159,11 +159,7 @@ fn traced_run(
         problem,
         graph_spec,
         seed,
-        SolveConfig {
-            method,
-            trace: true,
-            ..SolveConfig::default()
-        },
+        SolveOptions::builder().method(method).trace(true),
     )?;
     Ok(TracedRun {
         method,
@@ -458,11 +454,7 @@ fn scaling_point(
             &uniform(n, n, seed)?,
             graph_spec,
             seed,
-            SolveConfig {
-                method,
-                stop,
-                ..SolveConfig::default()
-            },
+            SolveOptions::builder().method(method).stop(stop),
         )?;
         point.trials += 1;
         point.mean_iterations += match stop {
@@ -681,11 +673,9 @@ pub fn ipc_scaling(
                     &uniform(n, n, seed)?,
                     "complete",
                     seed,
-                    SolveConfig {
-                        method,
-                        transport: Transport::Ipc,
-                        ..SolveConfig::default()
-                    },
+                    SolveOptions::builder()
+                        .method(method)
+                        .transport(Transport::Ipc),
                 )?;
                 let latency = report.round_latency_us.unwrap_or_default();
                 p.trials += 1;

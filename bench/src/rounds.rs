@@ -16,9 +16,13 @@
 use crate::plot::{Chart, PlotError, Scale, Series};
 use admm_ta_agents::probe::ProbeStep;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_runtime::error_text::one_line;
 use admm_ta_runtime::latency::Percentiles;
-use admm_ta_runtime::options::{SolveConfig, StopRule};
+use admm_ta_runtime::options::error::ConfigError;
+use admm_ta_runtime::options::run::RunOptions;
+use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
+use admm_ta_runtime::runner::RunError;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::solve;
 use admm_ta_runtime::transport::Transport;
@@ -392,7 +396,11 @@ pub enum MeasureError {
     #[error("{0}")]
     Case(String),
     #[error(transparent)]
-    Run(#[from] SolveError),
+    Options(#[from] ConfigError),
+    #[error(transparent)]
+    Run(#[from] RunError),
+    #[error(transparent)]
+    Solve(#[from] SolveError),
 }
 
 /// Measures one case.
@@ -405,24 +413,24 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
         .build(case.agents, 0)
         .map_err(|e| bad(&e))?;
     let total_rounds = config.rounds + config.warmup;
+    let options = RunOptions::builder()
+        .transport(case.transport)
+        .wait(case.wait)
+        .global_barrier(case.global_barrier)
+        .warmup_rounds(config.warmup)
+        .round_timeout(config.round_timeout)
+        .agent_program(config.agent_program.clone())
+        .build()?;
     let (latency, usage, startup, wall) = match case.step {
         StepKind::Touch | StepKind::Average => {
+            let step = if case.step == StepKind::Touch {
+                ProbeStep::Touch
+            } else {
+                ProbeStep::Average
+            };
             let run = ProbeRun {
-                transport: case.transport,
-                wait: case.wait,
-                global_barrier: case.global_barrier,
                 rounds: total_rounds,
-                warmup_rounds: config.warmup,
-                round_timeout: config.round_timeout,
-                agent_program: config.agent_program.clone(),
-                ..ProbeRun::new(
-                    case.payload.values(),
-                    if case.step == StepKind::Touch {
-                        ProbeStep::Touch
-                    } else {
-                        ProbeStep::Average
-                    },
-                )
+                ..ProbeRun::new(case.payload.values(), step, options)
             };
             let r = run_probe(&graph, &run)?;
             (
@@ -440,22 +448,18 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
             )
             .map_err(|e| bad(&e))?;
             let started = std::time::Instant::now();
-            let report = solve(
-                &problem,
-                &graph,
-                &SolveConfig {
-                    transport: case.transport,
-                    stop: StopRule::MaxIters,
-                    max_iters: total_rounds as usize,
-                    warmup_rounds: config.warmup,
-                    wait: case.wait,
-                    global_barrier: case.global_barrier,
-                    round_timeout: config.round_timeout,
-                    agent_program: config.agent_program.clone(),
-                    fault_injection: false,
-                    ..SolveConfig::default()
-                },
-            )?;
+            let options = SolveOptions::builder()
+                .transport(case.transport)
+                .stop(StopRule::MaxIters)
+                .max_iters(total_rounds as usize)
+                .warmup_rounds(config.warmup)
+                .wait(case.wait)
+                .global_barrier(case.global_barrier)
+                .round_timeout(config.round_timeout)
+                .agent_program(config.agent_program.clone())
+                .fault_injection(false)
+                .build()?;
+            let report = solve(&problem, &graph, &options)?;
             (
                 report.round_latency_us.unwrap_or_default(),
                 report.agent_usage.unwrap_or_default(),
@@ -544,7 +548,7 @@ pub fn run(
                 if let Ok(results) = slot {
                     match measure(case, config) {
                         Ok(r) => results.push(r),
-                        Err(e) => *slot = Err(e.to_string()),
+                        Err(e) => *slot = Err(one_line(&e)),
                     }
                 }
             }

@@ -229,7 +229,7 @@ pub fn run(
         robots: n,
         surveillance_stations: model.surveillance_stations.len(),
         charging_stations: model.charging_stations.len(),
-        transport: config.transport.name().to_string(),
+        transport: config.options.transport().name().to_string(),
         warm_start,
         rho: settings.rho,
         wall_ms: run.wall.as_secs_f64() * 1e3,

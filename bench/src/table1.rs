@@ -16,7 +16,7 @@
 
 use admm_ta_agents::method::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::options::{SolveConfig, StopRule};
+use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::solve;
 use admm_ta_topologies::TopologySpec;
@@ -143,20 +143,16 @@ fn run_trial(
     let rho = config.rho_scale
         * admm_ta_agents::rho::default_rho_for(method, problem.costs(), graph.mean_degree());
     let run = |stop| {
-        solve(
-            &problem,
-            &graph,
-            &SolveConfig {
-                method,
-                stop,
-                check: true,
-                max_iters: config.max_iters,
-                adaptive_rho: config.adaptive_rho,
-                rho: Some(rho),
-                seed,
-                ..SolveConfig::default()
-            },
-        )
+        let options = SolveOptions::builder()
+            .method(method)
+            .stop(stop)
+            .check(true)
+            .max_iters(config.max_iters)
+            .adaptive_rho(config.adaptive_rho)
+            .rho(Some(rho))
+            .seed(seed)
+            .build()?;
+        solve(&problem, &graph, &options)
     };
     // The oracle stop runs until the paper's criterion holds (a certified stop may come
     // first, while the relaxed objective is still more than 0.1% off).

@@ -256,18 +256,9 @@ impl ThreadExchange<'_> {
     }
 }
 
-/// Runs every agent in its own thread until the stop protocol or the round limit ends the
-/// run; `plans[i]` is agent `i`'s. Returns the outcomes in agent order, or the first
-/// failure (the other agents then stop at once).
-pub fn run_threads<A: ConsensusAgent + Send>(
-    agents: &mut [A],
-    graph: &Graph,
-    plans: &[AgentPlan],
-) -> Result<Vec<AgentOutcome>, ExchangeError> {
-    run_threads_waiting(agents, graph, plans, WaitStrategy::Auto)
-}
-
-/// [`run_threads`] with agents waiting by `wait`.
+/// Runs every agent in its own thread, waiting by `wait`, until the stop protocol or the
+/// round limit ends the run; `plans[i]` is agent `i`'s. Returns the outcomes in agent order,
+/// or the first failure (the other agents then stop at once).
 pub fn run_threads_waiting<A: ConsensusAgent + Send>(
     agents: &mut [A],
     graph: &Graph,

@@ -6,7 +6,7 @@ mod common;
 
 use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
-use admm_ta_runtime::options::SolveConfig;
+use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::solve;
 
 #[test]
@@ -24,12 +24,12 @@ fn cbaa_always_ends_conflict_free_on_any_connected_graph() {
             for seed in 0..8 {
                 let (problem, graph) =
                     common::uniform_instance(robots, tasks, 500 + seed, topology, seed);
-                let config = SolveConfig {
-                    method: Method::Cbaa,
-                    seed,
-                    max_iters: 2000,
-                    ..SolveConfig::default()
-                };
+                let config = SolveOptions::builder()
+                    .method(Method::Cbaa)
+                    .seed(seed)
+                    .max_iters(2000)
+                    .build()
+                    .unwrap();
                 let report = solve(&problem, &graph, &config).unwrap();
                 let what = format!("{robots}×{tasks} {topology} seed {seed}");
                 assert!(report.converged, "{what}: CBAA did not stop");

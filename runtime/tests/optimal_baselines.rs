@@ -8,7 +8,7 @@ mod common;
 use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::options::SolveConfig;
+use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::solve;
 
 fn always_optimal(method: Method) {
@@ -36,12 +36,12 @@ fn always_optimal(method: Method) {
                     )
                     .unwrap();
                 }
-                let config = SolveConfig {
-                    method,
-                    seed,
-                    max_iters: 50_000,
-                    ..SolveConfig::default()
-                };
+                let config = SolveOptions::builder()
+                    .method(method)
+                    .seed(seed)
+                    .max_iters(50_000)
+                    .build()
+                    .unwrap();
                 let report = solve(&problem, &graph, &config).unwrap();
                 let what = format!("{} {robots}×{tasks} {topology} seed {seed}", method.name());
                 assert!(report.converged, "{what}: did not stop");

@@ -7,7 +7,7 @@ use admm_ta_agents::primal::{PrimalSettings, ProjectionPath};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rho::default_rho;
 use admm_ta_agents::stopping::NeverStop;
-use admm_ta_runtime::options::{SolveConfig, StopRule};
+use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::solve::solve;
 use admm_ta_runtime::workload::plan::primal_team;
@@ -91,10 +91,7 @@ fn stop_rule_is_safe(stop: StopRule) {
             let costs = CostMatrix::uniform(robots, tasks, 1000 + seed).unwrap();
             let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
             let graph = spec.build(robots, seed).unwrap();
-            let config = SolveConfig {
-                stop,
-                ..SolveConfig::default()
-            };
+            let config = SolveOptions::builder().stop(stop).build().unwrap();
             let report = solve(&problem, &graph, &config).unwrap();
             let optimum = oracle::solve(&problem).unwrap();
             assert!(problem.is_feasible(&report.assignment));
@@ -133,10 +130,10 @@ fn early_stops_still_return_feasible_assignments() {
             .unwrap();
             let graph = generate::chain(robots).unwrap();
             for max_iters in [1, 2, 5, 20] {
-                let config = SolveConfig {
-                    max_iters,
-                    ..SolveConfig::default()
-                };
+                let config = SolveOptions::builder()
+                    .max_iters(max_iters)
+                    .build()
+                    .unwrap();
                 let report = solve(&problem, &graph, &config).unwrap();
                 assert!(
                     problem.is_feasible(&report.assignment),
@@ -166,11 +163,11 @@ fn certified_stop_fires_soon_after_the_assignment_is_optimal() {
             solve(
                 &problem,
                 &graph,
-                &SolveConfig {
-                    stop,
-                    check: true,
-                    ..SolveConfig::default()
-                },
+                &SolveOptions::builder()
+                    .stop(stop)
+                    .check(true)
+                    .build()
+                    .unwrap(),
             )
             .unwrap()
         };

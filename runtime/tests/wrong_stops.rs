@@ -6,7 +6,7 @@ mod common;
 
 use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
-use admm_ta_runtime::options::SolveConfig;
+use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::solve;
 
 #[test]
@@ -23,12 +23,12 @@ fn the_local_stop_never_certifies_a_wrong_assignment() {
             for seed in 0..15 {
                 let (problem, graph) =
                     common::uniform_instance(robots, tasks, 100 + seed, topology, seed);
-                let config = SolveConfig {
-                    method,
-                    seed,
-                    max_iters: 4000,
-                    ..SolveConfig::default()
-                };
+                let config = SolveOptions::builder()
+                    .method(method)
+                    .seed(seed)
+                    .max_iters(4000)
+                    .build()
+                    .unwrap();
                 let report = solve(&problem, &graph, &config).unwrap();
                 let optimum = oracle::solve(&problem).unwrap();
                 runs += 1;

@@ -4,7 +4,7 @@
 
 use crate::exchange::header::RoundHeader;
 use crate::exchange::{Exchange, ExchangeError};
-use crate::latency::{Component, LatencyBuckets, RoundLatency};
+use crate::latency::{BucketsMismatch, Component, LatencyBuckets, RoundLatency};
 use crate::usage::ThreadUsage;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::local_stop::{LocalCertifiedStop, Verdict};
@@ -52,6 +52,33 @@ pub struct AgentOutcome {
     /// CPU time and context switches of the agent's thread over the recorded rounds.
     #[serde(default)]
     pub usage: ThreadUsage,
+}
+
+/// An agent's outcome whose latency histograms do not merge with the others'.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("agent {agent} exited without a readable result")]
+pub struct UnreadableOutcome {
+    pub agent: usize,
+    #[source]
+    pub source: BucketsMismatch,
+}
+
+/// The team's round latency (every agent's recorded rounds merged) and CPU usage (summed).
+pub fn merge_outcomes<'a>(
+    outcomes: impl IntoIterator<Item = &'a AgentOutcome>,
+) -> Result<(RoundLatency, ThreadUsage), UnreadableOutcome> {
+    let mut latency = RoundLatency::new();
+    let mut usage = ThreadUsage::default();
+    for outcome in outcomes {
+        latency
+            .merge(&outcome.latency)
+            .map_err(|source| UnreadableOutcome {
+                agent: outcome.index,
+                source,
+            })?;
+        usage = usage.plus(&outcome.usage);
+    }
+    Ok((latency, usage))
 }
 
 /// FNV-1a over the bits of a payload.

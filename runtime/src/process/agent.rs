@@ -7,7 +7,7 @@
 
 use crate::exchange::round_loop::{AgentOutcome, run_agent};
 use crate::process::connect::connect;
-use crate::process::scenario::{Scenario, Workload};
+use crate::process::scenario::{Scenario, ScenarioWorkload};
 use crate::workload::episode::{EpisodeRecord, run_surveillance_agent};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -75,7 +75,7 @@ pub fn run_scenario(
     let mut endpoint = connect(scenario, &graph, index, run_dir, supervised, deadline)?;
     let connected_unix_ns = unix_ns();
     let ran = match &scenario.workload {
-        Workload::Episodes(settings) => {
+        ScenarioWorkload::Episodes(settings) => {
             let mut agent = settings.agent(index, graph.degree(index));
             run_surveillance_agent(&mut agent, endpoint.exchange(), &plan, settings)
                 .map(|(records, outcome)| (outcome, records))

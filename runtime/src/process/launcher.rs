@@ -13,7 +13,6 @@
 use crate::board::Board;
 use crate::exchange::round_loop::AgentOutcome;
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
-use crate::latency::RoundLatency;
 use crate::process::agent::{AgentReport, log_path, result_path};
 use crate::process::connect::{LauncherSupport, SupportError};
 use crate::process::namespace::RunNamespace;
@@ -21,18 +20,6 @@ use crate::process::scenario::Scenario;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
-
-/// How to run the agent processes.
-#[derive(Debug, Clone, PartialEq)]
-pub struct IpcOptions {
-    /// The `admm-ta` binary (it has the `agent` subcommand).
-    pub agent_program: PathBuf,
-    pub round_timeout: Duration,
-    pub startup_timeout: Duration,
-    pub global_barrier: bool,
-    /// Pass the `ADMM_TA_FAULT` test switch on to the agents.
-    pub fault_injection: bool,
-}
 
 /// Failures of a multi-process run.
 #[derive(Debug, thiserror::Error)]
@@ -71,10 +58,10 @@ pub enum LaunchError {
 
 /// What a multi-process run produced.
 #[derive(Debug, Clone)]
-pub struct IpcRun {
+pub struct ProcessRun {
     pub run_id: String,
+    /// Every agent's outcome, in agent order.
     pub outcomes: Vec<AgentOutcome>,
-    pub latency: RoundLatency,
     /// From the first spawn until every agent had all its neighbours connected.
     pub startup: Duration,
     /// Files of the run still present after cleanup (should be none).
@@ -148,9 +135,14 @@ fn describe_exit(status: ExitStatus) -> Option<String> {
     })
 }
 
-/// Runs `scenario` (its run id, prefix and root are filled in here) with one process per
-/// agent.
-pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, LaunchError> {
+/// Runs `scenario` (its run id, prefix, root and board are filled in here) with one process
+/// per agent started from `agent_program` (the `admm-ta` binary); `fault_injection`: pass
+/// the `ADMM_TA_FAULT` test switch on to the agents.
+pub fn launch(
+    mut scenario: Scenario,
+    agent_program: &Path,
+    fault_injection: bool,
+) -> Result<ProcessRun, LaunchError> {
     let namespace = RunNamespace::create().map_err(LaunchError::RunDirectory)?;
     let mut guard = RunGuard {
         namespace: namespace.clone(),
@@ -161,9 +153,6 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
     scenario.run_id = namespace.id.clone();
     scenario.iceoryx_prefix = namespace.prefix.clone();
     scenario.iceoryx_root = namespace.iceoryx_root();
-    scenario.round_timeout_ms = options.round_timeout.as_millis() as u64;
-    scenario.startup_timeout_ms = options.startup_timeout.as_millis() as u64;
-    scenario.global_barrier = options.global_barrier;
     scenario.board_shm = namespace.board_shm();
     guard.board = Some(
         Board::create(
@@ -185,8 +174,8 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
     for index in 0..scenario.robots {
         let log =
             std::fs::File::create(log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
-        let mut command = Command::new(&options.agent_program);
-        if !options.fault_injection {
+        let mut command = Command::new(agent_program);
+        if !fault_injection {
             command.env_remove(crate::fault::FAULT_ENV);
         }
         let child = command
@@ -201,7 +190,7 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
             .spawn()
             .map_err(|source| LaunchError::Spawn {
                 index,
-                program: options.agent_program.clone(),
+                program: agent_program.to_path_buf(),
                 source,
             })?;
         guard.children.push(Some(child));
@@ -304,7 +293,6 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
 
     let mut outcomes = Vec::with_capacity(scenario.robots);
     let mut episodes = Vec::with_capacity(scenario.robots);
-    let mut latency = RoundLatency::new();
     let mut connected = 0u128;
     for index in 0..scenario.robots {
         let path = result_path(&run_dir, index);
@@ -312,22 +300,15 @@ pub fn launch(mut scenario: Scenario, options: &IpcOptions) -> Result<IpcRun, La
             .map_err(|e| e.to_string())
             .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()))
             .map_err(|message| LaunchError::MissingResult { index, message })?;
-        latency
-            .merge(&report.outcome.latency)
-            .map_err(|e| LaunchError::MissingResult {
-                index,
-                message: e.to_string(),
-            })?;
         connected = connected.max(report.connected_unix_ns);
         outcomes.push(report.outcome);
         episodes.push(report.episodes);
     }
     let startup = Duration::from_nanos(connected.saturating_sub(spawned_unix_ns) as u64);
     drop(guard);
-    Ok(IpcRun {
+    Ok(ProcessRun {
         run_id: namespace.id.clone(),
         outcomes,
-        latency,
         startup,
         leftovers: namespace.leftovers(),
         episodes,

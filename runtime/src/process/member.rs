@@ -39,15 +39,19 @@
 //! ```
 
 use crate::board::Board;
+use crate::exchange::round_loop::{AgentStop, merge_outcomes};
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
-use crate::latency::{LatencySummary, RoundLatency};
-use crate::options::{SolveConfig, StopRule};
+use crate::latency::LatencySummary;
+use crate::options::error::{ConfigError, seconds};
+use crate::options::{SolveOptions, StopRule};
 use crate::process::agent::{AgentReport, run_scenario};
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
-use crate::process::scenario::agent_scenario;
 use crate::transport::Transport;
+use crate::workload::Workload;
+use crate::workload::plan::prepare;
 use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
+use admm_ta_agents::local_stop::LocalCertifiedStop;
 use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
@@ -173,16 +177,6 @@ pub struct Team {
     pub base: PathBuf,
 }
 
-fn seconds(name: &str, v: f64) -> Result<Duration, String> {
-    if v.is_finite() && v > 0.0 && v < 1e6 {
-        Ok(Duration::from_secs_f64(v))
-    } else {
-        Err(format!(
-            "{name} must be a positive number of seconds, got {v}"
-        ))
-    }
-}
-
 impl Team {
     pub fn read(path: &Path) -> Result<Self, String> {
         let text = std::fs::read_to_string(path)
@@ -191,8 +185,8 @@ impl Team {
             .map_err(|e| format!("team file {}: {}", path.display(), e.message()))?;
         let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         RunNamespace::check_team_name(&file.run)?;
-        seconds("startup_timeout", file.startup_timeout)?;
-        seconds("round_timeout", file.round_timeout)?;
+        seconds("startup_timeout", file.startup_timeout).map_err(|e| e.to_string())?;
+        seconds("round_timeout", file.round_timeout).map_err(|e| e.to_string())?;
         check_hosts(&file)?;
         Ok(Self { file, base })
     }
@@ -278,21 +272,20 @@ impl Team {
         Ok((problem, graph))
     }
 
-    /// The settings every agent runs with (on the ipc transport; a test may run the same
-    /// problem on another).
-    pub fn solve_config(&self) -> Result<SolveConfig, String> {
+    /// The settings every agent runs with, on its deployment's transport (a test may run
+    /// the same problem on another).
+    pub fn solve_options(&self) -> Result<SolveOptions, ConfigError> {
         let f = &self.file;
-        Ok(SolveConfig {
-            method: f.method,
-            transport: Transport::Ipc,
-            adaptive_rho: f.adaptive_rho,
-            max_iters: f.max_iters,
-            stop: StopRule::Local,
-            seed: f.seed,
-            round_timeout: seconds("round_timeout", f.round_timeout)?,
-            startup_timeout: seconds("startup_timeout", f.startup_timeout)?,
-            ..SolveConfig::default()
-        })
+        SolveOptions::builder()
+            .method(f.method)
+            .transport(f.transport.agent_transport())
+            .adaptive_rho(f.adaptive_rho)
+            .max_iters(f.max_iters)
+            .stop(StopRule::Local)
+            .seed(f.seed)
+            .round_timeout(seconds("round_timeout", f.round_timeout)?)
+            .startup_timeout(seconds("startup_timeout", f.startup_timeout)?)
+            .build()
     }
 }
 
@@ -410,8 +403,19 @@ pub(crate) fn member_scenario(
     host: Option<&HostEntry>,
 ) -> Result<(Scenario, RunNamespace), String> {
     let (problem, graph) = team.problem_and_graph()?;
-    let config = team.solve_config()?;
-    let mut scenario = agent_scenario(&problem, &graph, &config).map_err(|e| e.to_string())?;
+    let options = team.solve_options().map_err(|e| e.to_string())?;
+    let plan = prepare(&problem, &graph, &options).map_err(|e| e.to_string())?;
+    let stop = LocalCertifiedStop::new(plan.diameter, problem.robots(), plan.tolerance)
+        .map_err(|e| e.to_string())?;
+    let mut scenario = Scenario::new(
+        Workload::Solve {
+            plan: &plan,
+            stop: &AgentStop::Local(stop),
+            max_rounds: options.max_iters() as u64,
+        },
+        &graph,
+        options.run(),
+    );
     let namespace = match host {
         Some(host) => RunNamespace::for_team(&format!("{}-{}", team.file.run, host.name))?,
         None => RunNamespace::for_team(&team.file.run)?,
@@ -513,7 +517,6 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
     let result = member_result(&results, id);
     // A result of an earlier run must not pass for this one's.
     let _ = std::fs::remove_file(&result);
-    scenario.transport = team.file.transport.agent_transport();
     if !team.file.transport.host_board() {
         // No shared memory: presence, failures and cleanup are Zenoh's.
         let host = team.host_of(id).expect("checked: every robot is on a host");
@@ -589,12 +592,8 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
             results.display()
         ));
     }
-    let mut latency = RoundLatency::new();
-    for r in &reports {
-        latency
-            .merge(&r.outcome.latency)
-            .map_err(|e| format!("agent {}'s result: {e}", r.outcome.index))?;
-    }
+    let (latency, _) = merge_outcomes(reports.iter().map(|r| &r.outcome))
+        .map_err(|e| format!("agent {}'s result: {}", e.agent, e.source))?;
     let assignment: Vec<usize> = reports.iter().map(|r| r.outcome.task).collect();
     if !problem.is_feasible(&assignment) {
         return Err(format!(

@@ -4,15 +4,15 @@
 //! numbers as the lockstep simulation.
 
 use crate::exchange::round_loop::{AgentPlan, AgentStop};
-use crate::options::{SolveConfig, StopRule};
+use crate::options::run::RunOptions;
 use crate::transport::Transport;
 use crate::wait::WaitStrategy;
+use crate::workload::Workload;
 use crate::workload::episode::EpisodeSettings;
-use crate::workload::plan::{AgentFactory, Plan, prepare};
+use crate::workload::plan::AgentFactory;
 use crate::zenoh_net::links::ZenohLinks;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::local_stop::LocalCertifiedStop;
-use admm_ta_agents::local_stop::LocalStopError;
 use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
 use admm_ta_agents::primal::ProjectionPath;
 use admm_ta_agents::probe::{ProbeAgent, ProbeStep};
@@ -37,7 +37,7 @@ pub enum ScenarioStop {
 /// What the agents compute.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum Workload {
+pub enum ScenarioWorkload {
     /// The scenario's method on its problem.
     #[default]
     Method,
@@ -77,7 +77,7 @@ pub struct Scenario {
     pub board_shm: String,
     pub global_barrier: bool,
     #[serde(default)]
-    pub workload: Workload,
+    pub workload: ScenarioWorkload,
     /// A process transport.
     pub transport: Transport,
     #[serde(default)]
@@ -117,19 +117,17 @@ pub enum ScenarioError {
     BadIndex { index: usize, robots: usize },
     #[error("scenario is inconsistent: {0}")]
     Inconsistent(String),
-    #[error(transparent)]
-    Plan(#[from] crate::workload::plan::PlanError),
-    #[error(transparent)]
-    LocalStop(#[from] LocalStopError),
 }
 
 impl Scenario {
-    /// A scenario of a team on `graph` with `tasks` tasks and nothing else decided yet (zero
-    /// costs, the primal method, run to the round limit, iceoryx2, default waiting): the
-    /// base that benchmark and episode runs fill in. The launcher sets the run's names.
-    pub fn blank(graph: &Graph, tasks: usize) -> Self {
+    /// The scenario of agent processes computing `workload` on `graph`, run as `options`
+    /// say; the run's names (id, iceoryx2 prefix and root, board) are left to whoever starts
+    /// the run (the launcher, or the members of an independently started team).
+    pub fn new(workload: Workload<'_>, graph: &Graph, options: &RunOptions) -> Self {
         let robots = graph.robots();
-        Self {
+        // A team of `tasks` tasks and nothing else decided yet: zero costs, the primal
+        // method, run to the round limit.
+        let blank = |tasks: usize| Self {
             run_id: String::new(),
             iceoryx_prefix: String::new(),
             iceoryx_root: PathBuf::new(),
@@ -153,16 +151,77 @@ impl Scenario {
             stop: ScenarioStop::MaxIters,
             max_rounds: 0,
             diameter: graph.diameter().unwrap_or(0),
-            round_timeout_ms: 0,
-            startup_timeout_ms: 0,
+            round_timeout_ms: options.round_timeout().as_millis() as u64,
+            startup_timeout_ms: options.startup_timeout().as_millis() as u64,
             board_shm: String::new(),
-            global_barrier: false,
-            workload: Workload::Method,
-            transport: Transport::Ipc,
-            wait: WaitStrategy::Auto,
-            warmup_rounds: 0,
+            global_barrier: options.global_barrier(),
+            workload: ScenarioWorkload::Method,
+            transport: options.transport(),
+            wait: options.wait(),
+            warmup_rounds: options.warmup_rounds(),
             zenoh: None,
             local_agents: None,
+        };
+        match workload {
+            Workload::Solve {
+                plan,
+                stop,
+                max_rounds,
+            } => {
+                let problem = plan.agents.problem;
+                let settings = &plan.agents.settings;
+                Self {
+                    case: problem.case(),
+                    cost_bits: problem
+                        .costs()
+                        .values()
+                        .iter()
+                        .map(|v| v.to_bits())
+                        .collect(),
+                    method: settings.method,
+                    rho_bits: settings.rho.to_bits(),
+                    gamma_factor_bits: settings.gamma_factor.to_bits(),
+                    adaptive_rho: plan.agents.schedule.is_some(),
+                    epsilon_bits: plan.agents.epsilon.map(f64::to_bits),
+                    seed: plan.agents.seed,
+                    qp_projection: settings.projection == ProjectionPath::Qp,
+                    stop: match stop {
+                        AgentStop::MaxIters => ScenarioStop::MaxIters,
+                        AgentStop::Local(_) => ScenarioStop::Local {
+                            tolerance_bits: plan.tolerance.to_bits(),
+                        },
+                    },
+                    max_rounds,
+                    diameter: plan.diameter,
+                    ..blank(problem.tasks())
+                }
+            }
+            Workload::Probe {
+                payload_len,
+                step,
+                rounds,
+            } => Self {
+                max_rounds: rounds,
+                workload: ScenarioWorkload::Probe { payload_len, step },
+                ..blank(1)
+            },
+            Workload::Episodes {
+                settings,
+                max_rounds,
+            } => Self {
+                case: AssignmentCase::Two,
+                cost_bits: settings
+                    .model
+                    .initial_costs()
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect(),
+                rho_bits: settings.rho.to_bits(),
+                max_rounds,
+                diameter: settings.diameter,
+                workload: ScenarioWorkload::Episodes(Box::new(settings.clone())),
+                ..blank(settings.model.tasks())
+            },
         }
     }
 
@@ -242,10 +301,10 @@ impl Scenario {
     /// Values of every round message's payload.
     pub fn payload_len(&self) -> usize {
         match self.workload {
-            Workload::Method | Workload::Episodes(_) => {
+            ScenarioWorkload::Method | ScenarioWorkload::Episodes(_) => {
                 self.method.payload_len(self.robots, self.tasks)
             }
-            Workload::Probe { payload_len, .. } => payload_len.max(1),
+            ScenarioWorkload::Probe { payload_len, .. } => payload_len.max(1),
         }
     }
 
@@ -253,15 +312,15 @@ impl Scenario {
     /// (episode runs build theirs from [`EpisodeSettings::agent`], to change its costs).
     pub fn workload_agent(&self, index: usize) -> Result<Box<dyn ConsensusAgent>, ScenarioError> {
         match self.workload {
-            Workload::Method => Ok(Box::new(self.agent(index)?)),
-            Workload::Probe { payload_len, step } if index < self.robots => {
+            ScenarioWorkload::Method => Ok(Box::new(self.agent(index)?)),
+            ScenarioWorkload::Probe { payload_len, step } if index < self.robots => {
                 Ok(Box::new(ProbeAgent::new(index, payload_len, step)))
             }
-            Workload::Probe { .. } => Err(ScenarioError::BadIndex {
+            ScenarioWorkload::Probe { .. } => Err(ScenarioError::BadIndex {
                 index,
                 robots: self.robots,
             }),
-            Workload::Episodes(_) => Err(ScenarioError::Inconsistent(
+            ScenarioWorkload::Episodes(_) => Err(ScenarioError::Inconsistent(
                 "an episode run's agents come from its episode settings".into(),
             )),
         }
@@ -289,68 +348,4 @@ impl Scenario {
         };
         Ok(team.agent(index))
     }
-}
-
-/// The scenario an agent process of `problem` on `graph` runs with `config` (run id, prefix,
-/// root and board name still to be filled in): what `solve --transport ipc` hands its
-/// agents, and what an independently started agent (`admm-ta agent --team`) builds itself.
-pub fn agent_scenario(
-    problem: &TaskAssignmentProblem,
-    graph: &Graph,
-    config: &SolveConfig,
-) -> Result<Scenario, ScenarioError> {
-    let prepared = prepare(problem, graph, config)?;
-    Ok(scenario_of(problem, graph, config, &prepared)?)
-}
-
-pub(crate) fn scenario_of(
-    problem: &TaskAssignmentProblem,
-    graph: &Graph,
-    config: &SolveConfig,
-    prepared: &Plan<'_>,
-) -> Result<Scenario, LocalStopError> {
-    let (n, m) = (problem.robots(), problem.tasks());
-    let team = &prepared.agents;
-    LocalCertifiedStop::new(prepared.diameter, n, prepared.tolerance)?;
-    Ok(Scenario {
-        run_id: String::new(),
-        iceoryx_prefix: String::new(),
-        iceoryx_root: PathBuf::new(),
-        robots: n,
-        tasks: m,
-        case: problem.case(),
-        cost_bits: problem
-            .costs()
-            .values()
-            .iter()
-            .map(|v| v.to_bits())
-            .collect(),
-        edges: graph.edges().collect(),
-        topology: graph.name().to_string(),
-        method: config.method,
-        rho_bits: team.settings.rho.to_bits(),
-        gamma_factor_bits: team.settings.gamma_factor.to_bits(),
-        adaptive_rho: config.adaptive_rho,
-        epsilon_bits: team.epsilon.map(f64::to_bits),
-        seed: config.seed,
-        qp_projection: config.projection == ProjectionPath::Qp,
-        stop: match config.stop {
-            StopRule::MaxIters => ScenarioStop::MaxIters,
-            _ => ScenarioStop::Local {
-                tolerance_bits: prepared.tolerance.to_bits(),
-            },
-        },
-        max_rounds: config.max_iters as u64,
-        diameter: prepared.diameter,
-        round_timeout_ms: config.round_timeout.as_millis() as u64,
-        startup_timeout_ms: config.startup_timeout.as_millis() as u64,
-        board_shm: String::new(),
-        global_barrier: config.global_barrier,
-        workload: Default::default(),
-        transport: config.transport,
-        wait: config.wait,
-        warmup_rounds: config.warmup_rounds,
-        zenoh: None,
-        local_agents: None,
-    })
 }

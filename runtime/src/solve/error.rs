@@ -1,11 +1,10 @@
 //! Why a solve cannot start or complete.
 
-use crate::exchange::ExchangeError;
-use crate::process::launcher::LaunchError;
-use crate::transport::{Execution, Transport};
-use crate::workload::plan::PlanError;
+use crate::error_text::one_line;
+use crate::options::error::ConfigError;
+use crate::runner::RunError;
+use crate::workload::plan::BadRho;
 use admm_ta_agents::local_stop::LocalStopError;
-use std::path::PathBuf;
 
 /// Why the survivors of a failure could not re-solve (`--on-failure continue`).
 #[derive(Debug, thiserror::Error)]
@@ -16,63 +15,18 @@ pub enum CannotContinue {
     TooFewRobots { survivors: usize, tasks: usize },
     #[error("without robot {failed} the communication graph is disconnected")]
     Disconnected { failed: usize },
-    #[error("the survivors' re-solve failed too: {0}")]
+    #[error("the survivors' re-solve failed too: {}", one_line(.0.as_ref()))]
     ResolveFailed(Box<SolveError>),
 }
 
 /// Reasons a solve cannot start or complete.
 #[derive(Debug, thiserror::Error)]
 pub enum SolveError {
-    #[error(
-        "--stop {stop} needs the whole team's state: it runs on the {} transport only (use --stop local or max-iters)",
-        Transport::names_where(|c| c.execution == Execution::Lockstep, "or")
-    )]
-    CentralStop { stop: &'static str },
-    #[error(
-        "--global-barrier needs the {} transport ({} have none)",
-        Transport::names_where(|c| c.global_barrier, "or"),
-        Transport::names_where(|c| !c.global_barrier, "and")
-    )]
-    BarrierNeedsAgents,
-    #[error(
-        "round latency is measured on a distributed transport: {}",
-        Transport::names_where(|c| c.execution != Execution::Lockstep, "or")
-    )]
-    NotDistributed,
-    #[error(
-        "the {} transports need the admm-ta binary to start agents from",
-        Transport::names_where(|c| c.execution == Execution::Processes, "and")
-    )]
-    NoAgentProgram,
+    /// Options no solve can run (for callers that build them on the way).
     #[error(transparent)]
-    LocalStop(#[from] LocalStopError),
-    #[error(transparent)]
-    Exchange(#[from] ExchangeError),
-    #[error(transparent)]
-    Launch(#[from] LaunchError),
-    #[error("the run finished but could not remove its files: {0:?}")]
-    Leftovers(Vec<PathBuf>),
+    Config(#[from] ConfigError),
     #[error("the topology has {graph} robots but the costs have {problem}")]
     SizeMismatch { graph: usize, problem: usize },
-    #[error(transparent)]
-    Plan(#[from] PlanError),
-    #[error(
-        "--method hungarian is the centralized solver: it runs in this process, with --transport {}",
-        Transport::names_where(|c| c.execution == Execution::Lockstep, "or")
-    )]
-    CentralizedMethod,
-    #[error(
-        "--stop {stop} reads every robot's m×n matrix: it works with --method primal only (use --stop local, oracle or max-iters)"
-    )]
-    PrimalOnlyStop { stop: &'static str },
-    #[error("--max-iters must be at least 1")]
-    NoIterations,
-    /// An agent failed and, with `--on-failure continue`, the survivors could not go on.
-    #[error("{first}; --on-failure continue: {reason}")]
-    CannotContinue {
-        first: Box<SolveError>,
-        reason: CannotContinue,
-    },
     #[error(
         "{robots} robots × {tasks} tasks need about {gib:.1} GiB of agent state (each robot holds an m×n matrix); the limit is 8 GiB"
     )]
@@ -80,5 +34,17 @@ pub enum SolveError {
         robots: usize,
         tasks: usize,
         gib: f64,
+    },
+    #[error(transparent)]
+    Rho(#[from] BadRho),
+    #[error(transparent)]
+    LocalStop(#[from] LocalStopError),
+    #[error(transparent)]
+    Run(#[from] RunError),
+    /// An agent failed and, with `--on-failure continue`, the survivors could not go on.
+    #[error("{first}; --on-failure continue: {reason}")]
+    CannotContinue {
+        first: Box<SolveError>,
+        reason: CannotContinue,
     },
 }

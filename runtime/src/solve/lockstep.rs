@@ -1,36 +1,100 @@
-//! The central stop rules of a lockstep run: they read the whole team's state, which only
-//! the simulation has in one place (`--stop certified`, `oracle`, `agreement`; sim only).
+//! What a solve watches of a lockstep run: the oracle tracer of a checked solve, and the
+//! central stop rules (`--stop certified`, `oracle`, `agreement`), which read the whole
+//! team's state that only the simulation has in one place.
 
-use crate::sim::{LockstepSim, RoundView, SimOutcome};
+use crate::options::{SolveOptions, StopRule};
+use crate::runner::LockstepWatch;
+use crate::sim::{LockstepSim, RoundView};
+use crate::solve::trace::{Tracer, relaxed_objective, within_0_1pct};
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::method::MethodAgent;
-use admm_ta_agents::stopping::AgreementStreak;
+use admm_ta_agents::oracle::OptimalAssignment;
+use admm_ta_agents::problem::TaskAssignmentProblem;
+use admm_ta_agents::stopping::{AgreementStop, AgreementStreak, TeamStopRule};
 
 /// Rounds after which an agreement is first certified, and the spacing of later checks
 /// (each check is one `m × n` assignment problem per robot).
 const CERTIFY_AFTER: usize = 3;
 const CERTIFY_EVERY: usize = 5;
 
-/// Steps until the robots agree on one assignment whose certificate slacks sum to at most
-/// `tolerance` (see [`admm_ta_agents::primal::PrimalAgent::certificate_slack`]), or
-/// `max_rounds`.
-pub(crate) fn run_until_certified(
-    sim: &mut LockstepSim<MethodAgent>,
-    max_rounds: usize,
-    tolerance: f64,
-    observer: &mut dyn FnMut(&RoundView<'_>),
-) -> SimOutcome {
-    // Agreement on one feasible assignment; near-integrality is not needed here.
-    let mut streak = AgreementStreak::default();
-    sim.run_until(max_rounds, observer, |sim| {
-        let agreed_for = streak.observe(sim.view().reports, f64::MAX);
-        agreed_for >= CERTIFY_AFTER
-            && (agreed_for - CERTIFY_AFTER).is_multiple_of(CERTIFY_EVERY)
-            && sim
-                .agents()
-                .iter()
-                .map(ConsensusAgent::certificate_slack)
-                .sum::<f64>()
-                <= tolerance
-    })
+/// A stop rule that reads the whole team.
+enum Central<'p> {
+    /// The agents' own rule decides (local, max-iters).
+    None,
+    Agreement(AgreementStop),
+    /// The robots agree on one assignment whose certificate slacks sum to at most
+    /// `tolerance` (see [`admm_ta_agents::primal::PrimalAgent::certificate_slack`]).
+    Certified {
+        streak: AgreementStreak,
+        tolerance: f64,
+    },
+    /// The paper's criterion, with the centralized optimum (experiments only).
+    Oracle {
+        problem: &'p TaskAssignmentProblem,
+        optimal_cost: f64,
+    },
+}
+
+/// A solve's watch over a lockstep run.
+pub(crate) struct SolveWatch<'p> {
+    /// Follows the run against the optimum (checked solves).
+    pub(crate) tracer: Option<Tracer<'p>>,
+    central: Central<'p>,
+}
+
+impl<'p> SolveWatch<'p> {
+    /// The watch of a solve of `problem` with `options`; `tolerance` is the plan's, `optimum`
+    /// the centralized one (known when checking or stopping by the oracle).
+    pub(crate) fn new(
+        problem: &'p TaskAssignmentProblem,
+        options: &SolveOptions,
+        tolerance: f64,
+        tracer: Option<Tracer<'p>>,
+        optimum: Option<&OptimalAssignment>,
+    ) -> Self {
+        let central = match options.stop() {
+            StopRule::Agreement => Central::Agreement(AgreementStop::new(options.stop_rounds())),
+            StopRule::Certified => Central::Certified {
+                // Agreement on one feasible assignment; near-integrality is not needed here.
+                streak: AgreementStreak::default(),
+                tolerance,
+            },
+            StopRule::Oracle => Central::Oracle {
+                problem,
+                optimal_cost: optimum.expect("oracle stop has the optimum").cost,
+            },
+            StopRule::Local | StopRule::MaxIters => Central::None,
+        };
+        Self { tracer, central }
+    }
+}
+
+impl LockstepWatch for SolveWatch<'_> {
+    fn observe(&mut self, view: &RoundView<'_>) {
+        if let Some(t) = self.tracer.as_mut() {
+            t.observe(view);
+        }
+    }
+
+    fn stop(&mut self, sim: &LockstepSim<MethodAgent>) -> bool {
+        match &mut self.central {
+            Central::None => false,
+            Central::Agreement(rule) => rule.should_stop(sim.view().reports),
+            Central::Certified { streak, tolerance } => {
+                let agreed_for = streak.observe(sim.view().reports, f64::MAX);
+                agreed_for >= CERTIFY_AFTER
+                    && (agreed_for - CERTIFY_AFTER).is_multiple_of(CERTIFY_EVERY)
+                    && sim
+                        .agents()
+                        .iter()
+                        .map(ConsensusAgent::certificate_slack)
+                        .sum::<f64>()
+                        <= *tolerance
+            }
+            Central::Oracle {
+                problem,
+                optimal_cost,
+            } => within_0_1pct(relaxed_objective(problem, &sim.view()), *optimal_cost),
+        }
+    }
 }

@@ -34,7 +34,7 @@ pub struct OracleCheck {
     /// Round from which every robot's own argmax is an optimal assignment until the end
     /// (shift-invariant).
     pub rounds_to_optimal_assignment: Option<usize>,
-    /// Every round's objectives, when [`crate::options::SolveConfig::trace`] asked for them (sim only).
+    /// Every round's objectives, when [`crate::options::SolveOptions::trace`] asked for them (sim only).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub trace: Vec<TracePoint>,
 }

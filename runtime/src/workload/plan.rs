@@ -2,7 +2,7 @@
 //! tolerance and the agents' settings, computed once from the problem, the graph and the
 //! options, exactly as every transport (and every independently started agent) needs them.
 
-use crate::options::SolveConfig;
+use crate::options::SolveOptions;
 use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
 use admm_ta_agents::primal::PrimalSettings;
 use admm_ta_agents::problem::TaskAssignmentProblem;
@@ -44,14 +44,11 @@ impl AgentFactory<'_> {
     }
 }
 
-/// A solve's settings that do not fit its problem.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum PlanError {
-    #[error("ρ must be a positive finite number, got {0}")]
-    BadRho(f64),
-    #[error("the γ factor must be a positive finite number, got {0}")]
-    BadGamma(f64),
-}
+/// The ρ a problem's costs give by the method's default rule is no penalty (the costs have
+/// no spread): the only option the problem can refute.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("ρ must be a positive finite number, got {0}")]
+pub struct BadRho(pub f64);
 
 /// What every transport's agents are built from.
 pub struct Plan<'a> {
@@ -67,42 +64,41 @@ pub struct Plan<'a> {
 pub fn prepare<'a>(
     problem: &'a TaskAssignmentProblem,
     graph: &'a Graph,
-    config: &SolveConfig,
-) -> Result<Plan<'a>, PlanError> {
+    options: &SolveOptions,
+) -> Result<Plan<'a>, BadRho> {
     let n = problem.robots();
+    let method = options.method();
     // Methods without a penalty report ρ = 0 and ignore --rho and --adaptive-rho.
-    let rho = if config.method.is_admm() {
-        config.rho.unwrap_or_else(|| {
-            rho::default_rho_for(config.method, problem.costs(), graph.mean_degree())
-        })
+    let rho = if method.is_admm() {
+        options
+            .rho()
+            .unwrap_or_else(|| rho::default_rho_for(method, problem.costs(), graph.mean_degree()))
     } else {
         0.0
     };
-    if config.method.is_admm() && !(rho > 0.0 && rho.is_finite()) {
-        return Err(PlanError::BadRho(rho));
+    if method.is_admm() && !(rho > 0.0 && rho.is_finite()) {
+        return Err(BadRho(rho));
     }
-    let gamma_factor = config
-        .gamma_factor
+    // The options checked a given factor.
+    let gamma_factor = options
+        .gamma_factor()
         .unwrap_or(admm_ta_agents::dual::DEFAULT_GAMMA_FACTOR);
-    if !(gamma_factor > 0.0 && gamma_factor.is_finite()) {
-        return Err(PlanError::BadGamma(gamma_factor));
-    }
-    let epsilon = ties::epsilon(problem.costs(), config.perturbation);
+    let epsilon = ties::epsilon(problem.costs(), options.perturbation());
     let tolerance = 1e-9 * problem.costs().spread() * n as f64;
     let diameter = graph.diameter().unwrap_or(0);
     let settings = AgentSettings {
-        projection: config.projection,
+        projection: options.projection(),
         gamma_factor,
-        ..AgentSettings::new(config.method, rho, diameter, tolerance)
+        ..AgentSettings::new(method, rho, diameter, tolerance)
     };
-    let schedule = (config.adaptive_rho && config.method.is_admm())
-        .then(|| RhoSchedule::for_method(config.method, rho));
+    let schedule =
+        (options.adaptive_rho() && method.is_admm()).then(|| RhoSchedule::for_method(method, rho));
     let agents = AgentFactory {
         problem,
         graph,
         settings,
         epsilon,
-        seed: config.seed,
+        seed: options.seed(),
         schedule,
     };
     Ok(Plan {

@@ -13,7 +13,8 @@
 //! The hosts of a multi-host team and the mixed mode's bridge (iceoryx2 within a host, Zenoh
 //! between hosts) use both transports, so they live above them, in [`crate::process`].
 //!
-//! Built without the `zenoh` feature, every Zenoh entry point fails with [`not_built`].
+//! Built without the `zenoh` feature, every Zenoh entry point fails with
+//! [`crate::transport::ZenohNotBuilt`].
 
 pub mod links;
 
@@ -23,12 +24,3 @@ pub mod exchange;
 pub mod router;
 #[cfg(feature = "zenoh")]
 pub(crate) mod session;
-
-/// Whether this build carries the Zenoh transport.
-pub const BUILT: bool = cfg!(feature = "zenoh");
-
-/// The error of a Zenoh entry point in a build without the `zenoh` feature.
-pub fn not_built() -> String {
-    "this admm-ta was built without Zenoh support: rebuild with `cargo build --release --features zenoh`"
-        .into()
-}

@@ -1,0 +1,83 @@
+//! Settings no run can honour, and the one check of a timeout.
+
+use crate::transport::{Execution, Transport, ZenohNotBuilt};
+use std::time::Duration;
+
+/// Settings no run can honour.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConfigError {
+    #[error("--rho (ρ) must be auto or a positive number, got '{0}'")]
+    Rho(f64),
+    /// A timeout that is not a positive number of seconds (below 10⁶); `option` is the
+    /// command line's flag or the team file's key.
+    #[error("{option} must be a positive number of seconds, got {seconds}")]
+    Timeout { option: &'static str, seconds: f64 },
+    #[error(
+        "--on-failure continue applies to agent processes: use --transport {}",
+        Transport::names_where(|c| c.failure_recovery, "or")
+    )]
+    NoFailureRecovery,
+    #[error("--max-iters must be at least 1")]
+    NoIterations,
+    #[error(
+        "--method hungarian is the centralized solver: it runs in this process, with --transport {}",
+        Transport::names_where(|c| c.execution == Execution::Lockstep, "or")
+    )]
+    CentralizedMethod,
+    #[error("the γ factor must be a positive finite number, got {0}")]
+    Gamma(f64),
+    #[error(
+        "--global-barrier needs the {} transport ({} have none)",
+        Transport::names_where(|c| c.global_barrier, "or"),
+        Transport::names_where(|c| !c.global_barrier, "and")
+    )]
+    BarrierNeedsAgents,
+    #[error(transparent)]
+    NotBuilt(#[from] ZenohNotBuilt),
+    #[error(
+        "--stop {stop} needs the whole team's state: it runs on the {} transport only (use --stop local or max-iters)",
+        Transport::names_where(|c| c.execution == Execution::Lockstep, "or")
+    )]
+    CentralStop { stop: &'static str },
+    #[error(
+        "--stop {stop} reads every robot's m×n matrix: it works with --method primal only (use --stop local, oracle or max-iters)"
+    )]
+    PrimalOnlyStop { stop: &'static str },
+    #[error("--trace needs --check: it follows the run against the centralized optimum")]
+    TraceNeedsCheck,
+}
+
+/// `seconds` as a timeout: a positive number of seconds below 10⁶ (`option` names the setting
+/// in the error).
+pub fn seconds(option: &'static str, seconds: f64) -> Result<Duration, ConfigError> {
+    if seconds > 0.0 && seconds.is_finite() && seconds < 1e6 {
+        Ok(Duration::from_secs_f64(seconds))
+    } else {
+        Err(ConfigError::Timeout { option, seconds })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_name_the_flags_and_the_transports_that_can() {
+        assert_eq!(
+            ConfigError::BarrierNeedsAgents.to_string(),
+            "--global-barrier needs the threads or ipc transport (sim, uds and zenoh have none)"
+        );
+        assert_eq!(
+            ConfigError::NoFailureRecovery.to_string(),
+            "--on-failure continue applies to agent processes: use --transport ipc"
+        );
+        assert_eq!(
+            ConfigError::Rho(-1.0).to_string(),
+            "--rho (ρ) must be auto or a positive number, got '-1'"
+        );
+        assert_eq!(
+            seconds("round_timeout", -1.0).unwrap_err().to_string(),
+            "round_timeout must be a positive number of seconds, got -1"
+        );
+    }
+}

@@ -1,0 +1,485 @@
+//! Validated settings: what a solve does ([`SolveOptions`]) and how a team runs
+//! ([`run::RunOptions`], shared by solves, latency probes and surveillance episodes). Both are
+//! built by a builder whose `build` refuses every combination no run could honour, for every
+//! caller (the command line only maps its flags onto the builder), with the errors of
+//! [`error::ConfigError`], whose messages name the command line's flags. Checks that depend
+//! on the problem (sizes, memory, the ρ rule's value) are the solve's.
+
+pub mod error;
+pub mod run;
+
+use crate::options::error::ConfigError;
+use crate::options::run::{RunOptions, RunOptionsBuilder};
+use crate::transport::{Execution, Transport};
+use crate::wait::WaitStrategy;
+use admm_ta_agents::method::Method;
+use admm_ta_agents::primal::ProjectionPath;
+use admm_ta_agents::ties::Perturbation;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// When the run ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum StopRule {
+    /// All robots agree on one near-integral assignment for some rounds (default 10).
+    Agreement,
+    /// All robots round to the same assignment and their optimality-certificate slacks
+    /// ([`admm_ta_agents::primal::PrimalAgent::certificate_slack`]) sum to at most `1e-9 ·` its cost scale: the
+    /// assignment is then provably optimal to that tolerance. Checked centrally (sim only).
+    Certified,
+    /// The same certificate, decentralized: each robot checks its own slack and agreement
+    /// with its neighbours, and a header protocol makes all robots stop at the same round
+    /// (see [`admm_ta_agents::local_stop`]); costs about a graph diameter of extra rounds.
+    /// Works on every transport (default).
+    #[default]
+    Local,
+    /// Run to the iteration limit.
+    MaxIters,
+    /// The paper's criterion, for experiments only: stop at the first round whose relaxed
+    /// objective (the robots' own columns) is within 0.1% of the centralized optimum. It
+    /// needs the optimum, which no robot has (sim only).
+    Oracle,
+}
+
+impl StopRule {
+    /// Rules that read the whole team's state, which only a lockstep run has in one place.
+    pub fn is_central(self) -> bool {
+        matches!(self, Self::Agreement | Self::Certified | Self::Oracle)
+    }
+
+    /// Rules that read every robot's `m × n` matrix: the primal method's payload.
+    pub fn is_primal_only(self) -> bool {
+        matches!(self, Self::Agreement | Self::Certified)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Agreement => "agreement",
+            Self::Certified => "certified",
+            Self::Local => "local",
+            Self::MaxIters => "max-iters",
+            Self::Oracle => "oracle",
+        }
+    }
+}
+
+/// What the team does when an agent fails.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OnFailure {
+    /// Stop every agent and report the failure (the default).
+    #[default]
+    Abort,
+    /// The survivors drop the failed robot and re-solve without it, if they still can
+    /// (connected graph, at least as many robots as tasks).
+    Continue,
+}
+
+/// Everything a solve needs besides the problem and the graph.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolveOptions {
+    run: RunOptions,
+    method: Method,
+    rho: Option<f64>,
+    adaptive_rho: bool,
+    gamma_factor: Option<f64>,
+    max_iters: usize,
+    stop: StopRule,
+    stop_rounds: usize,
+    seed: u64,
+    perturbation: Perturbation,
+    projection: ProjectionPath,
+    check: bool,
+    trace: bool,
+    on_failure: OnFailure,
+}
+
+impl Default for SolveOptions {
+    /// Primal ADMM with the default ρ rule and the decentralized stop, at most 5000 rounds,
+    /// on the lockstep simulation; agent processes honour the fault-injection test switch.
+    fn default() -> Self {
+        Self {
+            run: RunOptions::default().with_fault_injection(true),
+            method: Method::Primal,
+            rho: None,
+            adaptive_rho: false,
+            gamma_factor: None,
+            max_iters: 5000,
+            stop: StopRule::Local,
+            stop_rounds: 10,
+            seed: 0,
+            perturbation: Perturbation::Auto,
+            projection: ProjectionPath::Fast,
+            check: false,
+            trace: false,
+            on_failure: OnFailure::Abort,
+        }
+    }
+}
+
+impl SolveOptions {
+    /// A builder starting from [`SolveOptions::default`].
+    pub fn builder() -> SolveOptionsBuilder {
+        Self::default().to_builder()
+    }
+
+    /// A builder starting from these options.
+    pub fn to_builder(&self) -> SolveOptionsBuilder {
+        SolveOptionsBuilder {
+            run: self.run.to_builder(),
+            method: self.method,
+            rho: self.rho,
+            adaptive_rho: self.adaptive_rho,
+            gamma_factor: self.gamma_factor,
+            max_iters: self.max_iters,
+            stop: self.stop,
+            stop_rounds: self.stop_rounds,
+            seed: self.seed,
+            perturbation: self.perturbation,
+            projection: self.projection,
+            check: self.check,
+            trace: self.trace,
+            on_failure: self.on_failure,
+        }
+    }
+
+    /// How the team runs.
+    pub fn run(&self) -> &RunOptions {
+        &self.run
+    }
+
+    /// What carries the messages (`self.run().transport()`).
+    pub fn transport(&self) -> Transport {
+        self.run.transport()
+    }
+
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    /// ρ as given; `None`: the scale-free default of [`admm_ta_agents::rho::default_rho_for`].
+    pub fn rho(&self) -> Option<f64> {
+        self.rho
+    }
+
+    /// Anneal ρ by the schedule of [`admm_ta_agents::rho::RhoSchedule`] (every agent applies
+    /// it at the same round).
+    pub fn adaptive_rho(&self) -> bool {
+        self.adaptive_rho
+    }
+
+    /// `g` of the inexact dual's `γ = g (m+1)/(2dρ)`; `None`: the default.
+    pub fn gamma_factor(&self) -> Option<f64> {
+        self.gamma_factor
+    }
+
+    /// Round limit.
+    pub fn max_iters(&self) -> usize {
+        self.max_iters
+    }
+
+    pub fn stop(&self) -> StopRule {
+        self.stop
+    }
+
+    /// Rounds of agreement the `agreement` stop waits for.
+    pub fn stop_rounds(&self) -> usize {
+        self.stop_rounds
+    }
+
+    /// Seed of the tie-breaking perturbations.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    pub fn perturbation(&self) -> Perturbation {
+        self.perturbation
+    }
+
+    pub fn projection(&self) -> ProjectionPath {
+        self.projection
+    }
+
+    /// Compare with the centralized optimum and trace convergence.
+    pub fn check(&self) -> bool {
+        self.check
+    }
+
+    /// With `check` on a lockstep run: record every round's objective in
+    /// [`crate::solve::report::OracleCheck::trace`] (for convergence plots).
+    pub fn trace(&self) -> bool {
+        self.trace
+    }
+
+    /// What to do when an agent process fails.
+    pub fn on_failure(&self) -> OnFailure {
+        self.on_failure
+    }
+}
+
+/// Builds [`SolveOptions`]: the run's settings and the solve's own.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolveOptionsBuilder {
+    run: RunOptionsBuilder,
+    method: Method,
+    rho: Option<f64>,
+    adaptive_rho: bool,
+    gamma_factor: Option<f64>,
+    max_iters: usize,
+    stop: StopRule,
+    stop_rounds: usize,
+    seed: u64,
+    perturbation: Perturbation,
+    projection: ProjectionPath,
+    check: bool,
+    trace: bool,
+    on_failure: OnFailure,
+}
+
+impl SolveOptionsBuilder {
+    pub fn transport(mut self, transport: Transport) -> Self {
+        self.run = self.run.transport(transport);
+        self
+    }
+
+    pub fn wait(mut self, wait: WaitStrategy) -> Self {
+        self.run = self.run.wait(wait);
+        self
+    }
+
+    pub fn global_barrier(mut self, on: bool) -> Self {
+        self.run = self.run.global_barrier(on);
+        self
+    }
+
+    pub fn round_timeout(mut self, timeout: Duration) -> Self {
+        self.run = self.run.round_timeout(timeout);
+        self
+    }
+
+    pub fn round_timeout_secs(mut self, seconds: f64) -> Self {
+        self.run = self.run.round_timeout_secs(seconds);
+        self
+    }
+
+    pub fn startup_timeout(mut self, timeout: Duration) -> Self {
+        self.run = self.run.startup_timeout(timeout);
+        self
+    }
+
+    pub fn startup_timeout_secs(mut self, seconds: f64) -> Self {
+        self.run = self.run.startup_timeout_secs(seconds);
+        self
+    }
+
+    pub fn agent_program(mut self, program: impl Into<Option<PathBuf>>) -> Self {
+        self.run = self.run.agent_program(program);
+        self
+    }
+
+    pub fn fault_injection(mut self, on: bool) -> Self {
+        self.run = self.run.fault_injection(on);
+        self
+    }
+
+    pub fn warmup_rounds(mut self, rounds: u64) -> Self {
+        self.run = self.run.warmup_rounds(rounds);
+        self
+    }
+
+    pub fn method(mut self, method: Method) -> Self {
+        self.method = method;
+        self
+    }
+
+    /// `None`: the method's default rule.
+    pub fn rho(mut self, rho: Option<f64>) -> Self {
+        self.rho = rho;
+        self
+    }
+
+    pub fn adaptive_rho(mut self, on: bool) -> Self {
+        self.adaptive_rho = on;
+        self
+    }
+
+    /// `None`: the default factor.
+    pub fn gamma_factor(mut self, factor: Option<f64>) -> Self {
+        self.gamma_factor = factor;
+        self
+    }
+
+    pub fn max_iters(mut self, rounds: usize) -> Self {
+        self.max_iters = rounds;
+        self
+    }
+
+    pub fn stop(mut self, stop: StopRule) -> Self {
+        self.stop = stop;
+        self
+    }
+
+    pub fn stop_rounds(mut self, rounds: usize) -> Self {
+        self.stop_rounds = rounds;
+        self
+    }
+
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    pub fn perturbation(mut self, perturbation: Perturbation) -> Self {
+        self.perturbation = perturbation;
+        self
+    }
+
+    pub fn projection(mut self, projection: ProjectionPath) -> Self {
+        self.projection = projection;
+        self
+    }
+
+    pub fn check(mut self, on: bool) -> Self {
+        self.check = on;
+        self
+    }
+
+    pub fn trace(mut self, on: bool) -> Self {
+        self.trace = on;
+        self
+    }
+
+    pub fn on_failure(mut self, on_failure: OnFailure) -> Self {
+        self.on_failure = on_failure;
+        self
+    }
+
+    /// The options, or the first reason no solve could run them (in the order the command
+    /// line reports them): ρ or a timeout out of range, `--on-failure continue` on a
+    /// transport that cannot name the failed agent, no rounds, the centralized method off
+    /// the lockstep simulation, γ out of range, a global barrier the transport has not, a
+    /// transport this build lacks, a central stop rule off the lockstep simulation, a
+    /// primal-only stop rule with another method, a trace without a check.
+    pub fn build(self) -> Result<SolveOptions, ConfigError> {
+        if let Some(rho) = self.rho.filter(|r| !(*r > 0.0 && r.is_finite())) {
+            return Err(ConfigError::Rho(rho));
+        }
+        self.run.timeouts()?;
+        let capabilities = self.run.transport.capabilities();
+        if self.on_failure == OnFailure::Continue && !capabilities.failure_recovery {
+            return Err(ConfigError::NoFailureRecovery);
+        }
+        if self.max_iters == 0 {
+            return Err(ConfigError::NoIterations);
+        }
+        let lockstep = capabilities.execution == Execution::Lockstep;
+        if self.method == Method::Hungarian && !lockstep {
+            return Err(ConfigError::CentralizedMethod);
+        }
+        if let Some(gamma) = self.gamma_factor.filter(|g| !(*g > 0.0 && g.is_finite())) {
+            return Err(ConfigError::Gamma(gamma));
+        }
+        let run = self.run.build()?;
+        if self.stop.is_central() && !lockstep {
+            return Err(ConfigError::CentralStop {
+                stop: self.stop.name(),
+            });
+        }
+        if self.stop.is_primal_only() && self.method != Method::Primal {
+            return Err(ConfigError::PrimalOnlyStop {
+                stop: self.stop.name(),
+            });
+        }
+        if self.trace && !self.check {
+            return Err(ConfigError::TraceNeedsCheck);
+        }
+        Ok(SolveOptions {
+            run,
+            method: self.method,
+            rho: self.rho,
+            adaptive_rho: self.adaptive_rho,
+            gamma_factor: self.gamma_factor,
+            max_iters: self.max_iters,
+            stop: self.stop,
+            stop_rounds: self.stop_rounds,
+            seed: self.seed,
+            perturbation: self.perturbation,
+            projection: self.projection,
+            check: self.check,
+            trace: self.trace,
+            on_failure: self.on_failure,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_invalid_combinations_are_refused() {
+        assert_eq!(SolveOptions::builder().build(), Ok(SolveOptions::default()));
+        assert_eq!(RunOptions::builder().build(), Ok(RunOptions::default()));
+        let refused = |b: SolveOptionsBuilder| b.build().unwrap_err();
+        let b = SolveOptions::builder;
+        assert_eq!(refused(b().rho(Some(-1.0))), ConfigError::Rho(-1.0));
+        assert!(matches!(
+            refused(b().round_timeout_secs(f64::NAN)),
+            ConfigError::Timeout {
+                option: "--round-timeout",
+                ..
+            }
+        ));
+        assert_eq!(
+            refused(b().startup_timeout(Duration::ZERO)),
+            ConfigError::Timeout {
+                option: "--startup-timeout",
+                seconds: 0.0
+            }
+        );
+        assert_eq!(
+            refused(
+                b().transport(Transport::Uds)
+                    .on_failure(OnFailure::Continue)
+            ),
+            ConfigError::NoFailureRecovery
+        );
+        assert_eq!(refused(b().max_iters(0)), ConfigError::NoIterations);
+        assert_eq!(
+            refused(b().method(Method::Hungarian).transport(Transport::Threads)),
+            ConfigError::CentralizedMethod
+        );
+        assert_eq!(
+            refused(b().gamma_factor(Some(0.0))),
+            ConfigError::Gamma(0.0)
+        );
+        assert_eq!(
+            refused(b().global_barrier(true)),
+            ConfigError::BarrierNeedsAgents
+        );
+        assert_eq!(
+            refused(b().transport(Transport::Ipc).stop(StopRule::Oracle)),
+            ConfigError::CentralStop { stop: "oracle" }
+        );
+        assert_eq!(
+            refused(b().method(Method::Dual).stop(StopRule::Certified)),
+            ConfigError::PrimalOnlyStop { stop: "certified" }
+        );
+        assert_eq!(refused(b().trace(true)), ConfigError::TraceNeedsCheck);
+        assert_eq!(
+            b().transport(Transport::Zenoh).build().is_ok(),
+            cfg!(feature = "zenoh")
+        );
+        let ok = b()
+            .transport(Transport::Ipc)
+            .global_barrier(true)
+            .on_failure(OnFailure::Continue)
+            .round_timeout_secs(2.5)
+            .build()
+            .unwrap();
+        assert_eq!(ok.run().round_timeout(), Duration::from_millis(2500));
+        assert_eq!(ok.to_builder().build(), Ok(ok));
+    }
+}

@@ -1,0 +1,207 @@
+//! How a team runs: the transport and everything about running agents on it, shared by
+//! solves, latency probes and surveillance episodes.
+
+use crate::options::error::{ConfigError, seconds};
+use crate::transport::{Transport, ZenohNotBuilt};
+use crate::wait::WaitStrategy;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// How a team runs: the transport and everything about running agents on it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunOptions {
+    transport: Transport,
+    wait: WaitStrategy,
+    global_barrier: bool,
+    round_timeout: Duration,
+    startup_timeout: Duration,
+    agent_program: Option<PathBuf>,
+    fault_injection: bool,
+    warmup_rounds: u64,
+}
+
+impl Default for RunOptions {
+    /// The lockstep simulation, default waiting, 30 s per round, 60 s to start, no fault
+    /// injection.
+    fn default() -> Self {
+        Self {
+            transport: Transport::Sim,
+            wait: WaitStrategy::Auto,
+            global_barrier: false,
+            round_timeout: Duration::from_secs(30),
+            startup_timeout: Duration::from_secs(60),
+            agent_program: None,
+            fault_injection: false,
+            warmup_rounds: 0,
+        }
+    }
+}
+
+impl RunOptions {
+    /// A builder starting from [`RunOptions::default`].
+    pub fn builder() -> RunOptionsBuilder {
+        Self::default().to_builder()
+    }
+
+    /// These options with fault injection on or off.
+    pub(super) fn with_fault_injection(self, on: bool) -> Self {
+        Self {
+            fault_injection: on,
+            ..self
+        }
+    }
+
+    /// A builder starting from these options.
+    pub fn to_builder(&self) -> RunOptionsBuilder {
+        RunOptionsBuilder {
+            transport: self.transport,
+            wait: self.wait,
+            global_barrier: self.global_barrier,
+            round_timeout: self.round_timeout.as_secs_f64(),
+            startup_timeout: self.startup_timeout.as_secs_f64(),
+            agent_program: self.agent_program.clone(),
+            fault_injection: self.fault_injection,
+            warmup_rounds: self.warmup_rounds,
+        }
+    }
+
+    /// What carries the messages.
+    pub fn transport(&self) -> Transport {
+        self.transport
+    }
+
+    /// How agents wait for their neighbours (threads and processes).
+    pub fn wait(&self) -> WaitStrategy {
+        self.wait
+    }
+
+    /// A global barrier after every round (transports with that capability).
+    pub fn global_barrier(&self) -> bool {
+        self.global_barrier
+    }
+
+    /// Deadline of every wait for a neighbour or the barrier.
+    pub fn round_timeout(&self) -> Duration {
+        self.round_timeout
+    }
+
+    /// Deadline for all agent processes to start and connect.
+    pub fn startup_timeout(&self) -> Duration {
+        self.startup_timeout
+    }
+
+    /// The `admm-ta` binary agent processes are started from (process transports need one
+    /// to run a team; options for independently started agents have none).
+    pub fn agent_program(&self) -> Option<&Path> {
+        self.agent_program.as_deref()
+    }
+
+    /// Agent processes honour the `ADMM_TA_FAULT` test switch ([`crate::fault`]).
+    pub fn fault_injection(&self) -> bool {
+        self.fault_injection
+    }
+
+    /// Rounds run before latency and CPU usage are recorded (benchmarks).
+    pub fn warmup_rounds(&self) -> u64 {
+        self.warmup_rounds
+    }
+}
+
+/// Builds [`RunOptions`]; timeouts are kept as given until [`RunOptionsBuilder::build`]
+/// checks them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunOptionsBuilder {
+    pub(super) transport: Transport,
+    wait: WaitStrategy,
+    global_barrier: bool,
+    round_timeout: f64,
+    startup_timeout: f64,
+    agent_program: Option<PathBuf>,
+    fault_injection: bool,
+    warmup_rounds: u64,
+}
+
+impl RunOptionsBuilder {
+    pub fn transport(mut self, transport: Transport) -> Self {
+        self.transport = transport;
+        self
+    }
+
+    pub fn wait(mut self, wait: WaitStrategy) -> Self {
+        self.wait = wait;
+        self
+    }
+
+    pub fn global_barrier(mut self, on: bool) -> Self {
+        self.global_barrier = on;
+        self
+    }
+
+    pub fn round_timeout(self, timeout: Duration) -> Self {
+        self.round_timeout_secs(timeout.as_secs_f64())
+    }
+
+    /// The round timeout in seconds, checked by `build` (the command line's
+    /// `--round-timeout`).
+    pub fn round_timeout_secs(mut self, seconds: f64) -> Self {
+        self.round_timeout = seconds;
+        self
+    }
+
+    pub fn startup_timeout(self, timeout: Duration) -> Self {
+        self.startup_timeout_secs(timeout.as_secs_f64())
+    }
+
+    /// The start-up timeout in seconds, checked by `build` (`--startup-timeout`).
+    pub fn startup_timeout_secs(mut self, seconds: f64) -> Self {
+        self.startup_timeout = seconds;
+        self
+    }
+
+    pub fn agent_program(mut self, program: impl Into<Option<PathBuf>>) -> Self {
+        self.agent_program = program.into();
+        self
+    }
+
+    pub fn fault_injection(mut self, on: bool) -> Self {
+        self.fault_injection = on;
+        self
+    }
+
+    pub fn warmup_rounds(mut self, rounds: u64) -> Self {
+        self.warmup_rounds = rounds;
+        self
+    }
+
+    /// The timeouts, checked.
+    pub(super) fn timeouts(&self) -> Result<(Duration, Duration), ConfigError> {
+        Ok((
+            seconds("--round-timeout", self.round_timeout)?,
+            seconds("--startup-timeout", self.startup_timeout)?,
+        ))
+    }
+
+    /// The options, or why no transport could run them: a timeout that is not a positive
+    /// number of seconds, a global barrier the transport has not, a transport this build
+    /// does not carry.
+    pub fn build(self) -> Result<RunOptions, ConfigError> {
+        let (round_timeout, startup_timeout) = self.timeouts()?;
+        let capabilities = self.transport.capabilities();
+        if self.global_barrier && !capabilities.global_barrier {
+            return Err(ConfigError::BarrierNeedsAgents);
+        }
+        if !capabilities.built {
+            return Err(ZenohNotBuilt.into());
+        }
+        Ok(RunOptions {
+            transport: self.transport,
+            wait: self.wait,
+            global_barrier: self.global_barrier,
+            round_timeout,
+            startup_timeout,
+            agent_program: self.agent_program,
+            fault_injection: self.fault_injection,
+            warmup_rounds: self.warmup_rounds,
+        })
+    }
+}
