@@ -16,7 +16,9 @@
 use crate::liveness::process_alive;
 use crate::wait::CountingBarrier;
 use iceoryx2::prelude::*;
-use iceoryx2_bb_posix::shared_memory::{SharedMemory, SharedMemoryBuilder};
+use iceoryx2_bb_posix::shared_memory::{
+    SharedMemory, SharedMemoryBuilder, SharedMemoryCreationError,
+};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Bytes of the board: the global barrier's line, one line per agent (two arrival counters
@@ -33,6 +35,50 @@ pub fn arrivals_target(degree: usize, round: u64) -> u64 {
     degree as u64 * (round / 2 + 1)
 }
 
+/// A board that cannot be opened, created or joined.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum BoardError {
+    #[error("bad board name {name}")]
+    Name {
+        name: String,
+        #[source]
+        source: SemanticStringError,
+    },
+    #[error("cannot open the run's board {name}")]
+    Open {
+        name: String,
+        #[source]
+        source: SharedMemoryCreationError,
+    },
+    #[error("the run's board {name} is too small")]
+    TooSmall { name: String },
+    #[error("cannot create the run's board {name}")]
+    Create {
+        name: String,
+        #[source]
+        source: SharedMemoryCreationError,
+    },
+    /// An agent whose scenario does not match the running team's shape.
+    #[error(
+        "this agent's scenario is {agents} robots × {tasks} tasks (payload {payload_len}) but the running team is {agents} robots × {running_tasks} tasks (payload {running_payload_len})"
+    )]
+    Shape {
+        agents: usize,
+        tasks: usize,
+        payload_len: usize,
+        running_tasks: u64,
+        running_payload_len: u64,
+    },
+}
+
+/// `shm` as the name of a shared-memory segment.
+fn file_name(shm: &str) -> Result<FileName, BoardError> {
+    FileName::new(shm.as_bytes()).map_err(|source| BoardError::Name {
+        name: shm.to_string(),
+        source,
+    })
+}
+
 /// The run-wide shared memory of arrival counters, published rounds, the global barrier and
 /// the failure mark.
 pub struct Board {
@@ -47,14 +93,18 @@ impl Board {
     }
 
     /// Opens the board `shm` of a run of `agents` (created by the launcher).
-    pub fn open(shm: &str, agents: usize) -> Result<Self, String> {
-        let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
-        let memory = SharedMemoryBuilder::new(&name)
+    pub fn open(shm: &str, agents: usize) -> Result<Self, BoardError> {
+        let memory = SharedMemoryBuilder::new(&file_name(shm)?)
             .is_memory_locked(false)
             .open_existing(iceoryx2_bb_posix::access_mode::AccessMode::ReadWrite)
-            .map_err(|e| format!("cannot open the run's board {shm}: {e:?}"))?;
+            .map_err(|source| BoardError::Open {
+                name: shm.to_string(),
+                source,
+            })?;
         if memory.size() < board_size(agents) {
-            return Err(format!("the run's board {shm} is too small"));
+            return Err(BoardError::TooSmall {
+                name: shm.to_string(),
+            });
         }
         Ok(Self { memory, agents })
     }
@@ -67,7 +117,7 @@ impl Board {
         agents: usize,
         tasks: usize,
         payload_len: usize,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, BoardError> {
         Self::create_owned(shm, agents, tasks, payload_len, true)
     }
 
@@ -78,9 +128,8 @@ impl Board {
         tasks: usize,
         payload_len: usize,
         owned: bool,
-    ) -> Result<Self, String> {
-        let name = FileName::new(shm.as_bytes()).map_err(|e| format!("bad board name: {e:?}"))?;
-        let memory = SharedMemoryBuilder::new(&name)
+    ) -> Result<Self, BoardError> {
+        let memory = SharedMemoryBuilder::new(&file_name(shm)?)
             .is_memory_locked(false)
             .creation_mode(iceoryx2_bb_posix::creation_mode::CreationMode::PurgeAndCreate)
             .size(board_size(agents))
@@ -88,7 +137,10 @@ impl Board {
             .zero_memory(true)
             .has_ownership(owned)
             .create()
-            .map_err(|e| format!("{e:?}"))?;
+            .map_err(|source| BoardError::Create {
+                name: shm.to_string(),
+                source,
+            })?;
         let board = Self { memory, agents };
         let line = LINE * (agents + 1);
         board.word(line + 8).store(tasks as u64, Ordering::Relaxed);
@@ -113,7 +165,7 @@ impl Board {
         agents: usize,
         tasks: usize,
         payload_len: usize,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, BoardError> {
         // A dead team's board (nobody recorded on it alive) is taken over.
         if let Ok(board) = Self::open(shm, agents)
             && (0..agents).any(|i| board.member_alive(i))
@@ -123,7 +175,6 @@ impl Board {
         }
         // The last agent out removes it (with the team's other files), not its creator.
         Self::create_owned(shm, agents, tasks, payload_len, false)
-            .map_err(|e| format!("cannot create the team's board {shm}: {e}"))
     }
 
     /// Records agent `agent`'s process id (independently started teams).
@@ -175,17 +226,20 @@ impl Board {
     }
 
     /// Refuses an agent whose scenario does not match the running team's shape.
-    pub(crate) fn check_shape(&self, tasks: usize, payload_len: usize) -> Result<(), String> {
+    pub(crate) fn check_shape(&self, tasks: usize, payload_len: usize) -> Result<(), BoardError> {
         let line = LINE * (self.agents + 1);
         let running = (
             self.word(line + 8).load(Ordering::Relaxed),
             self.word(line + 16).load(Ordering::Acquire),
         );
         if running != (tasks as u64, payload_len as u64) {
-            return Err(format!(
-                "this agent's scenario is {} robots × {tasks} tasks (payload {payload_len}) but the running team is {} robots × {} tasks (payload {})",
-                self.agents, self.agents, running.0, running.1
-            ));
+            return Err(BoardError::Shape {
+                agents: self.agents,
+                tasks,
+                payload_len,
+                running_tasks: running.0,
+                running_payload_len: running.1,
+            });
         }
         Ok(())
     }

@@ -17,6 +17,7 @@
 //! is reported as its failure. There is no global barrier.
 
 use crate::board::Board;
+use crate::error_text::one_line;
 use crate::exchange::header::{
     RoundHeader, words_as_bytes as as_bytes, words_as_bytes_mut as as_bytes_mut,
 };
@@ -88,7 +89,7 @@ impl UdsExchange {
     /// `deadline`.
     pub fn connect(endpoint: &UdsEndpoint, deadline: Instant) -> Result<Self, String> {
         let i = endpoint.index;
-        let board = Board::open(&endpoint.board_shm, endpoint.agents)?;
+        let board = Board::open(&endpoint.board_shm, endpoint.agents).map_err(|e| one_line(&e))?;
         let own = socket_path(&endpoint.socket_dir, i);
         let _ = std::fs::remove_file(&own);
         let listener = UnixListener::bind(&own)

@@ -71,6 +71,10 @@ pub enum ExchangeError {
         neighbour: usize,
         got: u32,
     },
+    /// The transport itself failed (a service, a port, a socket, a session). `what` is the
+    /// cause as one line with its sources ([`crate::error_text::one_line`]): an exchange
+    /// error crosses threads and is compared (`Clone + PartialEq`), which the io and Zenoh
+    /// errors behind it are not, and iceoryx2 has a distinct error type per call.
     #[error("agent {agent}: {what}")]
     Transport { agent: usize, what: String },
     /// Another agent of the run failed first.

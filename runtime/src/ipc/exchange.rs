@@ -23,14 +23,15 @@
 //! holds at most two unread samples and borrows at most two; safe overflow is off, and a
 //! sample that does not reach every subscriber is an error, never a silently lost round.
 
-use crate::board::{Board, arrivals_target};
+use crate::board::{Board, BoardError, arrivals_target};
+use crate::error_text::one_line;
 use crate::exchange::header::{MessageFault, Placement, RoundHeader, check_message};
 use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::Fault;
 use crate::ipc::nodes::{node_name, scan_dead_agents};
 use crate::ipc::services::{
-    SUBSCRIBER_BUFFER, Svc, open_barrier_service, open_bridge_wake_service, open_round_service,
-    open_wake_service,
+    SUBSCRIBER_BUFFER, ServiceError, Svc, open_barrier_service, open_bridge_wake_service,
+    open_round_service, open_wake_service,
 };
 use crate::wait::{Arrival, WaitPolicy};
 use admm_ta_agents::agent::Inbox;
@@ -129,10 +130,11 @@ impl IpcExchange {
         let err = |what: String| transport(i, what);
         let t0 = Instant::now();
         // The run's board first: an agent of another team shape must not touch its services.
-        let board = Board::open(&endpoint.board_shm, endpoint.degrees.len()).map_err(err)?;
+        let board_err = |e: BoardError| err(one_line(&e));
+        let board = Board::open(&endpoint.board_shm, endpoint.degrees.len()).map_err(board_err)?;
         board
             .check_shape(endpoint.tasks, endpoint.payload_len)
-            .map_err(err)?;
+            .map_err(board_err)?;
         let name =
             NodeName::new(&node_name(i)).map_err(|e| err(format!("bad node name: {e:?}")))?;
         let node = NodeBuilder::new()
@@ -140,8 +142,11 @@ impl IpcExchange {
             .config(config)
             .create::<Svc>()
             .map_err(|e| err(format!("cannot create the iceoryx2 node: {e:?}")))?;
-        let round_of = |j: usize| open_round_service(&node, j, endpoint.degrees[j]).map_err(err);
-        let wake_of = |j: usize| open_wake_service(&node, j, endpoint.degrees[j]).map_err(err);
+        let service_err = |e: ServiceError| err(one_line(&e));
+        let round_of =
+            |j: usize| open_round_service(&node, j, endpoint.degrees[j]).map_err(service_err);
+        let wake_of =
+            |j: usize| open_wake_service(&node, j, endpoint.degrees[j]).map_err(service_err);
         // Listener before subscribers: a neighbour that sees our subscriber can wake us.
         let t_node = t0.elapsed();
         let own_wake = wake_of(i)?;
@@ -187,7 +192,7 @@ impl IpcExchange {
         let bridge = if endpoint.notify_bridge {
             Some(
                 open_bridge_wake_service(&node, endpoint.degrees.len())
-                    .map_err(err)?
+                    .map_err(service_err)?
                     .notifier_builder()
                     .create()
                     .map_err(|e| err(format!("cannot create the bridge's notifier: {e:?}")))?,
@@ -480,7 +485,7 @@ fn open_barrier(
     parties: usize,
     err: &dyn Fn(String) -> ExchangeError,
 ) -> Result<BarrierPorts, ExchangeError> {
-    let service = open_barrier_service(node, parties).map_err(err)?;
+    let service = open_barrier_service(node, parties).map_err(|e| err(one_line(&e)))?;
     Ok(BarrierPorts {
         listener: service
             .listener_builder()

@@ -3,6 +3,9 @@
 
 use crate::exchange::header::RoundHeader;
 use iceoryx2::prelude::*;
+use iceoryx2::service::builder::event::EventOpenOrCreateError;
+use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenOrCreateError;
+use iceoryx2::service::service_name::ServiceNameError;
 
 /// The iceoryx2 service flavour of every run (inter-process).
 pub(crate) type Svc = ipc::Service;
@@ -27,6 +30,29 @@ const BARRIER_SERVICE: &str = "admm-ta/barrier";
 /// neighbours on other hosts notify it after every publish.
 pub const BRIDGE_WAKE_SERVICE: &str = "admm-ta/bridge/wake";
 
+/// A service of the run that cannot be opened.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ServiceError {
+    #[error("bad service name {name}")]
+    Name {
+        name: String,
+        #[source]
+        source: ServiceNameError,
+    },
+    #[error("cannot open service {name}")]
+    PublishSubscribe {
+        name: String,
+        #[source]
+        source: PublishSubscribeOpenOrCreateError,
+    },
+    #[error("cannot open service {name}")]
+    Event {
+        name: String,
+        #[source]
+        source: EventOpenOrCreateError,
+    },
+}
+
 /// Opens (or creates) agent `j`'s round-message service from `node`; `degree` is `j`'s.
 /// Every participant opens it with these limits (iceoryx2 refuses mismatched ones).
 pub(crate) fn open_round_service<S: iceoryx2::service::Service>(
@@ -35,11 +61,14 @@ pub(crate) fn open_round_service<S: iceoryx2::service::Service>(
     degree: usize,
 ) -> Result<
     iceoryx2::service::port_factory::publish_subscribe::PortFactory<S, [f64], RoundHeader>,
-    String,
+    ServiceError,
 > {
-    let name =
-        ServiceName::new(&round_service(j)).map_err(|e| format!("bad service name: {e:?}"))?;
-    node.service_builder(&name)
+    let name = round_service(j);
+    let service = ServiceName::new(&name).map_err(|source| ServiceError::Name {
+        name: name.clone(),
+        source,
+    })?;
+    node.service_builder(&service)
         .publish_subscribe::<[f64]>()
         .user_header::<RoundHeader>()
         .max_publishers(1)
@@ -50,7 +79,29 @@ pub(crate) fn open_round_service<S: iceoryx2::service::Service>(
         .history_size(0)
         .enable_safe_overflow(false)
         .open_or_create()
-        .map_err(|e| format!("cannot open service {}: {e:?}", round_service(j)))
+        .map_err(|source| ServiceError::PublishSubscribe { name, source })
+}
+
+/// Opens (or creates) an event service `name` for `notifiers` notifiers, `listeners`
+/// listeners and `nodes` nodes.
+fn open_event_service<S: iceoryx2::service::Service>(
+    node: &Node<S>,
+    name: String,
+    listeners: usize,
+    notifiers: usize,
+    nodes: usize,
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, ServiceError> {
+    let service = ServiceName::new(&name).map_err(|source| ServiceError::Name {
+        name: name.clone(),
+        source,
+    })?;
+    node.service_builder(&service)
+        .event()
+        .max_listeners(listeners)
+        .max_notifiers(notifiers)
+        .max_nodes(nodes)
+        .open_or_create()
+        .map_err(|source| ServiceError::Event { name, source })
 }
 
 /// Opens (or creates) agent `j`'s wake-up event service from `node`; `degree` is `j`'s.
@@ -58,45 +109,28 @@ pub(crate) fn open_wake_service<S: iceoryx2::service::Service>(
     node: &Node<S>,
     j: usize,
     degree: usize,
-) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, String> {
-    let name =
-        ServiceName::new(&wake_service(j)).map_err(|e| format!("bad service name: {e:?}"))?;
-    node.service_builder(&name)
-        .event()
-        .max_listeners(1)
-        .max_notifiers(degree.max(1))
-        .max_nodes(degree + 1)
-        .open_or_create()
-        .map_err(|e| format!("cannot open service {}: {e:?}", wake_service(j)))
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, ServiceError> {
+    open_event_service(node, wake_service(j), 1, degree.max(1), degree + 1)
 }
 
 /// Opens (or creates) the bridge's wake-up service of a team of `agents`.
 pub(crate) fn open_bridge_wake_service<S: iceoryx2::service::Service>(
     node: &Node<S>,
     agents: usize,
-) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, String> {
-    let name =
-        ServiceName::new(BRIDGE_WAKE_SERVICE).map_err(|e| format!("bad service name: {e:?}"))?;
-    node.service_builder(&name)
-        .event()
-        .max_listeners(1)
-        .max_notifiers(agents.max(1))
-        .max_nodes(agents + 1)
-        .open_or_create()
-        .map_err(|e| format!("cannot open service {BRIDGE_WAKE_SERVICE}: {e:?}"))
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, ServiceError> {
+    open_event_service(
+        node,
+        BRIDGE_WAKE_SERVICE.into(),
+        1,
+        agents.max(1),
+        agents + 1,
+    )
 }
 
 /// Opens (or creates) the run's global-barrier event service for `parties` agents.
 pub(crate) fn open_barrier_service(
     node: &Node<Svc>,
     parties: usize,
-) -> Result<iceoryx2::service::port_factory::event::PortFactory<Svc>, String> {
-    let name = ServiceName::new(BARRIER_SERVICE).map_err(|e| format!("bad service name: {e:?}"))?;
-    node.service_builder(&name)
-        .event()
-        .max_listeners(parties)
-        .max_notifiers(parties)
-        .max_nodes(parties)
-        .open_or_create()
-        .map_err(|e| format!("cannot open the barrier service: {e:?}"))
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<Svc>, ServiceError> {
+    open_event_service(node, BARRIER_SERVICE.into(), parties, parties, parties)
 }

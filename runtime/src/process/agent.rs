@@ -5,6 +5,7 @@
 //! round loop and writes its outcome as `result-I.json` into the run directory. It always
 //! returns (never `process::exit`), so iceoryx2's `Drop`s release its shared memory.
 
+use crate::error_text::one_line;
 use crate::exchange::round_loop::{AgentOutcome, run_agent};
 use crate::process::connect::connect;
 use crate::process::scenario::{Scenario, ScenarioWorkload};
@@ -45,7 +46,7 @@ fn unix_ns() -> u128 {
 /// Runs agent `index` of run `run_id` (started by the launcher); errors are one line for
 /// the log.
 pub fn run(run_id: &str, index: usize, scenario_path: &Path) -> Result<(), String> {
-    let scenario = Scenario::read(scenario_path, run_id).map_err(|e| e.to_string())?;
+    let scenario = Scenario::read(scenario_path, run_id).map_err(|e| one_line(&e))?;
     let run_dir = scenario_path.parent().unwrap_or(Path::new("."));
     run_scenario(
         &scenario,

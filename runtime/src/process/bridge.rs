@@ -23,9 +23,12 @@
 //! run's failure key, and an announced one is marked on the local board.
 
 use crate::board::{Board, arrivals_target};
+use crate::error_text::one_line;
 use crate::exchange::header::{RoundHeader, words_as_bytes};
 use crate::ipc::nodes::run_config;
-use crate::ipc::services::{Svc, open_bridge_wake_service, open_round_service, open_wake_service};
+use crate::ipc::services::{
+    ServiceError, Svc, open_bridge_wake_service, open_round_service, open_wake_service,
+};
 use crate::process::member::{HostEntry, Membership, Team, member_scenario};
 use crate::process::scenario::Scenario;
 use crate::zenoh_net::links::ZenohLinks;
@@ -249,6 +252,7 @@ fn node(scenario: &Scenario, name: &str) -> Result<Node<Svc>, String> {
 
 fn board(scenario: &Scenario) -> Result<Board, String> {
     Board::open(&scenario.board_shm, scenario.robots)
+        .map_err(|e| format!("bridge: {}", one_line(&e)))
 }
 
 /// What the two forwarding threads own.
@@ -280,7 +284,7 @@ impl Forwarder {
 
     /// Local agents' messages out to Zenoh.
     fn forward_out(&self, deadline: Instant) -> Result<(), String> {
-        let text = |e: String| format!("bridge: {e}");
+        let text = |e: ServiceError| format!("bridge: {}", one_line(&e));
         // Every host (so every other bridge) subscribed to our agents before we let them
         // start: a host declares its token after its bridge's subscriptions.
         loop {
@@ -390,7 +394,7 @@ impl Forwarder {
         inbox: &Receiver<(usize, ZBytes)>,
         deadline: Instant,
     ) -> Result<(), String> {
-        let text = |e: String| format!("bridge: {e}");
+        let text = |e: ServiceError| format!("bridge: {}", one_line(&e));
         let node = node(&self.scenario, "bridge-in")?;
         let board = board(&self.scenario)?;
         let layout = &self.layout;

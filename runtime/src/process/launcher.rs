@@ -10,7 +10,7 @@
 //! is one line: who failed, how, at which round, and what happened to the others. Whatever
 //! happens, the run's namespace ([`RunNamespace`]) is removed when the launcher returns.
 
-use crate::board::Board;
+use crate::board::{Board, BoardError};
 use crate::exchange::round_loop::AgentOutcome;
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::process::agent::{AgentReport, log_path, result_path};
@@ -24,16 +24,17 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 /// Failures of a multi-process run.
 #[derive(Debug, thiserror::Error)]
 pub enum LaunchError {
-    #[error("cannot prepare the run directory: {0}")]
-    RunDirectory(std::io::Error),
-    #[error("cannot create the run's shared board: {0}")]
-    Board(String),
+    #[error("cannot prepare the run directory")]
+    RunDirectory(#[source] std::io::Error),
+    #[error("cannot create the run's shared board")]
+    Board(#[source] BoardError),
     #[error(transparent)]
     Support(#[from] SupportError),
-    #[error("cannot start agent process {index} ({program}): {source}")]
+    #[error("cannot start agent process {index} ({program})")]
     Spawn {
         index: usize,
         program: PathBuf,
+        #[source]
         source: std::io::Error,
     },
     #[error(
@@ -52,8 +53,18 @@ pub enum LaunchError {
         /// Dead iceoryx2 nodes removed by the dead-node cleanup.
         dead_nodes: usize,
     },
-    #[error("agent {index} exited without a readable result: {message}")]
-    MissingResult { index: usize, message: String },
+    #[error("agent {index} exited without a readable result")]
+    MissingResult {
+        index: usize,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("agent {index} left a malformed result")]
+    MalformedResult {
+        index: usize,
+        #[source]
+        source: serde_json::Error,
+    },
 }
 
 /// What a multi-process run produced.
@@ -296,10 +307,10 @@ pub fn launch(
     let mut connected = 0u128;
     for index in 0..scenario.robots {
         let path = result_path(&run_dir, index);
-        let report: AgentReport = std::fs::read_to_string(&path)
-            .map_err(|e| e.to_string())
-            .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()))
-            .map_err(|message| LaunchError::MissingResult { index, message })?;
+        let text = std::fs::read_to_string(&path)
+            .map_err(|source| LaunchError::MissingResult { index, source })?;
+        let report: AgentReport = serde_json::from_str(&text)
+            .map_err(|source| LaunchError::MalformedResult { index, source })?;
         connected = connected.max(report.connected_unix_ns);
         outcomes.push(report.outcome);
         episodes.push(report.episodes);

@@ -39,6 +39,7 @@
 //! ```
 
 use crate::board::Board;
+use crate::error_text::one_line;
 use crate::exchange::round_loop::{AgentStop, merge_outcomes};
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::latency::LatencySummary;
@@ -453,7 +454,8 @@ impl Membership {
             n,
             scenario.tasks,
             scenario.payload_len(),
-        )?;
+        )
+        .map_err(|e| one_line(&e))?;
         for &slot in slots {
             board.set_member_pid(slot, std::process::id());
         }

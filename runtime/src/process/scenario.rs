@@ -97,12 +97,12 @@ pub struct Scenario {
 /// A scenario that cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
-    #[error("cannot read scenario {path}: {source}")]
+    #[error("cannot read scenario {path}")]
     Read {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("scenario {path} is malformed: {source}")]
+    #[error("scenario {path} is malformed")]
     Parse {
         path: PathBuf,
         source: serde_json::Error,
