@@ -9,7 +9,7 @@
 
 mod common;
 
-use admm_ta_runtime::process::member::Team;
+use admm_ta_runtime::process::team_file::Team;
 use admm_ta_runtime::solve::report::SolveReport;
 use admm_ta_runtime::solve::solve;
 use admm_ta_runtime::transport::Transport;

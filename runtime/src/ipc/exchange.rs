@@ -22,6 +22,10 @@
 //! Buffers: a neighbour is at most one round ahead (neighbour barrier), so each subscriber
 //! holds at most two unread samples and borrows at most two; safe overflow is off, and a
 //! sample that does not reach every subscriber is an error, never a silently lost round.
+//!
+//! Size: one type, `IpcExchange` — its start-up rendezvous, its receive and send paths and
+//! its `Exchange` implementation all work on the same private ports, samples and board;
+//! split, they would have to expose them to each other.
 
 use crate::board::{Board, BoardError, arrivals_target};
 use crate::error_text::one_line;

@@ -21,6 +21,10 @@
 //! local agent while it is on the board, so every host sees the whole team come and go.
 //! Failures cross hosts both ways: a failure marked on the local board is announced on the
 //! run's failure key, and an announced one is marked on the local board.
+//!
+//! Size: one running bridge — its start-up and its two forwarding threads share the
+//! private `Forwarder` state and `Layout` (tested here); split, they would have to expose
+//! them to each other.
 
 use crate::board::{Board, arrivals_target};
 use crate::error_text::one_line;
@@ -29,8 +33,9 @@ use crate::ipc::nodes::run_config;
 use crate::ipc::services::{
     ServiceError, Svc, open_bridge_wake_service, open_round_service, open_wake_service,
 };
-use crate::process::member::{HostEntry, Membership, Team, member_scenario};
+use crate::process::member::{Membership, member_scenario};
 use crate::process::scenario::Scenario;
+use crate::process::team_file::{HostEntry, Team};
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::{announce_failure, missing_hosts, watch_failures};

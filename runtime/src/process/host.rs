@@ -9,7 +9,7 @@
 //! It waits for the first agents until the team's start-up deadline (naming those that never
 //! came) and for the run no longer than every round's deadline allows.
 
-use crate::process::member::Team;
+use crate::process::team_file::Team;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::watch_failures;

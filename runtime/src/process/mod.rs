@@ -6,7 +6,8 @@
 //! * [`connect`]: the one place that maps a process transport to its exchange;
 //! * [`scenario`]: the file the launcher writes for its agents;
 //! * [`namespace`]: a run's private iceoryx2 prefix and directory, and their cleanup;
-//! * [`member`]: agents started independently from a team file;
+//! * [`team_file`]: the team file of independently started agents, and what they derive from it;
+//! * [`member`]: agents started independently from a team file (joining, leaving, collecting);
 //! * `host` and `bridge` (feature `zenoh`): one machine of a multi-host team.
 
 pub mod agent;
@@ -15,6 +16,7 @@ pub mod launcher;
 pub mod member;
 pub mod namespace;
 pub mod scenario;
+pub mod team_file;
 
 #[cfg(feature = "zenoh")]
 pub mod bridge;

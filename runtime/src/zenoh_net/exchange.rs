@@ -22,6 +22,10 @@
 //!   its next wait with an error naming that agent.
 //!
 //! There is no global barrier: use `ipc` or `threads` for lockstep benchmarks.
+//!
+//! Size: one type, `ZenohExchange` — its start-up, the state Zenoh's callbacks fill, its
+//! resends and its `Exchange` implementation share the same private slots and session;
+//! split, they would have to expose them to each other.
 
 use crate::exchange::header::{RoundHeader, words_as_bytes, words_as_bytes_mut};
 use crate::exchange::{Exchange, ExchangeError};

@@ -1,0 +1,338 @@
+//! The team file of agents started independently (`admm-ta agent --team FILE --id I`, see
+//! [`crate::process::member`]): its format, its checks, and what every agent derives from it
+//! alike — the problem, the graph, the settings, the hosts of a team across machines.
+//!
+//! ```toml
+//! run = "demo"              # letters, digits, dashes: namespaces the shared memory
+//! robots = 10
+//! costs = "costs.csv"       # a CSV (relative to this file), or "random" with tasks and seed
+//! topology = "ring"         # complete | chain | ring | star | grid | random:P | geometric:R | FILE.toml
+//! method = "primal"
+//! results = "results"       # each agent writes result-<id>.json here
+//! startup_timeout = 30.0    # seconds to wait for the neighbours
+//! ```
+//!
+//! A team across several machines names its hosts and how they talk (see
+//! [`crate::zenoh_net`]): `transport = "zenoh"` (every agent a Zenoh peer of its host's
+//! router) or `"mixed"` (iceoryx2 among the agents of a host, Zenoh between hosts through
+//! each host's bridge). Every host runs `admm-ta host --team FILE --name NAME` next to its
+//! agents (needs a build with `--features zenoh`):
+//!
+//! ```toml
+//! transport = "zenoh"
+//! [[hosts]]
+//! name = "alpha"
+//! agents = [0, 1, 2, 3, 4]
+//! endpoint = "tcp/192.168.1.10:7447"   # where alpha's router listens
+//! [[hosts]]
+//! name = "beta"
+//! agents = [5, 6, 7, 8, 9]
+//! endpoint = "tcp/192.168.1.11:7447"
+//! ```
+
+use crate::options::error::{ConfigError, seconds};
+use crate::options::{SolveOptions, StopRule};
+use crate::process::namespace::RunNamespace;
+use crate::transport::Transport;
+use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
+use admm_ta_agents::method::Method;
+use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_topologies::{Graph, TopologySpec, file as topology_file};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The team file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TeamFile {
+    pub run: String,
+    pub robots: usize,
+    /// A cost CSV (one row per robot), or `random` (uniform [0, 1) from `seed`, `tasks` columns).
+    pub costs: String,
+    #[serde(default)]
+    pub tasks: Option<usize>,
+    #[serde(default)]
+    pub seed: u64,
+    #[serde(default = "complete")]
+    pub topology: String,
+    #[serde(default)]
+    pub method: Method,
+    #[serde(default = "results")]
+    pub results: PathBuf,
+    #[serde(default = "sixty")]
+    pub startup_timeout: f64,
+    #[serde(default = "thirty")]
+    pub round_timeout: f64,
+    #[serde(default = "five_thousand")]
+    pub max_iters: usize,
+    #[serde(default)]
+    pub adaptive_rho: bool,
+    /// How the team is deployed and what carries its messages.
+    #[serde(default)]
+    pub transport: Deployment,
+    /// The machines of a zenoh or mixed team.
+    #[serde(default)]
+    pub hosts: Vec<HostEntry>,
+}
+
+/// How an independently started team is deployed: on one machine or across several, and
+/// what carries its messages (a team file's `transport` key).
+///
+/// It is not a [`Transport`]: `mixed` is two transports at once (iceoryx2 among the agents of
+/// a host, Zenoh between hosts through each host's bridge), and a deployment decides more
+/// than an agent's exchange — whether the team has hosts, a shared board per host, bridges.
+/// [`Deployment::agent_transport`] is the exchange each agent runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Deployment {
+    /// Every agent on this machine, iceoryx2 zero-copy (`iceoryx2`, or `ipc` as on the
+    /// command line).
+    #[default]
+    #[serde(alias = "ipc")]
+    Iceoryx2,
+    /// Every agent a Zenoh peer of its host's router.
+    Zenoh,
+    /// iceoryx2 among the agents of a host; the host's bridge carries what crosses hosts.
+    Mixed,
+}
+
+impl Deployment {
+    /// The transport every agent's exchange runs.
+    pub fn agent_transport(self) -> Transport {
+        match self {
+            Self::Iceoryx2 | Self::Mixed => Transport::Ipc,
+            Self::Zenoh => Transport::Zenoh,
+        }
+    }
+
+    /// The team spans machines, named by its `[[hosts]]`.
+    pub fn across_hosts(self) -> bool {
+        self != Self::Iceoryx2
+    }
+
+    /// The agents of a host share a board in shared memory (iceoryx2 and mixed teams); a
+    /// Zenoh team's presence, failures and cleanup travel on Zenoh instead.
+    pub fn host_board(self) -> bool {
+        self != Self::Zenoh
+    }
+
+    /// Each host runs a bridge between its agents' iceoryx2 services and the other hosts.
+    pub fn bridged(self) -> bool {
+        self == Self::Mixed
+    }
+}
+
+/// One machine of a multi-host team.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HostEntry {
+    /// Letters, digits and dashes (`admm-ta host --name NAME`).
+    pub name: String,
+    /// The robots that run on it.
+    pub agents: Vec<usize>,
+    /// Where its Zenoh router listens, `tcp/ADDRESS:PORT`, reachable from the other hosts.
+    pub endpoint: String,
+}
+
+fn complete() -> String {
+    "complete".into()
+}
+fn results() -> PathBuf {
+    "results".into()
+}
+fn sixty() -> f64 {
+    60.0
+}
+fn thirty() -> f64 {
+    30.0
+}
+fn five_thousand() -> usize {
+    5000
+}
+
+/// A team file read with the directory its relative paths start from.
+#[derive(Debug, Clone)]
+pub struct Team {
+    pub file: TeamFile,
+    pub base: PathBuf,
+}
+
+impl Team {
+    pub fn read(path: &Path) -> Result<Self, String> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read team file {}: {e}", path.display()))?;
+        let file: TeamFile = toml::from_str(&text)
+            .map_err(|e| format!("team file {}: {}", path.display(), e.message()))?;
+        let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+        RunNamespace::check_team_name(&file.run)?;
+        seconds("startup_timeout", file.startup_timeout).map_err(|e| e.to_string())?;
+        seconds("round_timeout", file.round_timeout).map_err(|e| e.to_string())?;
+        check_hosts(&file)?;
+        Ok(Self { file, base })
+    }
+
+    /// The host agent `id` runs on (zenoh and mixed teams).
+    pub fn host_of(&self, id: usize) -> Option<&HostEntry> {
+        self.file.hosts.iter().find(|h| h.agents.contains(&id))
+    }
+
+    /// The host called `name`.
+    pub fn host(&self, name: &str) -> Result<&HostEntry, String> {
+        self.file
+            .hosts
+            .iter()
+            .find(|h| h.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = self.file.hosts.iter().map(|h| h.name.as_str()).collect();
+                format!("the team file has no host '{name}' (hosts: {names:?})")
+            })
+    }
+
+    /// The Zenoh links of an agent on `host` (or of its bridge): the host's router.
+    pub fn zenoh_links(&self, host: &HostEntry) -> ZenohLinks {
+        ZenohLinks {
+            key_prefix: format!("admm-ta/team/{}", self.file.run),
+            connect: vec![host.endpoint.clone()],
+            hosts: self.file.hosts.iter().map(|h| h.name.clone()).collect(),
+        }
+    }
+
+    fn path(&self, p: &Path) -> PathBuf {
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.base.join(p)
+        }
+    }
+
+    /// Where the agents write their results.
+    pub fn results_dir(&self) -> PathBuf {
+        self.path(&self.file.results)
+    }
+
+    /// The problem and graph every agent derives from the file.
+    pub fn problem_and_graph(&self) -> Result<(TaskAssignmentProblem, Graph), String> {
+        let f = &self.file;
+        let costs = if f.costs == "random" {
+            let tasks = f
+                .tasks
+                .ok_or("costs = \"random\" needs tasks = M in the team file")?;
+            CostMatrix::uniform(f.robots, tasks, f.seed).map_err(|e| e.to_string())?
+        } else {
+            let path = self.path(Path::new(&f.costs));
+            CostMatrix::read_csv(&path).map_err(|e| format!("{}: {e}", path.display()))?
+        };
+        if costs.robots() != f.robots {
+            return Err(format!(
+                "the team file says {} robots but the costs have {} rows",
+                f.robots,
+                costs.robots()
+            ));
+        }
+        let problem =
+            TaskAssignmentProblem::new(costs, CaseChoice::Auto).map_err(|e| e.to_string())?;
+        let graph = if f.topology.ends_with(".toml") {
+            let path = self.path(Path::new(&f.topology));
+            let graph = topology_file::read(&path).map_err(|e| e.to_string())?;
+            if graph.robots() != f.robots {
+                return Err(format!(
+                    "topology {} has {} robots, the team {}",
+                    path.display(),
+                    graph.robots(),
+                    f.robots
+                ));
+            }
+            graph
+        } else {
+            f.topology
+                .parse::<TopologySpec>()
+                .and_then(|t| t.build(f.robots, f.seed))
+                .map_err(|e| format!("topology '{}': {e}", f.topology))?
+        };
+        Ok((problem, graph))
+    }
+
+    /// The settings every agent runs with, on its deployment's transport (a test may run
+    /// the same problem on another).
+    pub fn solve_options(&self) -> Result<SolveOptions, ConfigError> {
+        let f = &self.file;
+        SolveOptions::builder()
+            .method(f.method)
+            .transport(f.transport.agent_transport())
+            .adaptive_rho(f.adaptive_rho)
+            .max_iters(f.max_iters)
+            .stop(StopRule::Local)
+            .seed(f.seed)
+            .round_timeout(seconds("round_timeout", f.round_timeout)?)
+            .startup_timeout(seconds("startup_timeout", f.startup_timeout)?)
+            .build()
+    }
+}
+
+/// Checks the hosts of a team file: a zenoh or mixed team puts every robot on exactly one
+/// named host with a distinct TCP endpoint; an iceoryx2 team has no hosts.
+fn check_hosts(file: &TeamFile) -> Result<(), String> {
+    if !file.transport.across_hosts() {
+        if !file.hosts.is_empty() {
+            return Err(
+                "[[hosts]] are for teams across machines: add transport = \"zenoh\" or \"mixed\""
+                    .into(),
+            );
+        }
+        return Ok(());
+    }
+    if file.hosts.is_empty() {
+        return Err(
+            "a zenoh or mixed team needs [[hosts]] entries (name, agents, endpoint)".into(),
+        );
+    }
+    let mut host_of = vec![None; file.robots];
+    for (h, host) in file.hosts.iter().enumerate() {
+        if RunNamespace::check_team_name(&host.name).is_err() {
+            return Err(format!(
+                "host name '{}': use 1 to 40 letters, digits and dashes",
+                host.name
+            ));
+        }
+        check_endpoint(&host.endpoint).map_err(|e| format!("host '{}': {e}", host.name))?;
+        if let Some(other) = file.hosts[..h].iter().find(|o| o.name == host.name) {
+            return Err(format!("two hosts are called '{}'", other.name));
+        }
+        if let Some(other) = file.hosts[..h].iter().find(|o| o.endpoint == host.endpoint) {
+            return Err(format!(
+                "hosts '{}' and '{}' have the same endpoint {}",
+                other.name, host.name, host.endpoint
+            ));
+        }
+        for &a in &host.agents {
+            let slot = host_of.get_mut(a).ok_or_else(|| {
+                format!(
+                    "host '{}' lists robot {a}, but the team has {} robots (0..{})",
+                    host.name, file.robots, file.robots
+                )
+            })?;
+            if let Some(other) = slot.replace(h) {
+                return Err(format!(
+                    "robot {a} is on two hosts: '{}' and '{}'",
+                    file.hosts[other].name, host.name
+                ));
+            }
+        }
+    }
+    if file.transport.bridged()
+        && let Some(host) = file
+            .hosts
+            .iter()
+            .find(|h| file.run.len() + 1 + h.name.len() > 40)
+    {
+        return Err(format!(
+            "a mixed team's run name and host name together must fit 40 characters ('{}-{}' does not): each host's shared memory is named after both",
+            file.run, host.name
+        ));
+    }
+    let homeless: Vec<usize> = (0..file.robots).filter(|&a| host_of[a].is_none()).collect();
+    if !homeless.is_empty() {
+        return Err(format!("robot(s) {homeless:?} are on no host"));
+    }
+    Ok(())
+}

@@ -1,0 +1,444 @@
+//! The runtime's layout rules, checked on its sources (`runtime/src`) at test time:
+//!
+//! (a) no import cycle between its files: a file is a module (`mod.rs` stands for its
+//!     folder), and a module depends on every module it names by a `crate::…` path — in
+//!     `use` trees such as `use crate::{a, b::{c, d}}`, in paths written inline, and under
+//!     `#[cfg(…)]` as well (both builds count). Comments (doc links included) and string
+//!     literals are not code and do not count. A path names the longest module it starts
+//!     with (`crate::ipc::exchange::IpcExchange` names `ipc::exchange`);
+//! (b) no transport module (`sim`, `threads`, `ipc`, `uds`, `zenoh_net`, each with its
+//!     submodules) names another transport: what several of them share sits below them;
+//! (c) no file above 500 lines unless its module doc has a line starting with `//! Size:`
+//!     that says why.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// The transports: none may name another.
+const TRANSPORTS: [&str; 5] = ["sim", "threads", "ipc", "uds", "zenoh_net"];
+
+/// Longest file without a stated reason.
+const MAX_LINES: usize = 500;
+
+/// One source file of the runtime.
+struct SourceFile {
+    path: PathBuf,
+    /// `crate` for `lib.rs`, else the module path, e.g. `ipc::exchange`.
+    module: String,
+    text: String,
+}
+
+fn sources() -> Vec<SourceFile> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    collect(&root, &root, &mut files);
+    assert!(files.len() > 10, "found only {} files", files.len());
+    files
+}
+
+fn collect(root: &Path, dir: &Path, files: &mut Vec<SourceFile>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            collect(root, &path, files);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            let relative = path.strip_prefix(root).unwrap().with_extension("");
+            let mut parts: Vec<String> = relative
+                .components()
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect();
+            if parts.last().is_some_and(|p| p == "mod") {
+                parts.pop();
+            }
+            let module = if parts == ["lib"] {
+                "crate".to_string()
+            } else {
+                parts.join("::")
+            };
+            let text = std::fs::read_to_string(&path).unwrap();
+            files.push(SourceFile { path, module, text });
+        }
+    }
+}
+
+/// `source` with comments, string literals and character literals blanked out (replaced by
+/// spaces, newlines kept), so that only code is left.
+fn code_only(source: &str) -> String {
+    let chars: Vec<char> = source.chars().collect();
+    let mut out = String::with_capacity(source.len());
+    let blank = |c: char| if c == '\n' { '\n' } else { ' ' };
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        let next = chars.get(i + 1).copied();
+        if c == '/' && next == Some('/') {
+            while i < chars.len() && chars[i] != '\n' {
+                out.push(' ');
+                i += 1;
+            }
+        } else if c == '/' && next == Some('*') {
+            // Block comments nest in Rust.
+            let mut depth = 0;
+            while i < chars.len() {
+                if chars[i] == '/' && chars.get(i + 1) == Some(&'*') {
+                    depth += 1;
+                    out.push_str("  ");
+                    i += 2;
+                } else if chars[i] == '*' && chars.get(i + 1) == Some(&'/') {
+                    depth -= 1;
+                    out.push_str("  ");
+                    i += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    out.push(blank(chars[i]));
+                    i += 1;
+                }
+            }
+        } else if let Some(hashes) = raw_string_start(&chars, i) {
+            // r"…", r#"…"#, br"…": ends at a quote followed by as many hashes.
+            let open = chars[i..].iter().position(|&c| c == '"').unwrap() + i;
+            let closing: Vec<char> = std::iter::once('"')
+                .chain(std::iter::repeat_n('#', hashes))
+                .collect();
+            let mut j = open + 1;
+            while j < chars.len() && !chars[j..].starts_with(&closing) {
+                j += 1;
+            }
+            let end = (j + closing.len()).min(chars.len());
+            out.extend(chars[i..end].iter().map(|&c| blank(c)));
+            i = end;
+        } else if c == '"' {
+            out.push(' ');
+            i += 1;
+            while i < chars.len() && chars[i] != '"' {
+                let skip = if chars[i] == '\\' { 2 } else { 1 };
+                for k in 0..skip {
+                    if let Some(&c) = chars.get(i + k) {
+                        out.push(blank(c));
+                    }
+                }
+                i += skip;
+            }
+            out.push(' ');
+            i += 1;
+        } else if c == '\'' && next == Some('\\') {
+            // An escaped character literal: '\n', '\'', '\u{…}'.
+            let end = chars[i + 2..]
+                .iter()
+                .position(|&c| c == '\'')
+                .map_or(chars.len(), |p| i + 2 + p + 1);
+            out.extend(std::iter::repeat_n(' ', end - i));
+            i = end;
+        } else if c == '\'' && chars.get(i + 2) == Some(&'\'') {
+            // A one-character literal ('a'); a lifetime ('a) has no closing quote.
+            out.push_str("   ");
+            i += 3;
+        } else {
+            out.push(c);
+            i += 1;
+        }
+    }
+    out
+}
+
+/// The number of `#`s of a raw string literal starting at `i`, if one does.
+fn raw_string_start(chars: &[char], i: usize) -> Option<usize> {
+    let before = i.checked_sub(1).map(|p| chars[p]);
+    if before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
+        return None;
+    }
+    let mut j = i;
+    if chars.get(j) == Some(&'b') {
+        j += 1;
+    }
+    if chars.get(j) != Some(&'r') {
+        return None;
+    }
+    j += 1;
+    let hashes = chars[j..].iter().take_while(|&&c| c == '#').count();
+    (chars.get(j + hashes) == Some(&'"')).then_some(hashes)
+}
+
+/// Every path named after `crate::` in `code` (already stripped by [`code_only`]), as its
+/// segments; `use crate::{a, b::{c, d}}` gives `a`, `b::c` and `b::d`.
+fn crate_paths(code: &str) -> Vec<Vec<String>> {
+    let chars: Vec<char> = code.chars().collect();
+    let mut paths = Vec::new();
+    let mut i = 0;
+    while let Some(found) = find(&chars, i, "crate") {
+        i = found + "crate".len();
+        let before = found.checked_sub(1).map(|p| chars[p]);
+        if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == '$') {
+            continue;
+        }
+        let mut j = skip_space(&chars, i);
+        if !chars[j..].starts_with(&[':', ':']) {
+            continue;
+        }
+        j += 2;
+        parse_tree(&chars, j, &mut Vec::new(), &mut paths);
+    }
+    paths
+}
+
+fn find(chars: &[char], from: usize, word: &str) -> Option<usize> {
+    let word: Vec<char> = word.chars().collect();
+    (from..chars.len().saturating_sub(word.len() - 1)).find(|&i| chars[i..].starts_with(&word))
+}
+
+fn skip_space(chars: &[char], mut i: usize) -> usize {
+    while i < chars.len() && chars[i].is_whitespace() {
+        i += 1;
+    }
+    i
+}
+
+fn identifier(chars: &[char], i: usize) -> Option<(String, usize)> {
+    let start = chars
+        .get(i)
+        .filter(|c| c.is_alphabetic() || **c == '_')
+        .map(|_| i)?;
+    let mut end = start;
+    while end < chars.len() && (chars[end].is_alphanumeric() || chars[end] == '_') {
+        end += 1;
+    }
+    Some((chars[start..end].iter().collect(), end))
+}
+
+/// Parses a use tree (or an inline path) at `i` below `prefix`; pushes every complete path.
+/// Returns the position after the tree.
+fn parse_tree(
+    chars: &[char],
+    i: usize,
+    prefix: &mut Vec<String>,
+    paths: &mut Vec<Vec<String>>,
+) -> usize {
+    let mut i = skip_space(chars, i);
+    match chars.get(i) {
+        Some('{') => {
+            i += 1;
+            loop {
+                i = skip_space(chars, i);
+                match chars.get(i) {
+                    Some('}') => return i + 1,
+                    Some(',') => i += 1,
+                    None => return i,
+                    Some(_) => {
+                        let before = i;
+                        i = parse_tree(chars, i, &mut prefix.clone(), paths);
+                        if i == before {
+                            // Not a tree: skip the character rather than loop.
+                            i += 1;
+                        }
+                    }
+                }
+            }
+        }
+        Some('*') => {
+            paths.push(prefix.clone());
+            i + 1
+        }
+        _ => match identifier(chars, i) {
+            Some((name, end)) => {
+                if name != "self" {
+                    prefix.push(name);
+                }
+                let after = skip_space(chars, end);
+                let nested = chars[after..].starts_with(&[':', ':'])
+                    && matches!(
+                        chars.get(skip_space(chars, after + 2)),
+                        Some(c) if c.is_alphabetic() || *c == '_' || *c == '{' || *c == '*'
+                    );
+                if nested {
+                    parse_tree(chars, after + 2, prefix, paths)
+                } else {
+                    paths.push(prefix.clone());
+                    // A rename (`a as b`) names nothing more.
+                    match identifier(chars, after) {
+                        Some((word, end)) if word == "as" => {
+                            identifier(chars, skip_space(chars, end)).map_or(end, |(_, end)| end)
+                        }
+                        _ => end,
+                    }
+                }
+            }
+            None => {
+                if !prefix.is_empty() {
+                    paths.push(prefix.clone());
+                }
+                i
+            }
+        },
+    }
+}
+
+/// The module a path names: its longest prefix that is a module of `modules` (the crate
+/// root if none is).
+fn target(path: &[String], modules: &BTreeSet<String>) -> String {
+    (1..=path.len())
+        .rev()
+        .map(|k| path[..k].join("::"))
+        .find(|m| modules.contains(m))
+        .unwrap_or_else(|| "crate".to_string())
+}
+
+/// Module → the modules it names (not itself).
+fn dependencies(files: &[SourceFile]) -> BTreeMap<String, BTreeSet<String>> {
+    let modules: BTreeSet<String> = files.iter().map(|f| f.module.clone()).collect();
+    files
+        .iter()
+        .map(|f| {
+            let deps = crate_paths(&code_only(&f.text))
+                .iter()
+                .map(|p| target(p, &modules))
+                .filter(|t| *t != f.module)
+                .collect();
+            (f.module.clone(), deps)
+        })
+        .collect()
+}
+
+/// A cycle of `graph`, if it has one, as the modules along it (the first repeated last).
+fn find_cycle(graph: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
+    #[derive(Clone, Copy, PartialEq)]
+    enum Mark {
+        Unseen,
+        OnPath,
+        Done,
+    }
+    fn visit(
+        node: &str,
+        graph: &BTreeMap<String, BTreeSet<String>>,
+        marks: &mut BTreeMap<String, Mark>,
+        path: &mut Vec<String>,
+    ) -> Option<Vec<String>> {
+        marks.insert(node.to_string(), Mark::OnPath);
+        path.push(node.to_string());
+        for next in graph.get(node).into_iter().flatten() {
+            match marks.get(next).copied().unwrap_or(Mark::Unseen) {
+                Mark::OnPath => {
+                    let start = path.iter().position(|m| m == next).unwrap();
+                    let mut cycle = path[start..].to_vec();
+                    cycle.push(next.clone());
+                    return Some(cycle);
+                }
+                Mark::Unseen => {
+                    if let Some(cycle) = visit(next, graph, marks, path) {
+                        return Some(cycle);
+                    }
+                }
+                Mark::Done => {}
+            }
+        }
+        path.pop();
+        marks.insert(node.to_string(), Mark::Done);
+        None
+    }
+    let mut marks = BTreeMap::new();
+    for node in graph.keys() {
+        if marks.get(node).copied().unwrap_or(Mark::Unseen) == Mark::Unseen
+            && let Some(cycle) = visit(node, graph, &mut marks, &mut Vec::new())
+        {
+            return Some(cycle);
+        }
+    }
+    None
+}
+
+/// The transport a module belongs to, if any.
+fn transport_of(module: &str) -> Option<&'static str> {
+    let top = module.split("::").next().unwrap_or(module);
+    TRANSPORTS.into_iter().find(|t| *t == top)
+}
+
+#[test]
+fn no_import_cycle_between_runtime_files() {
+    let graph = dependencies(&sources());
+    if let Some(cycle) = find_cycle(&graph) {
+        panic!("import cycle: {}", cycle.join(" -> "));
+    }
+}
+
+#[test]
+fn no_transport_names_another() {
+    let mut crossings = Vec::new();
+    for (module, deps) in dependencies(&sources()) {
+        let Some(own) = transport_of(&module) else {
+            continue;
+        };
+        for dep in deps {
+            if transport_of(&dep).is_some_and(|other| other != own) {
+                crossings.push(format!("{module} -> {dep}"));
+            }
+        }
+    }
+    assert!(
+        crossings.is_empty(),
+        "transports naming another transport: {crossings:?}"
+    );
+}
+
+#[test]
+fn long_files_say_why() {
+    let mut unexplained = Vec::new();
+    for file in sources() {
+        let lines = file.text.lines().count();
+        let reason = file
+            .text
+            .lines()
+            .take_while(|l| l.starts_with("//!") || l.trim().is_empty())
+            .any(|l| l.starts_with("//! Size:"));
+        if lines > MAX_LINES && !reason {
+            unexplained.push(format!("{} ({lines} lines)", file.path.display()));
+        }
+    }
+    assert!(
+        unexplained.is_empty(),
+        "files above {MAX_LINES} lines without a `//! Size:` line in their module doc: {unexplained:?}"
+    );
+}
+
+#[test]
+fn the_parser_reads_nested_use_trees_and_skips_comments_and_strings() {
+    let code = code_only(
+        r##"
+        use crate::{a, b::{c, d::*}, self as me};
+        #[cfg(feature = "zenoh")]
+        use crate::e::f::G;
+        // use crate::commented::Out;
+        /* use crate::block /* nested */ crate::still_comment */
+        let s = "crate::in_a_string";
+        let r = r#"crate::in_a_raw "string""#;
+        let c = '"'; let l: &'static str = x;
+        let v = crate::h::i::<u8>(crate::j::K);
+        $crate::not_ours::X;
+        "##,
+    );
+    let paths: Vec<String> = crate_paths(&code).iter().map(|p| p.join("::")).collect();
+    assert_eq!(paths, ["a", "b::c", "b::d", "", "e::f::G", "h::i", "j::K"]);
+    let modules: BTreeSet<String> = ["a", "b", "b::d", "e", "h"]
+        .into_iter()
+        .map(String::from)
+        .collect();
+    let to = |p: &str| {
+        target(
+            &p.split("::").map(String::from).collect::<Vec<_>>(),
+            &modules,
+        )
+    };
+    assert_eq!(to("b::d::Thing"), "b::d");
+    assert_eq!(to("e::f::G"), "e");
+    assert_eq!(to("nowhere"), "crate");
+    let graph: BTreeMap<String, BTreeSet<String>> = [
+        ("a", vec!["b"]),
+        ("b", vec!["c"]),
+        ("c", vec!["a"]),
+        ("d", vec![]),
+    ]
+    .into_iter()
+    .map(|(m, deps)| (m.to_string(), deps.into_iter().map(String::from).collect()))
+    .collect();
+    assert_eq!(find_cycle(&graph).unwrap(), ["a", "b", "c", "a"]);
+}
