@@ -10,7 +10,8 @@
 //! * `wrong-size`: publishes a payload one value short.
 //!
 //! The launcher passes the environment to its agents, so a test sets it on `admm-ta solve`;
-//! the agent's [`crate::ipc::exchange::IpcExchange`] applies it when it publishes.
+//! the agent's exchange applies it when it publishes (the transports whose capabilities say
+//! so: [`crate::ipc::exchange::IpcExchange`], the Zenoh exchange).
 
 use crate::exchange::header::RoundHeader;
 use std::time::Duration;

@@ -1,10 +1,50 @@
 //! Runners that drive admm-ta agents and the reports they produce.
 //!
+//! Data flows one way: problem + graph + options → plan → team runner → transport → agents →
+//! report. The modules, by layer, top to bottom; a module names modules of its own layer or
+//! of lower ones only, no two files import each other (directly or around a circle), and no
+//! transport names another (`runtime/tests/layout.rs` checks all three on the sources).
+//!
+//! **Entry points**
+//! * [`solve`]: one end-to-end solve (costs + graph + options → rounded, checked assignment
+//!   with its report), the survivors' re-solve after a failure, the oracle tracer, the
+//!   central stop rules of the simulation;
+//! * [`episodes`]: repeated surveillance assignments by one team alive for all of them;
+//! * [`probe_run`]: a latency-benchmark team of probe agents.
+//!
+//! **Team runner**
+//! * [`runner`]: `run_team` — the only dispatch on how a transport executes (lockstep,
+//!   threads, processes) and the only merge of the agents' latency and CPU usage.
+//!
+//! **Process orchestration**
+//! * [`process`]: the launcher, the agent process, the one mapping of a process transport to
+//!   its exchange (`connect`), scenario files, run namespaces, team files and independently
+//!   started members, and the hosts and bridges of teams across machines.
+//!
+//! **Transports** (each independent of the others)
 //! * [`sim`]: the lockstep simulation — every agent in one thread, round by round, each
-//!   reading only its neighbours' previous-round payloads. It is the deterministic reference
-//!   that the threaded and multi-process transports must reproduce.
-//! * [`solve`]: one end-to-end solve (costs + graph + settings → rounded, checked
-//!   assignment with its report).
+//!   reading only its neighbours' previous-round payloads; the deterministic reference the
+//!   others must reproduce bit for bit;
+//! * [`threads`]: one OS thread per agent, lock-free double-buffered slots;
+//! * [`ipc`]: the iceoryx2 exchange of agent processes (services, nodes, zero-copy samples);
+//! * [`uds`]: agent processes copying payloads through Unix-domain sockets (a baseline);
+//! * [`zenoh_net`]: agent processes over Zenoh (feature `zenoh`), the multi-host transport.
+//!
+//! **Shared mechanisms**
+//! * [`exchange`]: the `Exchange` trait every distributed transport implements, its errors,
+//!   the per-agent round loop and the round header;
+//! * [`board`]: a run's shared-memory board (arrival counters, published rounds, failure
+//!   mark, member pids, global barrier);
+//! * [`liveness`]: whether a process lives;
+//! * [`fault`]: fault injection for tests;
+//! * [`wait`]: how agents wait (spin, then sleep), and the counting barrier;
+//! * [`latency`]: round-latency histograms per component;
+//! * [`usage`]: CPU time and context switches of an agent;
+//! * [`transport`]: the one `Transport` type and its capabilities;
+//! * [`options`]: validated `SolveOptions` and `RunOptions` and their `ConfigError`;
+//! * [`workload`]: what agents are built from and compute (a solve's plan, surveillance
+//!   episodes, probes);
+//! * [`error_text`]: errors as one line of text.
 //!
 //! ```
 //! use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
@@ -20,24 +60,33 @@
 //! assert!(problem.is_feasible(&report.assignment));
 //! ```
 
-pub mod board;
+// Entry points.
 pub mod episodes;
+pub mod probe_run;
+pub mod solve;
+
+// The team runner.
+pub mod runner;
+
+// Process orchestration.
+pub mod process;
+
+// Transports.
+pub mod ipc;
+pub mod sim;
+pub mod threads;
+pub mod uds;
+pub mod zenoh_net;
+
+// Shared mechanisms.
+pub mod board;
 pub mod error_text;
 pub mod exchange;
 pub mod fault;
-pub mod ipc;
 pub mod latency;
 pub mod liveness;
 pub mod options;
-pub mod probe_run;
-pub mod process;
-pub mod runner;
-pub mod sim;
-pub mod solve;
-pub mod threads;
 pub mod transport;
-pub mod uds;
 pub mod usage;
 pub mod wait;
 pub mod workload;
-pub mod zenoh_net;

@@ -1,4 +1,4 @@
-//! A latency-benchmark run: a team of [`ProbeAgent`]s (payload of any length, a step of
+//! A latency-benchmark run: a team of [`ProbeAgent`](admm_ta_agents::probe::ProbeAgent)s (payload of any length, a step of
 //! known cost) for a fixed number of rounds on one transport, with warm-up rounds excluded
 //! from the recorded latency and resource usage. The algorithmic counterpart is
 //! [`crate::solve::solve`] with `StopRule::MaxIters` and warm-up rounds. The team runs on

@@ -9,13 +9,42 @@
 //! (b) no transport module (`sim`, `threads`, `ipc`, `uds`, `zenoh_net`, each with its
 //!     submodules) names another transport: what several of them share sits below them;
 //! (c) no file above 500 lines unless its module doc has a line starting with `//! Size:`
-//!     that says why.
+//!     that says why;
+//! (d) data flows one way: a module names modules of its own layer or of lower layers only
+//!     ([`LAYERS`], the layers of `runtime/src/lib.rs`'s module map; a new top-level module
+//!     must be placed in one).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The transports: none may name another.
 const TRANSPORTS: [&str; 5] = ["sim", "threads", "ipc", "uds", "zenoh_net"];
+
+/// The runtime's layers, top to bottom, by top-level module (with their submodules).
+const LAYERS: [&[&str]; 5] = [
+    // Entry points.
+    &["solve", "episodes", "probe_run"],
+    // The team runner.
+    &["runner"],
+    // Process orchestration.
+    &["process"],
+    // The transports.
+    &TRANSPORTS,
+    // Shared mechanisms below every transport.
+    &[
+        "exchange",
+        "board",
+        "liveness",
+        "fault",
+        "wait",
+        "latency",
+        "usage",
+        "transport",
+        "options",
+        "workload",
+        "error_text",
+    ],
+];
 
 /// Longest file without a stated reason.
 const MAX_LINES: usize = 500;
@@ -377,6 +406,40 @@ fn no_transport_names_another() {
     assert!(
         crossings.is_empty(),
         "transports naming another transport: {crossings:?}"
+    );
+}
+
+/// The layer of a module (0 is the top), `None` for the crate root, which only declares
+/// the modules.
+fn layer_of(module: &str) -> Option<usize> {
+    let top = module.split("::").next().unwrap_or(module);
+    if top == "crate" {
+        return None;
+    }
+    let layer = LAYERS.iter().position(|layer| layer.contains(&top));
+    assert!(
+        layer.is_some(),
+        "module {module} is in no layer: add it to LAYERS"
+    );
+    layer
+}
+
+#[test]
+fn no_module_names_a_higher_layer() {
+    let mut upward = Vec::new();
+    for (module, deps) in dependencies(&sources()) {
+        let Some(own) = layer_of(&module) else {
+            continue;
+        };
+        for dep in deps {
+            if layer_of(&dep).is_some_and(|other| other < own) {
+                upward.push(format!("{module} -> {dep}"));
+            }
+        }
+    }
+    assert!(
+        upward.is_empty(),
+        "imports running up the layers: {upward:?}"
     );
 }
 

@@ -1,7 +1,7 @@
 //! The iceoryx2 end of one agent process: one publish-subscribe service per agent carrying
 //! its round messages (`[f64]` payload + [`RoundHeader`] user header), one event service per
-//! agent to wake it, and a run-wide *board* in shared memory (arrival counters and the
-//! optional global barrier).
+//! agent to wake it, and the run-wide *board* in shared memory ([`crate::board`]: arrival
+//! counters and the optional global barrier).
 //!
 //! Agent `i` publishes on `admm-ta/i/round`; each neighbour subscribes to it. The payload is
 //! written in place into the loaned sample and read in place by the neighbours: no copy on
@@ -61,7 +61,7 @@ pub struct IpcEndpoint {
     /// Tasks of the team (checked against the running team's on the board).
     pub tasks: usize,
     pub policy: WaitPolicy,
-    /// Name of the run's board (shared memory created by the launcher, [`board_size`]).
+    /// Name of the run's board (shared memory created by the launcher: a [`Board`]).
     pub board_shm: String,
     pub global_barrier: bool,
     /// Started by a launcher: stop when it is gone.

@@ -1,8 +1,8 @@
 //! One end-to-end solve: build the agents, run them, round, repair, check.
 //!
 //! * [`error`]: why a solve fails; [`report`]: what it reports;
-//! * [`trace`]: the oracle tracer of a checked solve;
-//! * [`lockstep`]: what a solve watches of a lockstep run (the tracer, the central stop
+//! * `trace`: the oracle tracer of a checked solve;
+//! * `lockstep`: what a solve watches of a lockstep run (the tracer, the central stop
 //!   rules).
 
 pub mod error;
