@@ -1,11 +1,12 @@
 //! Command-line interface: argument parsing and dispatch to the crates.
 
 use crate::output;
+use admm_ta_agents::method::Method;
 use admm_ta_agents::primal::ProjectionPath;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::ties::Perturbation;
 use admm_ta_runtime::options::{OnFailure, SolveOptions, StopRule};
-use admm_ta_runtime::solve::{self, Method};
+use admm_ta_runtime::solve;
 use admm_ta_runtime::transport::Transport;
 use admm_ta_runtime::wait::WaitStrategy;
 use admm_ta_topologies::{TopologySpec, file as topology_file};

@@ -2,9 +2,9 @@
 //! printing a table and writing JSON and SVG.
 
 use crate::cli::{Experiment, FigureArgs, MethodArg, agent_program};
+use admm_ta_agents::method::Method;
 use admm_ta_bench::figures::FigureConfig;
 use admm_ta_runtime::options::run::RunOptions;
-use admm_ta_runtime::solve::Method;
 use admm_ta_runtime::transport::Execution;
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};

@@ -26,7 +26,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         report.case,
         report.topology
     );
-    let inner = if report.method == admm_ta_runtime::solve::Method::Primal {
+    let inner = if report.method == admm_ta_agents::method::Method::Primal {
         format!(
             ", {:.2} Newton steps per projection",
             report.mean_projection_steps

@@ -4,11 +4,12 @@
 
 mod common;
 
+use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::report::SolveReport;
-use admm_ta_runtime::solve::{Method, solve};
+use admm_ta_runtime::solve::solve;
 use admm_ta_topologies::{Graph, generate};
 use common::{oracle_instances, relative_gap};
 

@@ -3,6 +3,7 @@
 //! and uds runs use real agent processes (and real shared memory, or real sockets), each in
 //! its own namespace, and must leave nothing behind.
 
+use admm_ta_agents::method::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::error::ConfigError;
 use admm_ta_runtime::options::run::RunOptions;
@@ -10,7 +11,7 @@ use admm_ta_runtime::options::{SolveOptions, SolveOptionsBuilder, StopRule};
 use admm_ta_runtime::runner::RunError;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::report::SolveReport;
-use admm_ta_runtime::solve::{Method, solve};
+use admm_ta_runtime::solve::solve;
 use admm_ta_runtime::transport::Transport;
 use admm_ta_topologies::{Graph, TopologySpec};
 use std::path::PathBuf;

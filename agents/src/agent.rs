@@ -88,3 +88,20 @@ pub trait ConsensusAgent {
     /// observers such as the paper's "within 0.1% of the optimum" criterion.
     fn own_column(&self) -> &[f64];
 }
+
+/// A method's agent as its registration in [`crate::method`] builds it: a
+/// [`ConsensusAgent`] whose penalty and costs may change between steps. Runners hold it as
+/// `Box<dyn AgentAlgorithm>` inside a [`crate::method_agent::MethodAgent`], so a new method is
+/// one module implementing this trait plus one registration, and no runner matches on
+/// methods. The defaults suit a method without a penalty that solves one problem.
+pub trait AgentAlgorithm: ConsensusAgent + Send + std::any::Any {
+    /// Changes ρ from the next step on (every robot at the same round); methods without a
+    /// penalty ignore it.
+    fn set_rho(&mut self, _rho: f64) {}
+
+    /// New own costs for the next episode of a repeated assignment, warm-started from the
+    /// current iterates or (`warm = false`) from zero.
+    fn set_costs(&mut self, _costs: &[f64], _warm: bool) -> Result<(), String> {
+        Err("repeated assignments with new costs run the primal method only".into())
+    }
+}

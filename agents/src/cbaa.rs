@@ -28,7 +28,7 @@
 //! the bids, which is not the optimal assignment in general (the paper's Section 4.3: it
 //! never was in their trials). Its optimality gap is reported by `solve --check`.
 
-use crate::agent::{ConsensusAgent, Inbox, StepReport};
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
 
 /// No winner (as stored in the payload).
 const NOBODY: f64 = -1.0;
@@ -198,6 +198,9 @@ impl ConsensusAgent for CbaaAgent {
         &self.column
     }
 }
+
+/// No penalty, one problem: the defaults.
+impl AgentAlgorithm for CbaaAgent {}
 
 #[cfg(test)]
 mod tests {

@@ -16,7 +16,7 @@
 //! needs far fewer bytes on large teams. This version sends `8nm` bytes per round, like the
 //! primal ADMM.
 
-use crate::agent::{ConsensusAgent, Inbox, StepReport};
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
 use crate::problem::{AssignmentCase, CostMatrix};
 
 /// Robot `index`'s state.
@@ -149,3 +149,6 @@ impl ConsensusAgent for DistHungarianAgent {
         &self.column
     }
 }
+
+/// No penalty, one problem: the defaults.
+impl AgentAlgorithm for DistHungarianAgent {}

@@ -78,7 +78,7 @@
 //! robot's is at most `tol / n`, the team's assignment is within `tol` of the optimum — the
 //! same contract as the primal's, so the same decentralized stop protocol runs on it.
 
-use crate::agent::{ConsensusAgent, Inbox, StepReport};
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
 use crate::problem::AssignmentCase;
 
 /// The proximal weight factor `g` of the inexact dual: `γ = g (m+1)/(2dρ)` (`g = 1` is the
@@ -530,6 +530,12 @@ impl ConsensusAgent for DualAgent {
 
     fn own_column(&self) -> &[f64] {
         &self.x
+    }
+}
+
+impl AgentAlgorithm for DualAgent {
+    fn set_rho(&mut self, rho: f64) {
+        DualAgent::set_rho(self, rho);
     }
 }
 

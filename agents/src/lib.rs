@@ -12,6 +12,7 @@ pub mod local_stop;
 pub mod lsap;
 pub mod market;
 pub mod method;
+pub mod method_agent;
 pub mod oracle;
 pub mod primal;
 pub mod probe;

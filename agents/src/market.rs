@@ -54,7 +54,7 @@
 //! sums never drops a matched edge); the assignment's cost is optimal to within `n` times
 //! that.
 
-use crate::agent::{ConsensusAgent, Inbox, StepReport};
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
 
 /// Demand bits per payload number: integers up to `2⁴⁸` are exact in an `f64`.
 const BITS_PER_WORD: usize = 48;
@@ -452,6 +452,9 @@ impl ConsensusAgent for MarketAgent {
         &self.column
     }
 }
+
+/// No penalty, one problem: the defaults.
+impl AgentAlgorithm for MarketAgent {}
 
 #[cfg(test)]
 mod tests {

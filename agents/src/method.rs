@@ -1,26 +1,36 @@
-//! The methods (consensus ADMM, the baselines), and one agent type that runs any of the
-//! distributed ones, so that runners and transports handle every method the same way.
+//! The method registry: every method the user can choose ([`Method`]: the consensus ADMM
+//! methods, the baselines, the centralized optimum) and, in one place, what each one needs
+//! and supports ([`MethodInfo`]): its name and one-line summary (the command line's help),
+//! how it runs (a team of agents, or centrally in the caller's process), the stop rules it
+//! honours and the memory a solve needs. A method a team of agents runs is an
+//! [`AgentMethod`], whose [`AgentMethodInfo`] gives its payload length, its penalty rule
+//! and how to build a robot's agent.
+//!
+//! Runners, option checks and the command line read these tables and never list methods. A
+//! new method is one module (its agent implements [`crate::agent::AgentAlgorithm`]) plus
+//! one registration here: a variant of [`Method`] (and of [`AgentMethod`] if it runs as
+//! agents) and its entries in [`Method::info`] and [`AgentMethod::info`].
 //!
 //! ```
-//! use admm_ta_agents::agent::ConsensusAgent;
-//! use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
-//! use admm_ta_agents::problem::AssignmentCase;
-//! let settings = AgentSettings::new(Method::Dual, 0.5, 1, 1e-9);
-//! let agent = MethodAgent::new(0, vec![0.2, 0.7], 2, AssignmentCase::One, 1, settings);
-//! assert_eq!(agent.payload_len(), 4); // ν: 2 robot rows + 2 task rows
+//! use admm_ta_agents::method::{AgentMethod, Method};
+//! assert_eq!(Method::Dual.agent_method(), Some(AgentMethod::Dual));
+//! assert_eq!(Method::Hungarian.agent_method(), None); // solved centrally, no agents
+//! assert_eq!(AgentMethod::Dual.payload_len(2, 2), 4); // ν and λ: 2 robot + 2 task prices
+//! assert_eq!(Method::Dual.info().summary, "Algorithm 2, exchanges n+m multipliers");
 //! ```
 
-use crate::agent::{ConsensusAgent, Inbox, StepReport};
+use crate::agent::AgentAlgorithm;
 use crate::cbaa::CbaaAgent;
 use crate::dist_hungarian::DistHungarianAgent;
 use crate::dual::{DEFAULT_GAMMA_FACTOR, DualAgent, DualSettings, DualUpdate};
 use crate::market::MarketAgent;
 use crate::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
-use crate::problem::AssignmentCase;
-use crate::rho::RhoSchedule;
+use crate::problem::{AssignmentCase, CostMatrix};
+use crate::rho::{DUAL_RHO_FACTOR, INEXACT_DUAL_RHO_FACTOR, RhoRule, RhoSchedule};
+use crate::stopping::StopRule;
 use serde::{Deserialize, Serialize};
 
-/// A consensus ADMM method of the paper.
+/// What solves the problem: the user's choice (`--method`, the JSON's `method`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
@@ -41,54 +51,91 @@ pub enum Method {
     Hungarian,
 }
 
-impl Method {
-    /// The consensus ADMM methods of the paper.
-    pub const ADMM: [Method; 3] = [Method::Primal, Method::Dual, Method::InexactDual];
-    /// Every method.
-    pub const ALL: [Method; 7] = [
-        Method::Primal,
-        Method::Dual,
-        Method::InexactDual,
-        Method::Cbaa,
-        Method::Market,
-        Method::DistHungarian,
-        Method::Hungarian,
-    ];
+/// A method a team of agents runs: what [`crate::method_agent::MethodAgent::new`] accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum AgentMethod {
+    #[default]
+    Primal,
+    Dual,
+    InexactDual,
+    Cbaa,
+    Market,
+    DistHungarian,
+}
 
+/// What a method needs and supports.
+#[derive(Debug)]
+pub struct MethodInfo {
     /// The name used on the command line and in JSON.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Primal => "primal",
-            Self::Dual => "dual",
-            Self::InexactDual => "inexact-dual",
-            Self::Cbaa => "cbaa",
-            Self::Market => "market",
-            Self::DistHungarian => "dist-hungarian",
-            Self::Hungarian => "hungarian",
-        }
-    }
+    pub name: &'static str,
+    /// One line for the command line's help.
+    pub summary: &'static str,
+    /// The agents a team runs, or `None`: solved centrally, in the caller's process (on a
+    /// lockstep transport only).
+    pub agents: Option<AgentMethod>,
+    /// The stop rules it honours.
+    pub stops: &'static [StopRule],
+    /// The memory a solve needs.
+    pub memory: Memory,
+}
 
-    /// A consensus ADMM method (it has a penalty ρ).
-    pub fn is_admm(self) -> bool {
-        Self::ADMM.contains(&self)
+impl MethodInfo {
+    /// The stop rules it honours, for messages: `local, oracle or max-iters`.
+    pub fn stop_names(&self, conjunction: &str) -> String {
+        let names: Vec<&str> = self.stops.iter().map(|s| s.name()).collect();
+        join(&names, conjunction)
     }
+}
 
-    /// Length of the payload exchanged every round (0: no messages).
-    pub fn payload_len(self, robots: usize, tasks: usize) -> usize {
-        match self {
-            Self::Primal | Self::DistHungarian => robots * tasks,
-            Self::Dual | Self::InexactDual => robots + tasks,
-            Self::Cbaa => 2 * tasks,
-            Self::Market => MarketAgent::payload_len_for(robots),
-            Self::Hungarian => 0,
-        }
+/// The memory a solve of a method needs, refused up front when too large.
+#[derive(Debug)]
+pub struct Memory {
+    /// Bytes for `(robots, tasks)`: every agent's state and round buffers, or the
+    /// centralized solver's working memory.
+    pub bytes: fn(usize, usize) -> f64,
+    /// What the bytes are, for messages: `agent state`.
+    pub of: &'static str,
+    /// Why, for messages: `each robot holds an m×n matrix`.
+    pub because: &'static str,
+}
+
+/// What a team's agents of a method need.
+pub struct AgentMethodInfo {
+    /// The method the user chose.
+    pub method: Method,
+    /// Values of the payload exchanged every round, for `(robots, tasks)`.
+    pub payload_len: fn(usize, usize) -> usize,
+    /// The penalty's default rule and `--adaptive-rho` schedule; `None`: no penalty.
+    pub rho: Option<RhoRule>,
+    /// Builds robot `index`'s agent.
+    pub build: fn(AgentInit) -> Box<dyn AgentAlgorithm>,
+}
+
+impl std::fmt::Debug for AgentMethodInfo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("AgentMethodInfo")
+            .field("method", &self.method)
+            .field("rho", &self.rho)
+            .finish_non_exhaustive()
     }
+}
+
+/// Everything a registration's `build` gets: robot `index` of `robots` with its own costs,
+/// `degree = |N(i)|`.
+pub struct AgentInit<'a> {
+    pub index: usize,
+    pub costs: Vec<f64>,
+    pub robots: usize,
+    pub case: AssignmentCase,
+    pub degree: usize,
+    pub settings: &'a AgentSettings,
 }
 
 /// Everything an agent needs besides its costs and its place in the graph.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AgentSettings {
-    pub method: Method,
+    pub method: AgentMethod,
     pub rho: f64,
     /// x-update solver of the primal method.
     pub projection: ProjectionPath,
@@ -102,7 +149,7 @@ pub struct AgentSettings {
 }
 
 impl AgentSettings {
-    pub fn new(method: Method, rho: f64, diameter: usize, tolerance: f64) -> Self {
+    pub fn new(method: AgentMethod, rho: f64, diameter: usize, tolerance: f64) -> Self {
         Self {
             method,
             rho,
@@ -114,177 +161,415 @@ impl AgentSettings {
     }
 }
 
-/// An agent of any method, optionally following a ρ schedule (applied by the agent itself
-/// before each step, so every transport changes ρ at the same round).
-pub struct MethodAgent {
-    algorithm: Algorithm,
-    schedule: Option<RhoSchedule>,
-    steps: u64,
+/// Every stop rule.
+const ALL_STOPS: &[StopRule] = &[
+    StopRule::Local,
+    StopRule::Agreement,
+    StopRule::Certified,
+    StopRule::Oracle,
+    StopRule::MaxIters,
+];
+/// The stop rules that do not read every robot's `m × n` matrix.
+const OWN_STATE_STOPS: &[StopRule] = &[StopRule::Local, StopRule::Oracle, StopRule::MaxIters];
+
+/// `8 · values` bytes for each of `robots` agents.
+fn per_agent(robots: usize, values: f64) -> f64 {
+    8.0 * robots as f64 * values
 }
 
-enum Algorithm {
-    Primal(PrimalAgent),
-    Dual(DualAgent),
-    Cbaa(CbaaAgent),
-    Market(MarketAgent),
-    DistHungarian(DistHungarianAgent),
+/// Values of the `n × n` matrix the exact assignment solves in Case 2 (0 in Case 1).
+fn case_two_expansion(robots: usize, tasks: usize) -> f64 {
+    if robots > tasks {
+        (robots * robots) as f64
+    } else {
+        0.0
+    }
 }
 
-impl MethodAgent {
-    /// Robot `index` of `robots` with its own costs, `degree = |N(i)|`.
-    ///
-    /// # Panics
-    /// For [`Method::Hungarian`], which has no agents (runners solve it centrally).
-    pub fn new(
-        index: usize,
-        costs: Vec<f64>,
-        robots: usize,
-        case: AssignmentCase,
-        degree: usize,
-        settings: AgentSettings,
-    ) -> Self {
-        let dual = |update| DualSettings {
-            rho: settings.rho,
+const TEAM_STATE: &str = "agent state";
+
+// The registrations: one `MethodInfo` per method, one `AgentMethodInfo` per team method.
+
+const PRIMAL: MethodInfo = MethodInfo {
+    name: "primal",
+    summary: "Algorithm 1, exchanges m×n matrices",
+    agents: Some(AgentMethod::Primal),
+    stops: ALL_STOPS,
+    // X, Q, Z, the projection's workspace and two round buffers: six m×n matrices.
+    memory: Memory {
+        bytes: |n, m| per_agent(n, 6.0 * (m * n) as f64),
+        of: TEAM_STATE,
+        because: "each robot holds an m×n matrix",
+    },
+};
+const PRIMAL_AGENTS: AgentMethodInfo = AgentMethodInfo {
+    method: Method::Primal,
+    payload_len: |n, m| n * m,
+    rho: Some(RhoRule::Primal),
+    build: |a| {
+        Box::new(PrimalAgent::new(
+            a.index,
+            a.costs,
+            a.robots,
+            a.case,
+            a.degree,
+            PrimalSettings {
+                projection: a.settings.projection,
+                ..PrimalSettings::new(a.settings.rho)
+            },
+        ))
+    },
+};
+
+/// y, p, κ and two round buffers of `n + m`; costs, x and the x-update's breakpoints.
+const DUAL_MEMORY: Memory = Memory {
+    bytes: |n, m| per_agent(n, (5 * (n + m) + 5 * m + 2) as f64),
+    of: TEAM_STATE,
+    because: "each robot holds n+m multipliers",
+};
+const DUAL: MethodInfo = MethodInfo {
+    name: "dual",
+    summary: "Algorithm 2, exchanges n+m multipliers",
+    agents: Some(AgentMethod::Dual),
+    stops: OWN_STATE_STOPS,
+    memory: DUAL_MEMORY,
+};
+const DUAL_AGENTS: AgentMethodInfo = AgentMethodInfo {
+    method: Method::Dual,
+    payload_len: |n, m| n + m,
+    rho: Some(RhoRule::Dual {
+        factor: DUAL_RHO_FACTOR,
+    }),
+    build: |a| Box::new(dual_agent(a, DualUpdate::Exact)),
+};
+
+const INEXACT_DUAL: MethodInfo = MethodInfo {
+    name: "inexact-dual",
+    summary: "proximal-gradient x-update, no inner solve",
+    agents: Some(AgentMethod::InexactDual),
+    stops: OWN_STATE_STOPS,
+    memory: DUAL_MEMORY,
+};
+const INEXACT_DUAL_AGENTS: AgentMethodInfo = AgentMethodInfo {
+    method: Method::InexactDual,
+    payload_len: |n, m| n + m,
+    rho: Some(RhoRule::Dual {
+        factor: INEXACT_DUAL_RHO_FACTOR,
+    }),
+    build: |a| {
+        let gamma_factor = a.settings.gamma_factor;
+        Box::new(dual_agent(a, DualUpdate::Inexact { gamma_factor }))
+    },
+};
+
+fn dual_agent(a: AgentInit, update: DualUpdate) -> DualAgent {
+    let s = a.settings;
+    DualAgent::new(
+        a.index,
+        a.costs,
+        a.robots,
+        a.case,
+        a.degree,
+        DualSettings {
+            rho: s.rho,
             update,
-            diameter: settings.diameter,
-            tolerance: settings.tolerance,
-        };
-        let algorithm = match settings.method {
-            Method::Primal => Algorithm::Primal(PrimalAgent::new(
-                index,
-                costs,
-                robots,
-                case,
-                degree,
-                PrimalSettings {
-                    projection: settings.projection,
-                    ..PrimalSettings::new(settings.rho)
-                },
-            )),
-            Method::Dual => Algorithm::Dual(DualAgent::new(
-                index,
-                costs,
-                robots,
-                case,
-                degree,
-                dual(DualUpdate::Exact),
-            )),
-            Method::InexactDual => Algorithm::Dual(DualAgent::new(
-                index,
-                costs,
-                robots,
-                case,
-                degree,
-                dual(DualUpdate::Inexact {
-                    gamma_factor: settings.gamma_factor,
-                }),
-            )),
-            Method::Cbaa => Algorithm::Cbaa(CbaaAgent::new(index, costs)),
-            Method::Market => {
-                Algorithm::Market(MarketAgent::new(index, costs, robots, settings.diameter))
-            }
-            Method::DistHungarian => {
-                Algorithm::DistHungarian(DistHungarianAgent::new(index, costs, robots, case))
-            }
-            Method::Hungarian => panic!("the centralized Hungarian method has no agents"),
-        };
-        Self {
-            algorithm,
-            schedule: None,
-            steps: 0,
+            diameter: s.diameter,
+            tolerance: s.tolerance,
+        },
+    )
+}
+
+const CBAA: MethodInfo = MethodInfo {
+    name: "cbaa",
+    summary: "the consensus-based auction baseline: fast, conflict-free, not optimal",
+    agents: Some(AgentMethod::Cbaa),
+    stops: OWN_STATE_STOPS,
+    // Costs, bids and winners, the own column, two round buffers of 2m.
+    memory: Memory {
+        bytes: |n, m| per_agent(n, 8.0 * m as f64),
+        of: TEAM_STATE,
+        because: "each robot holds 2m bids and winners",
+    },
+};
+const CBAA_AGENTS: AgentMethodInfo = AgentMethodInfo {
+    method: Method::Cbaa,
+    payload_len: |_, m| 2 * m,
+    rho: None,
+    build: |a| Box::new(CbaaAgent::new(a.index, a.costs)),
+};
+
+const MARKET: MethodInfo = MethodInfo {
+    name: "market",
+    summary: "Liu & Shell's price-escalation market replicated over the graph: optimal, 2·diameter rounds per price raise, sends demand bits only",
+    agents: Some(AgentMethod::Market),
+    stops: OWN_STATE_STOPS,
+    // The replicated market (prices, matching, clique, search scratch: about 10n), the own
+    // column, and the payload being built plus two round buffers.
+    memory: Memory {
+        bytes: |n, m| {
+            let payload = MarketAgent::payload_len_for(n);
+            per_agent(n, (10 * n + m + 3 * payload) as f64)
+        },
+        of: TEAM_STATE,
+        because: "each robot holds the team's demand bits",
+    },
+};
+const MARKET_AGENTS: AgentMethodInfo = AgentMethodInfo {
+    method: Method::Market,
+    payload_len: |n, _| MarketAgent::payload_len_for(n),
+    rho: None,
+    build: |a| {
+        Box::new(MarketAgent::new(
+            a.index,
+            a.costs,
+            a.robots,
+            a.settings.diameter,
+        ))
+    },
+};
+
+const DIST_HUNGARIAN: MethodInfo = MethodInfo {
+    name: "dist-hungarian",
+    summary: "robots flood their cost rows and solve locally: optimal after a graph diameter",
+    agents: Some(AgentMethod::DistHungarian),
+    stops: OWN_STATE_STOPS,
+    // The known rows, two round buffers and the copy solved; Case 2's n×n expansion.
+    memory: Memory {
+        bytes: |n, m| per_agent(n, 4.0 * (n * m) as f64 + case_two_expansion(n, m)),
+        of: TEAM_STATE,
+        because: "each robot holds the n×m cost rows",
+    },
+};
+const DIST_HUNGARIAN_AGENTS: AgentMethodInfo = AgentMethodInfo {
+    method: Method::DistHungarian,
+    payload_len: |n, m| n * m,
+    rho: None,
+    build: |a| Box::new(DistHungarianAgent::new(a.index, a.costs, a.robots, a.case)),
+};
+
+const HUNGARIAN: MethodInfo = MethodInfo {
+    name: "hungarian",
+    summary: "the centralized optimum, one round, sim only",
+    agents: None,
+    stops: OWN_STATE_STOPS,
+    // The solver's copy of the costs (Case 2: its n×n expansion) and its O(n + m) arrays.
+    memory: Memory {
+        bytes: |n, m| 8.0 * ((n * m) as f64 + case_two_expansion(n, m) + 8.0 * (n + m) as f64),
+        of: "working memory",
+        because: "the centralized solver holds the n×m costs, n×n in Case 2",
+    },
+};
+
+impl Method {
+    /// The consensus ADMM methods of the paper.
+    pub const ADMM: [Method; 3] = [Method::Primal, Method::Dual, Method::InexactDual];
+    /// Every method, in the order of the command line's help.
+    pub const ALL: [Method; 7] = [
+        Method::Primal,
+        Method::Dual,
+        Method::InexactDual,
+        Method::Cbaa,
+        Method::Market,
+        Method::DistHungarian,
+        Method::Hungarian,
+    ];
+
+    /// What this method needs and supports.
+    pub fn info(self) -> &'static MethodInfo {
+        match self {
+            Self::Primal => &PRIMAL,
+            Self::Dual => &DUAL,
+            Self::InexactDual => &INEXACT_DUAL,
+            Self::Cbaa => &CBAA,
+            Self::Market => &MARKET,
+            Self::DistHungarian => &DIST_HUNGARIAN,
+            Self::Hungarian => &HUNGARIAN,
         }
     }
 
-    /// Follow `schedule` (from the next step on, counted from the first step).
-    pub fn with_schedule(mut self, schedule: Option<RhoSchedule>) -> Self {
-        self.schedule = schedule;
-        self
+    /// The name used on the command line and in JSON.
+    pub fn name(self) -> &'static str {
+        self.info().name
     }
 
-    /// Changes ρ from the next step on; every robot must change it at the same round
-    /// (no effect on methods without a ρ).
-    pub fn set_rho(&mut self, rho: f64) {
-        match &mut self.algorithm {
-            Algorithm::Primal(a) => a.set_rho(rho),
-            Algorithm::Dual(a) => a.set_rho(rho),
-            Algorithm::Cbaa(_) | Algorithm::Market(_) | Algorithm::DistHungarian(_) => {}
-        }
+    /// The agents a team runs, or `None` for the centralized solver.
+    pub fn agent_method(self) -> Option<AgentMethod> {
+        self.info().agents
     }
 
-    /// New own costs for the next episode of a repeated assignment, warm-started from the
-    /// current iterates or (`warm = false`) from zero; primal consensus ADMM only.
-    pub fn set_costs(&mut self, costs: &[f64], warm: bool) -> Result<(), String> {
-        match &mut self.algorithm {
-            Algorithm::Primal(a) if costs.len() == a.iterate().nrows() => {
-                a.set_costs(costs);
-                if !warm {
-                    a.reset();
-                }
-                Ok(())
-            }
-            Algorithm::Primal(_) => Err(format!(
-                "{} costs for a robot with another number of tasks",
-                costs.len()
-            )),
-            _ => Err("repeated assignments with new costs run the primal method only".into()),
-        }
+    /// A consensus ADMM method (it has a penalty ρ).
+    pub fn is_admm(self) -> bool {
+        self.rho_rule().is_some()
     }
 
-    /// The primal agent inside, if this is one.
-    pub fn as_primal(&self) -> Option<&PrimalAgent> {
-        match &self.algorithm {
-            Algorithm::Primal(a) => Some(a),
-            Algorithm::Dual(_)
-            | Algorithm::Cbaa(_)
-            | Algorithm::Market(_)
-            | Algorithm::DistHungarian(_) => None,
-        }
+    /// The penalty's rule, if the method has one.
+    pub fn rho_rule(self) -> Option<RhoRule> {
+        self.agent_method().and_then(AgentMethod::rho_rule)
     }
 
-    fn inner(&self) -> &dyn ConsensusAgent {
-        match &self.algorithm {
-            Algorithm::Primal(a) => a,
-            Algorithm::Dual(a) => a,
-            Algorithm::Cbaa(a) => a,
-            Algorithm::Market(a) => a,
-            Algorithm::DistHungarian(a) => a,
-        }
+    /// The default ρ for these costs on a graph with this mean degree (0 for the methods
+    /// without a penalty).
+    pub fn default_rho(self, costs: &CostMatrix, mean_degree: f64) -> f64 {
+        self.rho_rule()
+            .map_or(0.0, |rule| rule.rho(costs, mean_degree))
+    }
+
+    /// Length of the payload exchanged every round (0: no messages).
+    pub fn payload_len(self, robots: usize, tasks: usize) -> usize {
+        self.agent_method()
+            .map_or(0, |a| a.payload_len(robots, tasks))
+    }
+
+    /// Whether it honours `stop`.
+    pub fn supports(self, stop: StopRule) -> bool {
+        self.info().stops.contains(&stop)
+    }
+
+    /// The methods whose entry satisfies `test`, for messages: `primal`, `dual or
+    /// inexact-dual` (`conjunction` joins the last two).
+    pub fn names_where(test: impl Fn(&MethodInfo) -> bool, conjunction: &str) -> String {
+        let names: Vec<&str> = Self::ALL
+            .into_iter()
+            .filter(|m| test(m.info()))
+            .map(Self::name)
+            .collect();
+        join(&names, conjunction)
+    }
+
+    /// The command line's help of `--method`: every method with its summary.
+    pub fn help() -> String {
+        let entries: Vec<String> = Self::ALL
+            .into_iter()
+            .map(|m| format!("{} ({})", m.name(), m.info().summary))
+            .collect();
+        let entries: Vec<&str> = entries.iter().map(String::as_str).collect();
+        join(&entries, "or")
     }
 }
 
-impl ConsensusAgent for MethodAgent {
-    fn payload_len(&self) -> usize {
-        self.inner().payload_len()
+/// `a, b and c` (`conjunction` between the last two).
+fn join(items: &[&str], conjunction: &str) -> String {
+    match items.split_last() {
+        None => String::new(),
+        Some((last, [])) => (*last).to_string(),
+        Some((last, rest)) => format!("{} {conjunction} {last}", rest.join(", ")),
     }
-    fn write_initial_payload(&self, out: &mut [f64]) {
-        self.inner().write_initial_payload(out)
-    }
-    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
-        self.inner().check_payload(payload)
-    }
-    fn step(&mut self, inbox: &dyn Inbox, out: &mut [f64]) -> StepReport {
-        if let Some(schedule) = self.schedule {
-            self.set_rho(schedule.rho(self.steps));
+}
+
+impl AgentMethod {
+    /// Every team method.
+    pub const ALL: [AgentMethod; 6] = [
+        Self::Primal,
+        Self::Dual,
+        Self::InexactDual,
+        Self::Cbaa,
+        Self::Market,
+        Self::DistHungarian,
+    ];
+
+    /// What its agents need.
+    pub fn info(self) -> &'static AgentMethodInfo {
+        match self {
+            Self::Primal => &PRIMAL_AGENTS,
+            Self::Dual => &DUAL_AGENTS,
+            Self::InexactDual => &INEXACT_DUAL_AGENTS,
+            Self::Cbaa => &CBAA_AGENTS,
+            Self::Market => &MARKET_AGENTS,
+            Self::DistHungarian => &DIST_HUNGARIAN_AGENTS,
         }
-        self.steps += 1;
-        match &mut self.algorithm {
-            Algorithm::Primal(a) => a.step(inbox, out),
-            Algorithm::Dual(a) => a.step(inbox, out),
-            Algorithm::Cbaa(a) => a.step(inbox, out),
-            Algorithm::Market(a) => a.step(inbox, out),
-            Algorithm::DistHungarian(a) => a.step(inbox, out),
+    }
+
+    /// The method the user chose.
+    pub fn method(self) -> Method {
+        self.info().method
+    }
+
+    pub fn name(self) -> &'static str {
+        self.method().name()
+    }
+
+    /// Length of the payload exchanged every round.
+    pub fn payload_len(self, robots: usize, tasks: usize) -> usize {
+        (self.info().payload_len)(robots, tasks)
+    }
+
+    /// The penalty's rule, if the method has one.
+    pub fn rho_rule(self) -> Option<RhoRule> {
+        self.info().rho
+    }
+
+    /// The `--adaptive-rho` schedule from `initial`, if the method has a penalty.
+    pub fn schedule(self, initial: f64) -> Option<RhoSchedule> {
+        self.rho_rule().map(|rule| rule.schedule(initial))
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for Method {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_registry_is_consistent() {
+        for method in Method::ALL {
+            let json = serde_json::to_string(&method).unwrap();
+            assert_eq!(json, format!("\"{}\"", method.name()));
+            if let Some(agents) = method.agent_method() {
+                assert_eq!(agents.method(), method);
+                assert_eq!(serde_json::to_string(&agents).unwrap(), json);
+            }
+            assert!(method.supports(StopRule::Local) && method.supports(StopRule::MaxIters));
         }
+        for agents in AgentMethod::ALL {
+            assert_eq!(agents.method().agent_method(), Some(agents));
+        }
+        assert_eq!(
+            Method::ALL
+                .iter()
+                .filter(|m| m.agent_method().is_none())
+                .count(),
+            1
+        );
+        assert_eq!(
+            Method::ALL
+                .into_iter()
+                .filter(|m| m.is_admm())
+                .collect::<Vec<_>>(),
+            Method::ADMM
+        );
+        assert_eq!(
+            Method::names_where(|i| i.stops.contains(&StopRule::Certified), "or"),
+            "primal"
+        );
+        assert!(Method::help().starts_with("primal (Algorithm 1, exchanges m×n matrices), dual ("));
+        assert!(
+            Method::help()
+                .ends_with(" or hungarian (the centralized optimum, one round, sim only)")
+        );
     }
-    fn decide(&self) -> usize {
-        self.inner().decide()
-    }
-    fn rounded_task(&self) -> usize {
-        self.inner().rounded_task()
-    }
-    fn certificate_slack(&self) -> f64 {
-        self.inner().certificate_slack()
-    }
-    fn own_column(&self) -> &[f64] {
-        self.inner().own_column()
+
+    #[test]
+    fn memory_estimates_follow_what_each_method_holds() {
+        let gib =
+            |m: Method, n: usize, t: usize| (m.info().memory.bytes)(n, t) / (1u64 << 30) as f64;
+        // The primal's m×n matrix per robot: 5000 × 5000 is far beyond 8 GiB …
+        assert!(gib(Method::Primal, 5000, 5000) > 5000.0);
+        // … the dual's n + m multipliers and the centralized solver are not.
+        assert!(gib(Method::Dual, 5000, 5000) < 8.0);
+        assert!(gib(Method::Hungarian, 5000, 5000) < 1.0);
+        assert!(
+            gib(Method::Hungarian, 100_000, 2) > 8.0,
+            "Case 2's n×n expansion"
+        );
     }
 }

@@ -21,7 +21,7 @@
 //! neighbours' sum, updates `Q` and forms the projection input, then the projection writes
 //! the new iterate straight into the outgoing payload.
 
-use crate::agent::{ConsensusAgent, Inbox, StepReport};
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
 use crate::general::GeneralProblem;
 use crate::problem::AssignmentCase;
 use crate::projection::{ProjectionStats, QpProjector, TransportPolytopeProjector};
@@ -36,6 +36,30 @@ pub enum ProjectionPath {
     Fast,
     /// clarabel QP (cross-check; orders of magnitude slower).
     Qp,
+}
+
+impl ProjectionPath {
+    /// Both paths, in the order of the command line's help.
+    pub const ALL: [ProjectionPath; 2] = [Self::Fast, Self::Qp];
+
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Fast => "fast",
+            Self::Qp => "qp",
+        }
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for ProjectionPath {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
 }
 
 /// Parameters of one primal agent.
@@ -342,5 +366,25 @@ impl ConsensusAgent for PrimalAgent {
 
     fn own_column(&self) -> &[f64] {
         &self.x[self.index * self.tasks..(self.index + 1) * self.tasks]
+    }
+}
+
+impl AgentAlgorithm for PrimalAgent {
+    fn set_rho(&mut self, rho: f64) {
+        PrimalAgent::set_rho(self, rho);
+    }
+
+    fn set_costs(&mut self, costs: &[f64], warm: bool) -> Result<(), String> {
+        if costs.len() != self.tasks {
+            return Err(format!(
+                "{} costs for a robot with another number of tasks",
+                costs.len()
+            ));
+        }
+        PrimalAgent::set_costs(self, costs);
+        if !warm {
+            self.reset();
+        }
+        Ok(())
     }
 }

@@ -284,6 +284,35 @@ pub enum CaseChoice {
     Forced(AssignmentCase),
 }
 
+impl CaseChoice {
+    /// Every choice, in the order of the command line's help.
+    pub const ALL: [CaseChoice; 3] = [
+        Self::Auto,
+        Self::Forced(AssignmentCase::One),
+        Self::Forced(AssignmentCase::Two),
+    ];
+
+    /// The name used on the command line: `auto`, `1` or `2`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Forced(AssignmentCase::One) => "1",
+            Self::Forced(AssignmentCase::Two) => "2",
+        }
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for CaseChoice {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}
+
 /// Problem 1: costs plus the coverage case. Always feasible once constructed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TaskAssignmentProblem {

@@ -1,5 +1,8 @@
-//! The default penalty parameter ρ of primal consensus ADMM.
+//! The penalty parameter ρ: the scale-free default rules of the consensus ADMM methods
+//! ([`RhoRule`], which each method's entry in [`crate::method`] names) and the
+//! `--adaptive-rho` schedules ([`RhoSchedule`]).
 //!
+//! **The primal rule.**
 //! The x-update depends on the costs only through `α/ρ` and is unchanged by adding a
 //! constant to a robot's costs (its column sum is fixed), so a ρ proportional to a shift-free
 //! spread of the costs makes the whole iteration scale- and shift-free: costs in metres or
@@ -14,7 +17,6 @@
 //! rounds to the optimal assignment from 246 to 148 (15×15 chain, 20 seeds), from ≈1450 (half
 //! the runs within 3000 rounds) to 561 (50×30 chain) and from 259 to 132 (50×30, random:0.1).
 
-use crate::method::Method;
 use crate::problem::CostMatrix;
 
 /// The `0.5` of the rule.
@@ -40,15 +42,43 @@ pub const DUAL_RHO_FACTOR: f64 = 5.0;
 /// The inexact dual's `c` (it needs a larger ρ than the exact one to stay stable).
 pub const INEXACT_DUAL_RHO_FACTOR: f64 = 10.0;
 
-/// The default ρ of `method` for these costs on a graph with this mean degree (0 for the
-/// methods without a penalty).
-pub fn default_rho_for(method: Method, costs: &CostMatrix, mean_degree: f64) -> f64 {
-    let dual = |factor: f64| factor / (costs.spread() * mean_degree.max(1.0));
-    match method {
-        Method::Primal => default_rho(costs, mean_degree),
-        Method::Dual => dual(DUAL_RHO_FACTOR),
-        Method::InexactDual => dual(INEXACT_DUAL_RHO_FACTOR),
-        Method::Cbaa | Method::Market | Method::DistHungarian | Method::Hungarian => 0.0,
+/// How a method with a penalty picks its default ρ and its `--adaptive-rho` schedule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RhoRule {
+    /// [`default_rho`], and the schedule that shrinks ρ (see [`RhoSchedule`]).
+    Primal,
+    /// `ρ = factor / (spread · d̄)` (multipliers are prices in cost units), and the schedule
+    /// that grows ρ.
+    Dual { factor: f64 },
+}
+
+impl RhoRule {
+    /// The default ρ for these costs on a graph with this mean degree.
+    pub fn rho(self, costs: &CostMatrix, mean_degree: f64) -> f64 {
+        match self {
+            Self::Primal => default_rho(costs, mean_degree),
+            Self::Dual { factor } => factor / (costs.spread() * mean_degree.max(1.0)),
+        }
+    }
+
+    /// The measured schedule from `initial` (the default or a given ρ).
+    pub fn schedule(self, initial: f64) -> RhoSchedule {
+        match self {
+            Self::Primal => RhoSchedule {
+                initial,
+                start: 3.0,
+                rate: 0.98,
+                min: 0.6,
+                max: 3.0,
+            },
+            Self::Dual { .. } => RhoSchedule {
+                initial,
+                start: 0.5,
+                rate: 1.01,
+                min: 1.0,
+                max: 10.0,
+            },
+        }
     }
 }
 
@@ -85,26 +115,6 @@ pub struct RhoSchedule {
 }
 
 impl RhoSchedule {
-    /// The measured schedule of `method` from `initial` (its default or given ρ).
-    pub fn for_method(method: Method, initial: f64) -> Self {
-        match method {
-            Method::Primal => Self {
-                initial,
-                start: 3.0,
-                rate: 0.98,
-                min: 0.6,
-                max: 3.0,
-            },
-            _ => Self {
-                initial,
-                start: 0.5,
-                rate: 1.01,
-                min: 1.0,
-                max: 10.0,
-            },
-        }
-    }
-
     /// ρ of step `round` (0 for the first step).
     pub fn rho(&self, round: u64) -> f64 {
         let exponent = round.min(i32::MAX as u64) as i32;
@@ -127,21 +137,24 @@ mod tests {
         .unwrap();
         let ratio = default_rho(&scaled, 9.0) / default_rho(&costs, 9.0);
         assert!((ratio - 250.0).abs() < 1e-9);
-        for method in [Method::Dual, Method::InexactDual] {
-            let ratio =
-                default_rho_for(method, &costs, 9.0) / default_rho_for(method, &scaled, 9.0);
+        for factor in [DUAL_RHO_FACTOR, INEXACT_DUAL_RHO_FACTOR] {
+            let rule = RhoRule::Dual { factor };
+            let ratio = rule.rho(&costs, 9.0) / rule.rho(&scaled, 9.0);
             assert!((ratio - 250.0).abs() < 1e-9, "dual ρ scales like 1/cost");
         }
     }
 
     #[test]
     fn schedules_stay_within_their_bounds() {
-        let primal = RhoSchedule::for_method(Method::Primal, 2.0);
+        let primal = RhoRule::Primal.schedule(2.0);
         assert_eq!(primal.rho(0), 6.0);
         assert!((primal.rho(10) - 6.0 * 0.98f64.powi(10)).abs() < 1e-12);
         assert_eq!(primal.rho(100_000), 1.2);
         assert_eq!(primal.rho(u64::MAX), 1.2);
-        let dual = RhoSchedule::for_method(Method::Dual, 2.0);
+        let dual = RhoRule::Dual {
+            factor: DUAL_RHO_FACTOR,
+        }
+        .schedule(2.0);
         assert_eq!(dual.rho(0), 2.0);
         assert_eq!(dual.rho(60), 2.0);
         assert!(dual.rho(200) > 2.0 && dual.rho(200) < 20.0);

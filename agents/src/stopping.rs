@@ -1,4 +1,4 @@
-//! Stop rules over the team's step reports.
+//! Stop rules: the user's choice ([`StopRule`]) and the rules over the team's step reports.
 //!
 //! [`AgreementStop`] stops once, for `rounds` consecutive rounds, every robot's iterate is
 //! near-integral (every entry within the integrality tolerance of a feasible assignment) and
@@ -9,6 +9,71 @@
 //! version with an agreement protocol belongs to the runtime's distributed transports.
 
 use crate::agent::StepReport;
+use serde::{Deserialize, Serialize};
+
+/// When a run ends: the choice of `--stop` (which methods honour which rule is declared by
+/// each method's entry in [`crate::method`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum StopRule {
+    /// All robots agree on one near-integral assignment for some rounds (default 10).
+    Agreement,
+    /// All robots round to the same assignment and their optimality-certificate slacks
+    /// ([`crate::primal::PrimalAgent::certificate_slack`]) sum to at most `1e-9 ·` its cost
+    /// scale: the assignment is then provably optimal to that tolerance. Checked centrally
+    /// (sim only).
+    Certified,
+    /// The same certificate, decentralized: each robot checks its own slack and agreement
+    /// with its neighbours, and a header protocol makes all robots stop at the same round
+    /// (see [`crate::local_stop`]); costs about a graph diameter of extra rounds. Works on
+    /// every transport (default).
+    #[default]
+    Local,
+    /// Run to the iteration limit.
+    MaxIters,
+    /// The paper's criterion, for experiments only: stop at the first round whose relaxed
+    /// objective (the robots' own columns) is within 0.1% of the centralized optimum. It
+    /// needs the optimum, which no robot has (sim only).
+    Oracle,
+}
+
+impl StopRule {
+    /// Every rule, in the order of the command line's help.
+    pub const ALL: [StopRule; 5] = [
+        Self::Local,
+        Self::Agreement,
+        Self::Certified,
+        Self::MaxIters,
+        Self::Oracle,
+    ];
+
+    /// Rules that read the whole team's state, which only a lockstep run has in one place.
+    pub fn is_central(self) -> bool {
+        matches!(self, Self::Agreement | Self::Certified | Self::Oracle)
+    }
+
+    /// The name used on the command line and in JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Agreement => "agreement",
+            Self::Certified => "certified",
+            Self::Local => "local",
+            Self::MaxIters => "max-iters",
+            Self::Oracle => "oracle",
+        }
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for StopRule {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}
 
 /// Something that decides, round by round, whether the team is done.
 pub trait TeamStopRule {

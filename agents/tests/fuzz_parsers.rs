@@ -4,7 +4,8 @@
 //! --test fuzz_parsers`.)
 
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
+use admm_ta_agents::method::{AgentMethod, AgentSettings};
+use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
 use proptest::prelude::*;
 
@@ -69,10 +70,7 @@ proptest! {
     /// any wrong length, and accepts the payload a real agent of the method wrote.
     #[test]
     fn payload_checks_refuse_corruption_and_accept_real_payloads(
-        method in prop::sample::select(vec![
-            Method::Primal, Method::Dual, Method::InexactDual,
-            Method::Cbaa, Method::Market, Method::DistHungarian,
-        ]),
+        method in prop::sample::select(AgentMethod::ALL.to_vec()),
         robots in 1usize..7,
         position in any::<prop::sample::Index>(),
         garbage in any::<f64>(),
@@ -95,7 +93,7 @@ proptest! {
         // The distributed Hungarian marks unknown rows with NaN: a NaN there is valid, a
         // NaN in a known row is not.
         let known_row = payload[k - k % tasks].is_finite();
-        if method != Method::DistHungarian || (known_row && tasks > 1) {
+        if method != AgentMethod::DistHungarian || (known_row && tasks > 1) {
             prop_assert!(agents[0].check_payload(&nan).is_err());
         }
         let mut corrupt = payload.clone();

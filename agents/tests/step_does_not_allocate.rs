@@ -3,7 +3,8 @@
 //! inexact-dual step (multiplier update, x-update, certificate) allocate nothing.
 
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
+use admm_ta_agents::method::{AgentMethod, AgentSettings};
+use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -34,14 +35,14 @@ unsafe impl GlobalAlloc for CountingAllocator {
 static GLOBAL: CountingAllocator = CountingAllocator;
 
 fn team_rounds(
-    method: Method,
+    method: AgentMethod,
     robots: usize,
     tasks: usize,
     case: AssignmentCase,
     rounds: usize,
 ) -> usize {
     let costs = CostMatrix::uniform(robots, tasks, 11).unwrap();
-    let rho = admm_ta_agents::rho::default_rho_for(method, &costs, (robots - 1) as f64);
+    let rho = method.method().default_rho(&costs, (robots - 1) as f64);
     let settings = AgentSettings::new(method, rho, 1, 1e-9);
     let mut agents: Vec<MethodAgent> = (0..robots)
         .map(|i| MethodAgent::new(i, costs.row(i).to_vec(), robots, case, robots - 1, settings))
@@ -75,11 +76,11 @@ fn team_rounds(
 fn every_method_steps_without_allocating_after_warm_up() {
     // The distributed Hungarian allocates once, when it solves the full problem.
     for method in [
-        Method::Primal,
-        Method::Dual,
-        Method::InexactDual,
-        Method::Cbaa,
-        Method::Market,
+        AgentMethod::Primal,
+        AgentMethod::Dual,
+        AgentMethod::InexactDual,
+        AgentMethod::Cbaa,
+        AgentMethod::Market,
     ] {
         assert_eq!(
             team_rounds(method, 12, 12, AssignmentCase::One, 40),

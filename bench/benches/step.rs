@@ -11,10 +11,10 @@
 //!   scipy's `linear_sum_assignment` (86 µs at 50, 9.8 ms at 500 on a CI runner).
 
 use admm_ta_agents::agent::{ConsensusAgent, Inbox};
-use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
+use admm_ta_agents::method::{AgentMethod, AgentSettings};
+use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::oracle;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_agents::rho;
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::workload::plan::AgentFactory;
 use admm_ta_topologies::generate;
@@ -26,12 +26,14 @@ use std::time::Duration;
 const RECORDED_ROUNDS: usize = 30;
 
 /// Robot 0 after 60 rounds, and its neighbours' payloads of rounds 30–59.
-fn agent_in_flight(method: Method, n: usize) -> (MethodAgent, Vec<Vec<Vec<f64>>>) {
+fn agent_in_flight(method: AgentMethod, n: usize) -> (MethodAgent, Vec<Vec<Vec<f64>>>) {
     let problem =
         TaskAssignmentProblem::new(CostMatrix::uniform(n, n, 7).unwrap(), CaseChoice::Auto)
             .unwrap();
     let graph = generate::complete(n).unwrap();
-    let rho = rho::default_rho_for(method, problem.costs(), graph.mean_degree());
+    let rho = method
+        .method()
+        .default_rho(problem.costs(), graph.mean_degree());
     let team = AgentFactory {
         problem: &problem,
         graph: &graph,
@@ -67,7 +69,11 @@ fn step(c: &mut Criterion) {
         .sample_size(30)
         .measurement_time(Duration::from_secs(3))
         .warm_up_time(Duration::from_millis(500));
-    for method in [Method::Primal, Method::Dual, Method::InexactDual] {
+    for method in [
+        AgentMethod::Primal,
+        AgentMethod::Dual,
+        AgentMethod::InexactDual,
+    ] {
         for n in [20usize, 50] {
             let (mut agent, rounds) = agent_in_flight(method, n);
             let inboxes: Vec<Vec<&[f64]>> = rounds

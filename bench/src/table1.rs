@@ -140,8 +140,7 @@ fn run_trial(
     let graph = TopologySpec::Complete
         .build(n, seed)
         .expect("complete graph");
-    let rho = config.rho_scale
-        * admm_ta_agents::rho::default_rho_for(method, problem.costs(), graph.mean_degree());
+    let rho = config.rho_scale * method.default_rho(problem.costs(), graph.mean_degree());
     let run = |stop| {
         let options = SolveOptions::builder()
             .method(method)

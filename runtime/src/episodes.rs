@@ -6,7 +6,7 @@
 //! station, updating its position and battery. The agents are not restarted: after the
 //! stop (all robots stop at the same round), the next episode goes on from that round with
 //! the new costs, **warm-started** from the current iterates and multipliers
-//! ([`admm_ta_agents::method::MethodAgent::set_costs`]) and a fresh stop rule. Threads and
+//! ([`admm_ta_agents::method_agent::MethodAgent::set_costs`]) and a fresh stop rule. Threads and
 //! processes (one per robot for the whole run) run the same agent function on the team
 //! runner ([`crate::runner`]),
 //! [`run_surveillance_agent`](crate::workload::episode::run_surveillance_agent).

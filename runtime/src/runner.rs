@@ -19,7 +19,7 @@ use crate::usage::ThreadUsage;
 use crate::workload::Workload;
 use crate::workload::episode::{EpisodeRecord, run_surveillance_agent};
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::method::MethodAgent;
+use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::probe::ProbeAgent;
 use admm_ta_topologies::Graph;
 use std::path::PathBuf;

@@ -132,6 +132,17 @@ impl std::fmt::Display for Transport {
     }
 }
 
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for Transport {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}
+
 /// A name that is no transport.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("unknown transport '{name}' (use {})", Transport::names_where(|_| true, "or"))]

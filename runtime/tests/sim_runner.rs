@@ -1,7 +1,7 @@
 //! The lockstep simulation: deterministic, worker-count independent, and its stop rule
 //! does not stop at wrong assignments.
 
-use admm_ta_agents::method::MethodAgent;
+use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::oracle;
 use admm_ta_agents::primal::{PrimalSettings, ProjectionPath};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};

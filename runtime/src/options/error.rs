@@ -1,6 +1,8 @@
 //! Settings no run can honour, and the one check of a timeout.
 
 use crate::transport::{Execution, Transport, ZenohNotBuilt};
+use admm_ta_agents::method::Method;
+use admm_ta_agents::stopping::StopRule;
 use std::time::Duration;
 
 /// Settings no run can honour.
@@ -20,10 +22,10 @@ pub enum ConfigError {
     #[error("--max-iters must be at least 1")]
     NoIterations,
     #[error(
-        "--method hungarian is the centralized solver: it runs in this process, with --transport {}",
+        "--method {method} is the centralized solver: it runs in this process, with --transport {}",
         Transport::names_where(|c| c.execution == Execution::Lockstep, "or")
     )]
-    CentralizedMethod,
+    CentralizedMethod { method: &'static str },
     #[error("the γ factor must be a positive finite number, got {0}")]
     Gamma(f64),
     #[error(
@@ -39,10 +41,15 @@ pub enum ConfigError {
         Transport::names_where(|c| c.execution == Execution::Lockstep, "or")
     )]
     CentralStop { stop: &'static str },
+    /// A stop rule the method does not honour (only the primal's payload is the `m × n`
+    /// matrix the central rules read).
     #[error(
-        "--stop {stop} reads every robot's m×n matrix: it works with --method primal only (use --stop local, oracle or max-iters)"
+        "--stop {} reads every robot's m×n matrix: it works with --method {} only (use --stop {})",
+        stop.name(),
+        Method::names_where(|info| info.stops.contains(stop), "or"),
+        method.info().stop_names("or")
     )]
-    PrimalOnlyStop { stop: &'static str },
+    UnsupportedStop { stop: StopRule, method: Method },
     #[error("--trace needs --check: it follows the run against the centralized optimum")]
     TraceNeedsCheck,
 }
@@ -70,6 +77,21 @@ mod tests {
         assert_eq!(
             ConfigError::NoFailureRecovery.to_string(),
             "--on-failure continue applies to agent processes: use --transport ipc"
+        );
+        assert_eq!(
+            ConfigError::UnsupportedStop {
+                stop: StopRule::Agreement,
+                method: Method::Dual
+            }
+            .to_string(),
+            "--stop agreement reads every robot's m×n matrix: it works with --method primal only (use --stop local, oracle or max-iters)"
+        );
+        assert_eq!(
+            ConfigError::CentralizedMethod {
+                method: "hungarian"
+            }
+            .to_string(),
+            "--method hungarian is the centralized solver: it runs in this process, with --transport sim"
         );
         assert_eq!(
             ConfigError::Rho(-1.0).to_string(),

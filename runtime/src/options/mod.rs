@@ -14,56 +14,11 @@ use crate::transport::{Execution, Transport};
 use crate::wait::WaitStrategy;
 use admm_ta_agents::method::Method;
 use admm_ta_agents::primal::ProjectionPath;
+pub use admm_ta_agents::stopping::StopRule;
 use admm_ta_agents::ties::Perturbation;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::time::Duration;
-
-/// When the run ends.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum StopRule {
-    /// All robots agree on one near-integral assignment for some rounds (default 10).
-    Agreement,
-    /// All robots round to the same assignment and their optimality-certificate slacks
-    /// ([`admm_ta_agents::primal::PrimalAgent::certificate_slack`]) sum to at most `1e-9 ·` its cost scale: the
-    /// assignment is then provably optimal to that tolerance. Checked centrally (sim only).
-    Certified,
-    /// The same certificate, decentralized: each robot checks its own slack and agreement
-    /// with its neighbours, and a header protocol makes all robots stop at the same round
-    /// (see [`admm_ta_agents::local_stop`]); costs about a graph diameter of extra rounds.
-    /// Works on every transport (default).
-    #[default]
-    Local,
-    /// Run to the iteration limit.
-    MaxIters,
-    /// The paper's criterion, for experiments only: stop at the first round whose relaxed
-    /// objective (the robots' own columns) is within 0.1% of the centralized optimum. It
-    /// needs the optimum, which no robot has (sim only).
-    Oracle,
-}
-
-impl StopRule {
-    /// Rules that read the whole team's state, which only a lockstep run has in one place.
-    pub fn is_central(self) -> bool {
-        matches!(self, Self::Agreement | Self::Certified | Self::Oracle)
-    }
-
-    /// Rules that read every robot's `m × n` matrix: the primal method's payload.
-    pub fn is_primal_only(self) -> bool {
-        matches!(self, Self::Agreement | Self::Certified)
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Agreement => "agreement",
-            Self::Certified => "certified",
-            Self::Local => "local",
-            Self::MaxIters => "max-iters",
-            Self::Oracle => "oracle",
-        }
-    }
-}
 
 /// What the team does when an agent fails.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
@@ -75,6 +30,30 @@ pub enum OnFailure {
     /// The survivors drop the failed robot and re-solve without it, if they still can
     /// (connected graph, at least as many robots as tasks).
     Continue,
+}
+
+impl OnFailure {
+    /// Both choices, in the order of the command line's help.
+    pub const ALL: [OnFailure; 2] = [Self::Abort, Self::Continue];
+
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Abort => "abort",
+            Self::Continue => "continue",
+        }
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for OnFailure {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
 }
 
 /// Everything a solve needs besides the problem and the graph.
@@ -159,7 +138,8 @@ impl SolveOptions {
         self.method
     }
 
-    /// ρ as given; `None`: the scale-free default of [`admm_ta_agents::rho::default_rho_for`].
+    /// ρ as given; `None`: the scale-free default of the method's rule
+    /// ([`admm_ta_agents::method::Method::default_rho`]).
     pub fn rho(&self) -> Option<f64> {
         self.rho
     }
@@ -358,10 +338,11 @@ impl SolveOptionsBuilder {
 
     /// The options, or the first reason no solve could run them (in the order the command
     /// line reports them): ρ or a timeout out of range, `--on-failure continue` on a
-    /// transport that cannot name the failed agent, no rounds, the centralized method off
+    /// transport that cannot name the failed agent, no rounds, a centralized method off
     /// the lockstep simulation, γ out of range, a global barrier the transport has not, a
-    /// transport this build lacks, a central stop rule off the lockstep simulation, a
-    /// primal-only stop rule with another method, a trace without a check.
+    /// transport this build lacks, a central stop rule off the lockstep simulation, a stop
+    /// rule the method does not honour (the method registry says which), a trace without a
+    /// check.
     pub fn build(self) -> Result<SolveOptions, ConfigError> {
         if let Some(rho) = self.rho.filter(|r| !(*r > 0.0 && r.is_finite())) {
             return Err(ConfigError::Rho(rho));
@@ -375,8 +356,10 @@ impl SolveOptionsBuilder {
             return Err(ConfigError::NoIterations);
         }
         let lockstep = capabilities.execution == Execution::Lockstep;
-        if self.method == Method::Hungarian && !lockstep {
-            return Err(ConfigError::CentralizedMethod);
+        if self.method.agent_method().is_none() && !lockstep {
+            return Err(ConfigError::CentralizedMethod {
+                method: self.method.name(),
+            });
         }
         if let Some(gamma) = self.gamma_factor.filter(|g| !(*g > 0.0 && g.is_finite())) {
             return Err(ConfigError::Gamma(gamma));
@@ -387,9 +370,10 @@ impl SolveOptionsBuilder {
                 stop: self.stop.name(),
             });
         }
-        if self.stop.is_primal_only() && self.method != Method::Primal {
-            return Err(ConfigError::PrimalOnlyStop {
-                stop: self.stop.name(),
+        if !self.method.supports(self.stop) {
+            return Err(ConfigError::UnsupportedStop {
+                stop: self.stop,
+                method: self.method,
             });
         }
         if self.trace && !self.check {
@@ -449,7 +433,9 @@ mod tests {
         assert_eq!(refused(b().max_iters(0)), ConfigError::NoIterations);
         assert_eq!(
             refused(b().method(Method::Hungarian).transport(Transport::Threads)),
-            ConfigError::CentralizedMethod
+            ConfigError::CentralizedMethod {
+                method: "hungarian"
+            }
         );
         assert_eq!(
             refused(b().gamma_factor(Some(0.0))),
@@ -465,7 +451,10 @@ mod tests {
         );
         assert_eq!(
             refused(b().method(Method::Dual).stop(StopRule::Certified)),
-            ConfigError::PrimalOnlyStop { stop: "certified" }
+            ConfigError::UnsupportedStop {
+                stop: StopRule::Certified,
+                method: Method::Dual
+            }
         );
         assert_eq!(refused(b().trace(true)), ConfigError::TraceNeedsCheck);
         assert_eq!(

@@ -76,7 +76,14 @@ pub(crate) fn member_scenario(
 ) -> Result<(Scenario, RunNamespace), String> {
     let (problem, graph) = team.problem_and_graph()?;
     let options = team.solve_options().map_err(|e| e.to_string())?;
-    let plan = prepare(&problem, &graph, &options).map_err(|e| e.to_string())?;
+    // The options refused a centralized method on the team's process transport.
+    let method = options.method().agent_method().ok_or_else(|| {
+        format!(
+            "method {} is solved centrally: it has no agents",
+            options.method().name()
+        )
+    })?;
+    let plan = prepare(&problem, &graph, &options, method).map_err(|e| e.to_string())?;
     let stop = LocalCertifiedStop::new(plan.diameter, problem.robots(), plan.tolerance)
         .map_err(|e| e.to_string())?;
     let mut scenario = Scenario::new(

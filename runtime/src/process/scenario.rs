@@ -13,11 +13,11 @@ use crate::workload::plan::AgentFactory;
 use crate::zenoh_net::links::ZenohLinks;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::local_stop::LocalCertifiedStop;
-use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
+use admm_ta_agents::method::{AgentMethod, AgentSettings};
+use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::primal::ProjectionPath;
 use admm_ta_agents::probe::{ProbeAgent, ProbeStep};
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_agents::rho::RhoSchedule;
 use admm_ta_topologies::Graph;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -60,7 +60,7 @@ pub struct Scenario {
     pub cost_bits: Vec<u64>,
     pub edges: Vec<(usize, usize)>,
     pub topology: String,
-    pub method: Method,
+    pub method: AgentMethod,
     pub rho_bits: u64,
     pub gamma_factor_bits: u64,
     /// Follow the `--adaptive-rho` schedule from `rho_bits`.
@@ -141,7 +141,7 @@ impl Scenario {
             cost_bits: vec![0; robots * tasks],
             edges: graph.edges().collect(),
             topology: graph.name().to_string(),
-            method: Method::Primal,
+            method: AgentMethod::Primal,
             rho_bits: 0,
             gamma_factor_bits: 0,
             adaptive_rho: false,
@@ -344,7 +344,8 @@ impl Scenario {
             seed: self.seed,
             schedule: self
                 .adaptive_rho
-                .then(|| RhoSchedule::for_method(self.method, f64::from_bits(self.rho_bits))),
+                .then(|| self.method.schedule(f64::from_bits(self.rho_bits)))
+                .flatten(),
         };
         Ok(team.agent(index))
     }

@@ -27,13 +27,16 @@ pub enum SolveError {
     Config(#[from] ConfigError),
     #[error("the topology has {graph} robots but the costs have {problem}")]
     SizeMismatch { graph: usize, problem: usize },
+    /// The method's memory estimate ([`admm_ta_agents::method::Memory`]) is above the limit.
     #[error(
-        "{robots} robots × {tasks} tasks need about {gib:.1} GiB of agent state (each robot holds an m×n matrix); the limit is 8 GiB"
+        "{robots} robots × {tasks} tasks need about {gib:.1} GiB of {of} ({because}); the limit is 8 GiB"
     )]
     TooLarge {
         robots: usize,
         tasks: usize,
         gib: f64,
+        of: &'static str,
+        because: &'static str,
     },
     #[error(transparent)]
     Rho(#[from] BadRho),

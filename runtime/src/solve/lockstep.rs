@@ -7,7 +7,7 @@ use crate::runner::LockstepWatch;
 use crate::sim::{LockstepSim, RoundView};
 use crate::solve::trace::{Tracer, relaxed_objective, within_0_1pct};
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::method::MethodAgent;
+use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::oracle::OptimalAssignment;
 use admm_ta_agents::problem::TaskAssignmentProblem;
 use admm_ta_agents::stopping::{AgreementStop, AgreementStreak, TeamStopRule};

@@ -28,13 +28,13 @@ use admm_ta_agents::local_stop::LocalCertifiedStop;
 use admm_ta_agents::oracle::{self, OptimalAssignment};
 use admm_ta_agents::problem::TaskAssignmentProblem;
 use admm_ta_agents::rounding;
+use admm_ta_agents::ties;
 use admm_ta_topologies::Graph;
 use std::time::Instant;
 
-/// Agent state plus round buffers above this many bytes is refused up front.
+/// A solve whose method needs more memory than this (by its registry entry's estimate:
+/// agent state plus round buffers, or the centralized solver's) is refused up front.
 pub const MEMORY_LIMIT_BYTES: f64 = 8.0 * (1u64 << 30) as f64;
-
-pub use admm_ta_agents::method::Method;
 
 /// Solves `problem` on `graph` as `options` say; with [`OnFailure::Continue`], a failed
 /// agent process is dropped and the survivors re-solve without it.
@@ -129,16 +129,22 @@ fn solve_once(
             problem: n,
         });
     }
-    let bytes = 8.0 * 6.0 * (m * n) as f64 * n as f64;
+    let memory = &options.method().info().memory;
+    let bytes = (memory.bytes)(n, m);
     if bytes > MEMORY_LIMIT_BYTES {
         return Err(SolveError::TooLarge {
             robots: n,
             tasks: m,
             gib: bytes / (1u64 << 30) as f64,
+            of: memory.of,
+            because: memory.because,
         });
     }
-    let plan = prepare(problem, graph, options)?;
-    let rho = plan.rho;
+    // A team method's plan (ρ, tolerance, agents); `None`: the centralized solver.
+    let plan = match options.method().agent_method() {
+        Some(method) => Some(prepare(problem, graph, options, method)?),
+        None => None,
+    };
     let optimum = (options.check() || options.stop() == StopRule::Oracle)
         .then(|| oracle::solve(problem).expect("validated costs have an optimum"));
     let started = Instant::now();
@@ -146,47 +152,50 @@ fn solve_once(
     if let Some(t) = tracer.as_mut() {
         t.record = options.trace();
     }
-    let run = if options.method() == Method::Hungarian {
-        tracer = None;
-        let optimum = optimum
-            .clone()
-            .unwrap_or_else(|| oracle::solve(problem).expect("validated costs have an optimum"));
-        RunResult::centralized(optimum)
-    } else {
-        // The central rules (certified, oracle, agreement) are the watch's; the agents run
-        // to the round limit under them.
-        let stop = match options.stop() {
-            StopRule::Local => {
-                AgentStop::Local(LocalCertifiedStop::new(plan.diameter, n, plan.tolerance)?)
-            }
-            _ => AgentStop::MaxIters,
-        };
-        let mut watch = SolveWatch::new(
-            problem,
-            options,
-            plan.tolerance,
-            tracer.take(),
-            optimum.as_ref(),
-        );
-        let team = run_team_watched(
-            Workload::Solve {
-                plan: &plan,
-                stop: &stop,
-                max_rounds: options.max_iters() as u64,
-            },
-            graph,
-            options.run(),
-            Some(&mut watch),
-        )?;
-        tracer = watch.tracer;
-        let distributed = options.transport().capabilities().execution != Execution::Lockstep;
-        RunResult::of_team(team, distributed)
+    let run = match &plan {
+        None => {
+            tracer = None;
+            let optimum = optimum.clone().unwrap_or_else(|| {
+                oracle::solve(problem).expect("validated costs have an optimum")
+            });
+            RunResult::centralized(optimum)
+        }
+        Some(plan) => {
+            // The central rules (certified, oracle, agreement) are the watch's; the agents
+            // run to the round limit under them.
+            let stop = match options.stop() {
+                StopRule::Local => {
+                    AgentStop::Local(LocalCertifiedStop::new(plan.diameter, n, plan.tolerance)?)
+                }
+                _ => AgentStop::MaxIters,
+            };
+            let mut watch = SolveWatch::new(
+                problem,
+                options,
+                plan.tolerance,
+                tracer.take(),
+                optimum.as_ref(),
+            );
+            let team = run_team_watched(
+                Workload::Solve {
+                    plan,
+                    stop: &stop,
+                    max_rounds: options.max_iters() as u64,
+                },
+                graph,
+                options.run(),
+                Some(&mut watch),
+            )?;
+            tracer = watch.tracer;
+            let distributed = options.transport().capabilities().execution != Execution::Lockstep;
+            RunResult::of_team(team, distributed)
+        }
     };
     let wall_time_ms = started.elapsed().as_secs_f64() * 1e3;
-    let (message_bytes, messages_per_agent) = match options.method() {
-        Method::Hungarian => (0, 0),
-        method => (
-            8 * method.payload_len(n, m) + std::mem::size_of::<RoundHeader>(),
+    let (message_bytes, messages_per_agent) = match &plan {
+        None => (0, 0),
+        Some(plan) => (
+            8 * plan.agents.settings.method.payload_len(n, m) + std::mem::size_of::<RoundHeader>(),
             run.rounds,
         ),
     };
@@ -208,12 +217,16 @@ fn solve_once(
         repaired,
         method: options.method(),
         transport: options.transport(),
-        rho,
+        rho: plan.as_ref().map_or(0.0, |p| p.rho),
         robots: n,
         tasks: m,
         case: problem.case().number(),
         topology: graph.name().to_string(),
-        perturbation: plan.agents.epsilon,
+        // The centralized solver reports the perturbation a team would have used.
+        perturbation: plan.as_ref().map_or_else(
+            || ties::epsilon(problem.costs(), options.perturbation()),
+            |p| p.agents.epsilon,
+        ),
         mean_projection_steps: run.projection_steps as f64 / (n * run.rounds.max(1)) as f64,
         message_bytes,
         messages_per_agent,

@@ -7,9 +7,10 @@ use crate::exchange::Exchange;
 use crate::exchange::ExchangeError;
 use crate::exchange::round_loop::{AgentOutcome, AgentPlan, AgentStop, RoundLoop};
 use admm_ta_agents::local_stop::LocalCertifiedStop;
-use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
+use admm_ta_agents::method::{AgentMethod, AgentSettings};
+use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
-use admm_ta_agents::rho;
+use admm_ta_agents::rho::RhoRule;
 use admm_ta_agents::surveillance::SurveillanceScenario;
 use serde::{Deserialize, Serialize};
 
@@ -60,7 +61,7 @@ impl EpisodeSettings {
             .fold(0.0, f64::max);
         let capped: Vec<f64> = first.iter().map(|&c| c.min(ordinary)).collect();
         let costs = CostMatrix::new(n, model.tasks(), capped).expect("a validated model");
-        let rho = rho::default_rho_for(Method::Primal, &costs, mean_degree);
+        let rho = RhoRule::Primal.rho(&costs, mean_degree);
         let tolerance = 1e-9 * costs.spread().max(1e-12) * n as f64;
         Self {
             model,
@@ -81,7 +82,7 @@ impl EpisodeSettings {
             self.model.robots,
             AssignmentCase::Two,
             degree,
-            AgentSettings::new(Method::Primal, self.rho, self.diameter, self.tolerance),
+            AgentSettings::new(AgentMethod::Primal, self.rho, self.diameter, self.tolerance),
         )
     }
 }

@@ -3,10 +3,11 @@
 //! options, exactly as every transport (and every independently started agent) needs them.
 
 use crate::options::SolveOptions;
-use admm_ta_agents::method::{AgentSettings, Method, MethodAgent};
+use admm_ta_agents::method::{AgentMethod, AgentSettings};
+use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::primal::PrimalSettings;
 use admm_ta_agents::problem::TaskAssignmentProblem;
-use admm_ta_agents::rho::{self, RhoSchedule};
+use admm_ta_agents::rho::RhoSchedule;
 use admm_ta_agents::ties;
 use admm_ta_topologies::Graph;
 
@@ -59,24 +60,24 @@ pub struct Plan<'a> {
     pub agents: AgentFactory<'a>,
 }
 
-/// ρ, γ, the tie-breaking perturbation, the stop tolerance and the agents' settings, as every
-/// transport (and every independently started agent) computes them.
+/// ρ, γ, the tie-breaking perturbation, the stop tolerance and the agents' settings of the
+/// team method `method` (the options' method), as every transport (and every independently
+/// started agent) computes them.
 pub fn prepare<'a>(
     problem: &'a TaskAssignmentProblem,
     graph: &'a Graph,
     options: &SolveOptions,
+    method: AgentMethod,
 ) -> Result<Plan<'a>, BadRho> {
     let n = problem.robots();
-    let method = options.method();
     // Methods without a penalty report ρ = 0 and ignore --rho and --adaptive-rho.
-    let rho = if method.is_admm() {
-        options
+    let rho = match method.rho_rule() {
+        Some(rule) => options
             .rho()
-            .unwrap_or_else(|| rho::default_rho_for(method, problem.costs(), graph.mean_degree()))
-    } else {
-        0.0
+            .unwrap_or_else(|| rule.rho(problem.costs(), graph.mean_degree())),
+        None => 0.0,
     };
-    if method.is_admm() && !(rho > 0.0 && rho.is_finite()) {
+    if method.rho_rule().is_some() && !(rho > 0.0 && rho.is_finite()) {
         return Err(BadRho(rho));
     }
     // The options checked a given factor.
@@ -91,8 +92,10 @@ pub fn prepare<'a>(
         gamma_factor,
         ..AgentSettings::new(method, rho, diameter, tolerance)
     };
-    let schedule =
-        (options.adaptive_rho() && method.is_admm()).then(|| RhoSchedule::for_method(method, rho));
+    let schedule = options
+        .adaptive_rho()
+        .then(|| method.schedule(rho))
+        .flatten();
     let agents = AgentFactory {
         problem,
         graph,
@@ -124,7 +127,7 @@ pub fn primal_team(
         graph,
         settings: AgentSettings {
             projection: settings.projection,
-            ..AgentSettings::new(Method::Primal, settings.rho, diameter, f64::INFINITY)
+            ..AgentSettings::new(AgentMethod::Primal, settings.rho, diameter, f64::INFINITY)
         },
         epsilon,
         seed,
