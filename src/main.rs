@@ -1,8 +1,8 @@
-//! `admm-ta`: consensus ADMM task assignment for multi-robot teams.
+//! `admm-ta`: consensus ADMM task assignment for multi-robot teams — the command line over
+//! the `admm_ta` library ([`cli`]: the arguments; [`commands`]: one file per subcommand).
 
-mod bench_cmd;
 mod cli;
-mod experiments;
+mod commands;
 mod output;
 
 use clap::Parser;
@@ -24,7 +24,7 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    match cli::run(args) {
+    match commands::run(args.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
             // One line naming the problem, with its causes; never a backtrace.

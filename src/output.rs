@@ -1,7 +1,7 @@
 //! Human and JSON renderings of a solve report.
 
-use admm_ta_runtime::solve::report::SolveReport;
-use admm_ta_runtime::transport::Execution;
+use admm_ta::runtime::transport::Execution;
+use admm_ta::{Method, SolveReport, StopRule};
 use anyhow::Result;
 
 pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
@@ -26,7 +26,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         report.case,
         report.topology
     );
-    let inner = if report.method == admm_ta_agents::method::Method::Primal {
+    let inner = if report.method == Method::Primal {
         format!(
             ", {:.2} Newton steps per projection",
             report.mean_projection_steps
@@ -55,7 +55,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         println!(
             "stop: {} — all robots certified the assignment of round {r}",
             match report.stop {
-                admm_ta_runtime::options::StopRule::Local => "local (decentralized)",
+                StopRule::Local => "local (decentralized)",
                 _ => "certified",
             }
         );

@@ -45,12 +45,72 @@ pub enum StepKind {
 }
 
 impl StepKind {
+    /// Every step, in the order of the command line's help.
+    pub const ALL: [StepKind; 3] = [Self::Touch, Self::Average, Self::Primal];
+
     pub fn name(self) -> &'static str {
         match self {
             Self::Touch => "touch",
             Self::Average => "average",
             Self::Primal => "primal",
         }
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for StepKind {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}
+
+/// Which barrier ends a round.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Barrier {
+    /// Each agent waits for its neighbours' messages only.
+    Neighbour,
+    /// Every agent also waits for the whole team (threads and ipc).
+    Global,
+}
+
+impl Barrier {
+    /// Both kinds, in the order of the command line's help.
+    pub const ALL: [Barrier; 2] = [Self::Neighbour, Self::Global];
+
+    /// The kind of a run with or without a global barrier.
+    pub fn of(global: bool) -> Self {
+        if global {
+            Self::Global
+        } else {
+            Self::Neighbour
+        }
+    }
+
+    pub fn is_global(self) -> bool {
+        self == Self::Global
+    }
+
+    /// `neighbour` or `global`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Neighbour => "neighbour",
+            Self::Global => "global",
+        }
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for Barrier {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
     }
 }
 
@@ -108,11 +168,7 @@ pub struct Case {
 impl Case {
     /// `global` or `neighbour`.
     pub fn barrier_name(&self) -> &'static str {
-        if self.global_barrier {
-            "global"
-        } else {
-            "neighbour"
-        }
+        Barrier::of(self.global_barrier).name()
     }
 
     /// The first six columns of the Markdown tables: agents, graph, payload, transport,
@@ -138,7 +194,7 @@ pub struct SweepSpec {
     pub payloads: Option<Vec<PayloadShape>>,
     pub transports: Option<Vec<Transport>>,
     pub waits: Option<Vec<WaitStrategy>>,
-    pub barriers: Option<Vec<bool>>,
+    pub barriers: Option<Vec<Barrier>>,
 }
 
 /// Settings of a benchmark run.
@@ -209,7 +265,9 @@ pub fn cases(config: &RoundsConfig) -> Vec<Case> {
             s.topologies.clone().unwrap_or(vec![base.topology.clone()]),
             s.payloads.clone().unwrap_or(vec![base.payload]),
             s.waits.clone().unwrap_or(vec![base.wait]),
-            s.barriers.clone().unwrap_or(vec![false]),
+            s.barriers
+                .as_ref()
+                .map_or(vec![false], |b| b.iter().map(|b| b.is_global()).collect()),
         )]
     } else if config.quick {
         vec![

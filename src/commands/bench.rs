@@ -1,14 +1,15 @@
 //! `admm-ta bench rounds`: the round-latency sweep's arguments checked, its progress shown,
 //! its tables printed and its files written.
 
-use crate::cli::{BarrierArg, Bench, StepArg, WaitArg, agent_program};
-use admm_ta_runtime::transport::{Capabilities, Execution, Transport};
-use admm_ta_topologies::TopologySpec;
+use crate::cli::{Bench, RoundsArgs};
+use crate::commands::shared::{agent_program, progress_bar};
+use admm_ta::TopologySpec;
+use admm_ta::runtime::transport::{Capabilities, Execution, Transport};
+use admm_ta_bench::rounds::{self, RoundsConfig, SweepSpec};
 use anyhow::{Context, Result, bail};
 
-pub(crate) fn run_bench(bench: Bench) -> Result<()> {
-    use admm_ta_bench::rounds::{self, RoundsConfig, StepKind, SweepSpec};
-    let Bench::Rounds {
+pub fn run(bench: Bench) -> Result<()> {
+    let Bench::Rounds(RoundsArgs {
         quick,
         agents,
         topologies,
@@ -22,7 +23,7 @@ pub(crate) fn run_bench(bench: Bench) -> Result<()> {
         repeat,
         out,
         json,
-    } = bench;
+    }) = bench;
     if agents.as_ref().is_some_and(|a| a.contains(&0)) {
         bail!("--agents: every team needs at least 1 agent");
     }
@@ -56,18 +57,10 @@ pub(crate) fn run_bench(bench: Bench) -> Result<()> {
         topologies,
         payloads,
         transports,
-        waits: waits.map(|w| w.into_iter().map(WaitArg::strategy).collect()),
-        barriers: barriers.map(|b| {
-            b.into_iter()
-                .map(|b| matches!(b, BarrierArg::Global))
-                .collect()
-        }),
+        waits,
+        barriers,
     };
-    config.step = match step {
-        StepArg::Touch => StepKind::Touch,
-        StepArg::Average => StepKind::Average,
-        StepArg::Primal => StepKind::Primal,
-    };
+    config.step = step;
     config.rounds = recorded.unwrap_or(config.rounds);
     config.warmup = warmup.unwrap_or(config.warmup);
     if !(1..=100).contains(&repeat) {
@@ -82,11 +75,9 @@ pub(crate) fn run_bench(bench: Bench) -> Result<()> {
     if cases.is_empty() {
         bail!("no case to measure (a global barrier needs threads or ipc)");
     }
-    let bar = indicatif::ProgressBar::new(cases.len() as u64).with_style(
-        indicatif::ProgressStyle::with_template(
-            "{bar:30} {pos}/{len} cases, {elapsed} elapsed, ~{eta} left  {msg}",
-        )
-        .expect("valid template"),
+    let bar = progress_bar(
+        cases.len() as u64,
+        "{bar:30} {pos}/{len} cases, {elapsed} elapsed, ~{eta} left  {msg}",
     );
     if !json {
         println!(

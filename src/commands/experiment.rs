@@ -1,11 +1,12 @@
 //! `admm-ta experiment NAME`: the paper's experiments and the comparisons beyond it, each
 //! printing a table and writing JSON and SVG.
 
-use crate::cli::{Experiment, FigureArgs, MethodArg, agent_program};
-use admm_ta_agents::method::Method;
+use crate::cli::{Experiment, FigureArgs};
+use crate::commands::shared::{agent_program, progress_bar};
+use admm_ta::Method;
+use admm_ta::runtime::options::run::RunOptions;
+use admm_ta::runtime::transport::Execution;
 use admm_ta_bench::figures::FigureConfig;
-use admm_ta_runtime::options::run::RunOptions;
-use admm_ta_runtime::transport::Execution;
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -41,11 +42,9 @@ fn run_figure<T: serde::Serialize>(
     adjust(&mut config);
     let steps = steps(&config);
     let bar = if steps > 0 {
-        indicatif::ProgressBar::new(steps as u64).with_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:30} {pos}/{len}, {elapsed} elapsed, ~{eta} left  {msg}",
-            )
-            .expect("valid template"),
+        progress_bar(
+            steps as u64,
+            "{bar:30} {pos}/{len}, {elapsed} elapsed, ~{eta} left  {msg}",
         )
     } else {
         let bar = indicatif::ProgressBar::new_spinner();
@@ -66,7 +65,7 @@ fn run_figure<T: serde::Serialize>(
     Ok(())
 }
 
-pub(crate) fn run_experiment(experiment: Experiment) -> Result<()> {
+pub fn run(experiment: Experiment) -> Result<()> {
     use admm_ta_bench::{compare, figures, table1};
     match experiment {
         Experiment::Compare {
@@ -85,7 +84,7 @@ pub(crate) fn run_experiment(experiment: Experiment) -> Result<()> {
             let methods = if methods.is_empty() {
                 Method::ALL.to_vec()
             } else {
-                methods.into_iter().map(MethodArg::method).collect()
+                methods
             };
             let config = compare::CompareConfig {
                 robots,
@@ -179,7 +178,7 @@ pub(crate) fn run_experiment(experiment: Experiment) -> Result<()> {
             out,
             json,
         } => {
-            use admm_ta_agents::surveillance::SurveillanceScenario;
+            use admm_ta::agents::surveillance::SurveillanceScenario;
             use admm_ta_bench::surveillance;
             if episodes == 0 || max_iters == 0 {
                 bail!("--episodes and --max-iters must be at least 1");
@@ -196,18 +195,16 @@ pub(crate) fn run_experiment(experiment: Experiment) -> Result<()> {
             if transport.capabilities().execution == Execution::Lockstep {
                 bail!("--transport: the team runs on threads, ipc or uds");
             }
-            let config = admm_ta_runtime::episodes::EpisodeRunConfig {
+            let config = admm_ta::runtime::episodes::EpisodeRunConfig {
                 max_rounds: max_iters,
                 options: RunOptions::builder()
                     .transport(transport)
                     .agent_program(agent_program()?)
                     .build()?,
             };
-            let bar = indicatif::ProgressBar::new(episodes as u64).with_style(
-                indicatif::ProgressStyle::with_template(
-                    "{bar:30} {pos}/{len} cold-start comparisons, {elapsed} elapsed, ~{eta} left",
-                )
-                .expect("valid template"),
+            let bar = progress_bar(
+                episodes as u64,
+                "{bar:30} {pos}/{len} cold-start comparisons, {elapsed} elapsed, ~{eta} left",
             );
             bar.set_message("team running");
             let report = surveillance::run(model, episodes, !cold_start, &config, &|done| {

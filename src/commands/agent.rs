@@ -1,0 +1,45 @@
+//! `admm-ta agent`: one agent process, of an independently started team or of a launcher's run.
+
+use crate::cli::AgentArgs;
+use admm_ta::runtime::process::{agent, member};
+use anyhow::{Result, bail};
+
+pub fn run(args: AgentArgs) -> Result<()> {
+    let (index, result) = match args {
+        AgentArgs {
+            team: Some(team),
+            id: Some(id),
+            ..
+        } => {
+            let report = member::run_member(&team, id);
+            if let Ok(r) = &report {
+                println!(
+                    "{}",
+                    serde_json::json!({
+                        "id": id,
+                        "task": r.outcome.task,
+                        "rounds": r.outcome.rounds,
+                        "converged": r.outcome.converged,
+                    })
+                );
+            }
+            (id, report.map(|_| ()))
+        }
+        AgentArgs {
+            team: None,
+            id: None,
+            run: Some(run),
+            index: Some(index),
+            scenario: Some(scenario),
+        } => (index, agent::run(&run, index, &scenario)),
+        _ => bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
+    };
+    result.map_err(|e| {
+        // Exchange errors already start with "agent N:".
+        if e.starts_with(&format!("agent {index}:")) {
+            anyhow::anyhow!(e)
+        } else {
+            anyhow::anyhow!("agent {index}: {e}")
+        }
+    })
+}

@@ -1,0 +1,25 @@
+//! `admm-ta demo`: the built-in problem (20 robots, 20 tasks, complete graph), checked.
+
+use crate::cli::DemoArgs;
+use crate::commands::shared::agent_program;
+use crate::output;
+use admm_ta::{CaseChoice, CostMatrix, SolveOptions, TaskAssignmentProblem, generate};
+use anyhow::Result;
+
+pub fn run(args: DemoArgs) -> Result<()> {
+    let problem = TaskAssignmentProblem::new(CostMatrix::uniform(20, 20, 2019)?, CaseChoice::Auto)?;
+    let graph = generate::complete(20)?;
+    let options = SolveOptions::builder()
+        .check(true)
+        .transport(args.transport)
+        .agent_program(agent_program()?)
+        .build()?;
+    if !args.json {
+        println!(
+            "demo: 20 robots, 20 tasks, uniform [0,1) costs (seed 2019), complete graph, transport {}\n",
+            options.transport().name()
+        );
+    }
+    let report = admm_ta::solve(&problem, &graph, &options)?;
+    output::print_report(&report, args.json)
+}

@@ -1,0 +1,17 @@
+//! `admm-ta host`: one machine of a team across machines (its Zenoh router and bridge).
+
+use crate::cli::HostArgs;
+use anyhow::Result;
+
+#[cfg(feature = "zenoh")]
+pub fn run(args: HostArgs) -> Result<()> {
+    let report = admm_ta::runtime::process::host::run_host(&args.team, &args.name)
+        .map_err(anyhow::Error::msg)?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(())
+}
+
+#[cfg(not(feature = "zenoh"))]
+pub fn run(_args: HostArgs) -> Result<()> {
+    anyhow::bail!(admm_ta::runtime::transport::ZenohNotBuilt)
+}

@@ -1,0 +1,15 @@
+//! `admm-ta topology`: a generated topology in the topology file format.
+
+use crate::cli::TopologyArgs;
+use admm_ta::TopologySpec;
+use admm_ta::topologies::file as topology_file;
+use anyhow::Result;
+
+pub fn run(args: TopologyArgs) -> Result<()> {
+    let spec: TopologySpec = args.kind.parse()?;
+    print!(
+        "{}",
+        topology_file::to_toml(&spec.build(args.robots, args.seed)?)
+    );
+    Ok(())
+}
