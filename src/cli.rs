@@ -3,7 +3,7 @@
 //! strategies, …) come from the library's own types.
 
 use admm_ta::{CaseChoice, Method, OnFailure, ProjectionPath, StopRule, Transport, WaitStrategy};
-use admm_ta_bench::rounds::{Barrier, StepKind};
+use admm_ta_bench::rounds::case::{Barrier, StepKind};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 

@@ -1,6 +1,7 @@
 //! Every method side by side on the same problems, graphs and transports: rounds to its own
 //! stop, optimality, messages and bytes per agent, wall time (`admm-ta experiment compare`).
 
+use crate::experiment::Experiment;
 use admm_ta_agents::method::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
@@ -40,16 +41,40 @@ pub struct CompareRow {
     pub mean_wall_time_ms: f64,
 }
 
+/// Every row of a comparison (written as a JSON array).
+#[derive(Debug, Clone, Serialize)]
+#[serde(transparent)]
+pub struct Comparison {
+    pub rows: Vec<CompareRow>,
+}
+
+impl Experiment for Comparison {
+    fn json_file(&self) -> &'static str {
+        "compare.json"
+    }
+
+    /// The Markdown table of every row.
+    fn render(&self) -> String {
+        let mut out = format!("{TABLE_HEADER}\n");
+        for row in &self.rows {
+            out += &render_row(row);
+            out.push('\n');
+        }
+        out
+    }
+}
+
 /// Runs every (size, method, transport) on `seeds` uniform square problems.
 pub fn run(
     config: &CompareConfig,
     progress: &dyn Fn(&CompareRow),
-) -> Result<Vec<CompareRow>, SolveError> {
+) -> Result<Comparison, SolveError> {
     let mut rows = Vec::new();
     for &n in &config.robots {
         for &method in &config.methods {
             for &transport in &config.transports {
-                if method == Method::Hungarian
+                // A centralized method runs on a lockstep transport only.
+                if method.agent_method().is_none()
                     && transport.capabilities().execution != Execution::Lockstep
                 {
                     continue;
@@ -103,7 +128,7 @@ pub fn run(
             }
         }
     }
-    Ok(rows)
+    Ok(Comparison { rows })
 }
 
 /// The header of the Markdown table [`render_row`] fills.
@@ -147,7 +172,9 @@ mod tests {
             max_iters: 2000,
             agent_program: None,
         };
-        let rows = run(&config, &|_| {}).unwrap();
+        let comparison = run(&config, &|_| {}).unwrap();
+        assert!(comparison.render().starts_with(TABLE_HEADER));
+        let rows = comparison.rows;
         assert_eq!(rows.len(), 5);
         for row in &rows {
             assert_eq!(row.runs, 2);

@@ -5,6 +5,7 @@
 //! `admm-ta experiment NAME` reproduces ([`table1`], [`compare`]).
 
 pub mod compare;
+pub mod experiment;
 pub mod figures;
 pub mod plot;
 pub mod rounds;

@@ -9,7 +9,8 @@
 //! below 0), and the same cost matrix is solved again from a **cold** start (fresh agents,
 //! lockstep simulation, same ρ and stop rule) to measure what the warm start saves.
 
-use crate::figures::{FigureError, mean_of, write_json};
+use crate::experiment::{Experiment, OutputFile, mean_of};
+use crate::figures::FigureError;
 use crate::plot::{Chart, Legend, Series};
 use admm_ta_agents::local_stop::LocalCertifiedStop;
 use admm_ta_agents::oracle;
@@ -20,7 +21,6 @@ use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::workload::episode::EpisodeSettings;
 use admm_ta_topologies::{Graph, TopologySpec};
 use serde::Serialize;
-use std::path::{Path, PathBuf};
 
 /// One episode as the experiment saw it.
 #[derive(Debug, Clone, Serialize)]
@@ -244,7 +244,7 @@ pub fn run(
 }
 
 /// A short human summary.
-pub fn render(report: &SurveillanceReport) -> String {
+fn render(report: &SurveillanceReport) -> String {
     let mut out = format!(
         "{} robots, {} surveillance + {} charging stations, {} episodes over {} ({} start), ρ = {:.3e}\n\
          optimal episodes: {}/{}\n\
@@ -280,10 +280,10 @@ pub fn render(report: &SurveillanceReport) -> String {
     out
 }
 
-/// Writes `surveillance.json` and the plots (total cost over episodes as the paper's Fig. 3,
-/// its last 60 episodes, battery levels).
-pub fn write_outputs(report: &SurveillanceReport, dir: &Path) -> Result<Vec<PathBuf>, FigureError> {
-    let mut written = vec![write_json(dir, "surveillance.json", report)?];
+/// The plots: total cost over episodes as the paper's Fig. 3, its last 60 episodes, battery
+/// levels.
+fn charts(report: &SurveillanceReport) -> Vec<(String, OutputFile)> {
+    let mut charts = Vec::new();
     let series = |from: usize| {
         let pts = |f: fn(&Episode) -> f64| {
             report.per_episode[from..]
@@ -297,8 +297,7 @@ pub fn write_outputs(report: &SurveillanceReport, dir: &Path) -> Result<Vec<Path
         )
     };
     let (team, optimum) = series(0);
-    let path = dir.join("surveillance-cost.svg");
-    Chart::new(
+    let chart = Chart::new(
         format!(
             "Fig. 3: total assignment cost per episode, {} robots, {} surveillance stations",
             report.robots, report.surveillance_stations
@@ -308,21 +307,21 @@ pub fn write_outputs(report: &SurveillanceReport, dir: &Path) -> Result<Vec<Path
     )
     .legend(Legend::UpperRight)
     .series(team)
-    .series(optimum)
-    .write(&path)?;
-    written.push(path);
+    .series(optimum);
+    charts.push(("surveillance-cost.svg".into(), OutputFile::Chart(chart)));
     let (team, optimum) = series(report.episodes.saturating_sub(60));
-    let path = dir.join("surveillance-cost-last60.svg");
-    Chart::new(
+    let chart = Chart::new(
         "total cost over the last 60 episodes (the limit cycle)",
         "episode",
         "total cost",
     )
     .legend(Legend::UpperRight)
     .series(team)
-    .series(optimum)
-    .write(&path)?;
-    written.push(path);
+    .series(optimum);
+    charts.push((
+        "surveillance-cost-last60.svg".into(),
+        OutputFile::Chart(chart),
+    ));
     let shown = report.episodes.min(100);
     let mut chart = Chart::new(
         format!("battery level per robot after each episode (first {shown})"),
@@ -338,8 +337,20 @@ pub fn write_outputs(report: &SurveillanceReport, dir: &Path) -> Result<Vec<Path
             .collect();
         chart = chart.series(Series::new(format!("robot {i}"), pts));
     }
-    let path = dir.join("surveillance-battery.svg");
-    chart.write(&path)?;
-    written.push(path);
-    Ok(written)
+    charts.push(("surveillance-battery.svg".into(), OutputFile::Chart(chart)));
+    charts
+}
+
+impl Experiment for SurveillanceReport {
+    fn json_file(&self) -> &'static str {
+        "surveillance.json"
+    }
+
+    fn render(&self) -> String {
+        render(self)
+    }
+
+    fn files(&self) -> Vec<(String, OutputFile)> {
+        charts(self)
+    }
 }

@@ -14,6 +14,7 @@
 //! shift-invariant (note 9): the table is computed for uniform costs in [0, 1) and again for
 //! the same costs shifted to [1, 2).
 
+use crate::experiment::Experiment;
 use admm_ta_agents::method::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::{SolveOptions, StopRule};
@@ -245,8 +246,18 @@ pub fn run(
     })
 }
 
+impl Experiment for Table1 {
+    fn json_file(&self) -> &'static str {
+        "table1.json"
+    }
+
+    fn render(&self) -> String {
+        render(self)
+    }
+}
+
 /// The printed table.
-pub fn render(table: &Table1) -> String {
+fn render(table: &Table1) -> String {
     let mut out = format!(
         "Table 1: {} robots × {} tasks, complete graph, {} trials{}{}; iterations (mean / median / p90, runs that reached it)\n",
         table.robots,

@@ -2,10 +2,14 @@
 //! its tables printed and its files written.
 
 use crate::cli::{Bench, RoundsArgs};
+use crate::commands::experiment::report_written;
 use crate::commands::shared::{agent_program, progress_bar};
 use admm_ta::TopologySpec;
 use admm_ta::runtime::transport::{Capabilities, Execution, Transport};
-use admm_ta_bench::rounds::{self, RoundsConfig, SweepSpec};
+use admm_ta_bench::experiment::{Experiment, write};
+use admm_ta_bench::rounds;
+use admm_ta_bench::rounds::case::{RoundsConfig, SweepSpec, cases};
+use admm_ta_bench::rounds::report::{TABLE_HEADER, render_row};
 use anyhow::{Context, Result, bail};
 
 pub fn run(bench: Bench) -> Result<()> {
@@ -71,7 +75,7 @@ pub fn run(bench: Bench) -> Result<()> {
         bail!("--rounds must be at least 1");
     }
     config.agent_program = Some(agent_program()?);
-    let cases = rounds::cases(&config);
+    let cases = cases(&config);
     if cases.is_empty() {
         bail!("no case to measure (a global barrier needs threads or ipc)");
     }
@@ -87,7 +91,7 @@ pub fn run(bench: Bench) -> Result<()> {
             config.warmup,
             config.step.name()
         );
-        println!("{}", rounds::TABLE_HEADER);
+        println!("{}", TABLE_HEADER);
     }
     let report = rounds::run(&config, &mut |case, result| {
         bar.inc(1);
@@ -102,26 +106,18 @@ pub fn run(bench: Bench) -> Result<()> {
             return;
         }
         bar.suspend(|| match result {
-            Ok(r) => println!("{}", rounds::render_row(r)),
+            Ok(r) => println!("{}", render_row(r)),
             Err(e) => println!("{} failed: {e} |", case.columns()),
         });
     });
     bar.finish_and_clear();
-    let written = rounds::write_outputs(&report, &out).map_err(anyhow::Error::msg)?;
+    let written = write(&report, &out)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        println!(
-            "
-Ratios on equal cases (round time):
-
-{}",
-            rounds::render_ratios(&report)
-        );
+        print!("{}", report.render());
     }
-    for path in written {
-        eprintln!("wrote {}", path.display());
-    }
+    report_written(&written);
     if !report.failures.is_empty() {
         bail!(
             "{} of {} cases failed (see above and rounds.json)",

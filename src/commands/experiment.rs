@@ -1,74 +1,24 @@
-//! `admm-ta experiment NAME`: the paper's experiments and the comparisons beyond it, each
-//! printing a table and writing JSON and SVG.
+//! `admm-ta experiment NAME`: the paper's experiments and the comparisons beyond it. Each
+//! runs into a report ([`admm_ta_bench::experiment::Experiment`]) that the one write path
+//! puts into `--out`, then prints its table or its JSON.
 
-use crate::cli::{Experiment, FigureArgs};
+use crate::cli::{Experiment as Command, FigureArgs};
 use crate::commands::shared::{agent_program, progress_bar};
 use admm_ta::Method;
+use admm_ta::agents::surveillance::SurveillanceScenario;
+use admm_ta::runtime::episodes::EpisodeRunConfig;
 use admm_ta::runtime::options::run::RunOptions;
 use admm_ta::runtime::transport::Execution;
-use admm_ta_bench::figures::FigureConfig;
+use admm_ta_bench::experiment::{Experiment, write};
+use admm_ta_bench::figures::{FigureConfig, convergence, scaling};
+use admm_ta_bench::{compare, surveillance, table1};
 use anyhow::{Context, Result, bail};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
-fn check_sizes(sizes: &[usize]) -> Result<()> {
-    if sizes.is_empty() || sizes.iter().any(|n| !(2..=500).contains(n)) {
-        bail!("--sizes: every team size must be 2…500");
-    }
-    Ok(())
-}
-
-/// A figure experiment's result: what `--json` prints, the table, the files written.
-type FigureOutput<T> = (T, String, Vec<PathBuf>);
-
-/// Runs a figure experiment: its settings from `args` adjusted by `adjust`, a progress bar of
-/// `steps(settings)` steps (a spinner when 0), then the table or the JSON and the files.
-fn run_figure<T: serde::Serialize>(
-    args: FigureArgs,
-    adjust: impl FnOnce(&mut FigureConfig),
-    steps: impl FnOnce(&FigureConfig) -> usize,
-    body: impl FnOnce(&FigureConfig, &Path, &indicatif::ProgressBar) -> Result<FigureOutput<T>>,
-) -> Result<()> {
-    if args.trials == 0 || args.max_iters == 0 {
-        bail!("--trials and --max-iters must be at least 1");
-    }
-    let mut config = FigureConfig {
-        trials: args.trials,
-        adaptive_rho: args.adaptive_rho,
-        max_iters: args.max_iters,
-        agent_program: Some(agent_program()?),
-        ..FigureConfig::default()
-    };
-    adjust(&mut config);
-    let steps = steps(&config);
-    let bar = if steps > 0 {
-        progress_bar(
-            steps as u64,
-            "{bar:30} {pos}/{len}, {elapsed} elapsed, ~{eta} left  {msg}",
-        )
-    } else {
-        let bar = indicatif::ProgressBar::new_spinner();
-        bar.enable_steady_tick(Duration::from_millis(200));
-        bar
-    };
-    let result = body(&config, &args.out, &bar);
-    bar.finish_and_clear();
-    let (value, table, written) = result?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
-    } else {
-        print!("{table}");
-    }
-    for path in written {
-        eprintln!("wrote {}", path.display());
-    }
-    Ok(())
-}
-
-pub fn run(experiment: Experiment) -> Result<()> {
-    use admm_ta_bench::{compare, figures, table1};
-    match experiment {
-        Experiment::Compare {
+pub fn run(command: Command) -> Result<()> {
+    match command {
+        Command::Compare {
             robots,
             seeds,
             methods,
@@ -96,41 +46,30 @@ pub fn run(experiment: Experiment) -> Result<()> {
                 max_iters,
                 agent_program: Some(agent_program()?),
             };
+            // The rows are printed as they come; the whole table is the report's.
             println!("{}", compare::TABLE_HEADER);
-            let rows = compare::run(&config, &|row| println!("{}", compare::render_row(row)))?;
+            let comparison =
+                compare::run(&config, &|row| println!("{}", compare::render_row(row)))?;
             if let Some(dir) = out {
-                std::fs::create_dir_all(&dir)
-                    .with_context(|| format!("cannot create {}", dir.display()))?;
-                let path = dir.join("compare.json");
-                std::fs::write(&path, serde_json::to_string_pretty(&rows)?)
-                    .with_context(|| format!("cannot write {}", path.display()))?;
-                eprintln!("wrote {}", path.display());
+                report_written(&write(&comparison, &dir)?);
             }
             Ok(())
         }
-        Experiment::Fig1Convergence { figure } => run_figure(
+        Command::Fig1Convergence { figure } => run_figure(
             figure,
             |_| {},
             |_| 0,
-            |config, out, bar| {
-                let (fig, written) =
-                    figures::fig1_convergence(config, out, &|m| bar.set_message(m.to_string()))?;
-                let table = figures::render_summaries(&fig.summaries);
-                Ok((fig, table, written))
+            |config, bar| {
+                convergence::fig1_convergence(config, &|m| bar.set_message(m.to_string()))
             },
         ),
-        Experiment::Fig1Topologies { figure } => run_figure(
+        Command::Fig1Topologies { figure } => run_figure(
             figure,
             |_| {},
             |_| 0,
-            |config, out, bar| {
-                let (fig, written) =
-                    figures::fig1_topologies(config, out, &|m| bar.set_message(m.to_string()))?;
-                let table = figures::render_summaries(&fig.summaries);
-                Ok((fig, table, written))
-            },
+            |config, bar| convergence::fig1_topologies(config, &|m| bar.set_message(m.to_string())),
         ),
-        Experiment::Fig2Scaling {
+        Command::Fig2Scaling {
             figure,
             sizes,
             decentralized_up_to,
@@ -142,34 +81,30 @@ pub fn run(experiment: Experiment) -> Result<()> {
                     c.sizes = sizes;
                     c.decentralized_up_to = decentralized_up_to;
                 },
-                figures::fig2_points,
-                |config, out, bar| {
-                    let (fig, written) = figures::fig2_scaling(config, out, &|p| {
+                scaling::fig2_points,
+                |config, bar| {
+                    scaling::fig2_scaling(config, &|p| {
                         bar.inc(1);
                         bar.set_message(format!("{} {} robots {}", p.topology, p.robots, p.series));
-                    })?;
-                    let table = figures::render_scaling(&fig.points);
-                    Ok((fig, table, written))
+                    })
                 },
             )
         }
-        Experiment::IpcScaling { figure, sizes } => {
+        Command::IpcScaling { figure, sizes } => {
             check_sizes(&sizes)?;
             run_figure(
                 figure,
                 |c| c.sizes = sizes,
-                |c| c.sizes.len() * figures::ipc_methods().count(),
-                |config, out, bar| {
-                    let (fig, written) = figures::ipc_scaling(config, out, &|p| {
+                |c| c.sizes.len() * scaling::ipc_methods().count(),
+                |config, bar| {
+                    scaling::ipc_scaling(config, &|p| {
                         bar.inc(1);
                         bar.set_message(format!("{} robots {}", p.robots, p.method.name()));
-                    })?;
-                    let table = figures::render_ipc(&fig.points);
-                    Ok((fig, table, written))
+                    })
                 },
             )
         }
-        Experiment::Surveillance {
+        Command::Surveillance {
             episodes,
             scenario,
             transport,
@@ -178,8 +113,6 @@ pub fn run(experiment: Experiment) -> Result<()> {
             out,
             json,
         } => {
-            use admm_ta::agents::surveillance::SurveillanceScenario;
-            use admm_ta_bench::surveillance;
             if episodes == 0 || max_iters == 0 {
                 bail!("--episodes and --max-iters must be at least 1");
             }
@@ -195,7 +128,7 @@ pub fn run(experiment: Experiment) -> Result<()> {
             if transport.capabilities().execution == Execution::Lockstep {
                 bail!("--transport: the team runs on threads, ipc or uds");
             }
-            let config = admm_ta::runtime::episodes::EpisodeRunConfig {
+            let config = EpisodeRunConfig {
                 max_rounds: max_iters,
                 options: RunOptions::builder()
                     .transport(transport)
@@ -212,7 +145,7 @@ pub fn run(experiment: Experiment) -> Result<()> {
             });
             bar.finish_and_clear();
             let report = report?;
-            let written = surveillance::write_outputs(&report, &out)?;
+            let written = write(&report, &out)?;
             if json {
                 let mut value = serde_json::to_value(&report)?;
                 // The per-episode detail is in surveillance.json; stdout stays one object.
@@ -221,14 +154,12 @@ pub fn run(experiment: Experiment) -> Result<()> {
                 }
                 println!("{value}");
             } else {
-                print!("{}", surveillance::render(&report));
+                print!("{}", report.render());
             }
-            for path in written {
-                eprintln!("wrote {}", path.display());
-            }
+            report_written(&written);
             Ok(())
         }
-        Experiment::Table1 {
+        Command::Table1 {
             trials,
             out,
             adaptive_rho,
@@ -258,23 +189,76 @@ pub fn run(experiment: Experiment) -> Result<()> {
                 }
             };
             let table = table1::run(&config, &progress)?;
-            let text = serde_json::to_string_pretty(&table)?;
             if let Some(dir) = out {
-                std::fs::create_dir_all(&dir)
-                    .with_context(|| format!("cannot create {}", dir.display()))?;
-                let path = dir.join("table1.json");
-                std::fs::write(&path, &text)
-                    .with_context(|| format!("cannot write {}", path.display()))?;
+                let written = write(&table, &dir)?;
                 if !json {
-                    eprintln!("wrote {}", path.display());
+                    report_written(&written);
                 }
             }
             if json {
-                println!("{text}");
+                println!("{}", serde_json::to_string_pretty(&table)?);
             } else {
-                print!("{}", table1::render(&table));
+                print!("{}", table.render());
             }
             Ok(())
         }
+    }
+}
+
+fn check_sizes(sizes: &[usize]) -> Result<()> {
+    if sizes.is_empty() || sizes.iter().any(|n| !(2..=500).contains(n)) {
+        bail!("--sizes: every team size must be 2…500");
+    }
+    Ok(())
+}
+
+/// Runs a figure experiment: its settings from `args` adjusted by `adjust`, a progress bar of
+/// `steps(settings)` steps (a spinner when 0); writes the report into `--out`, prints its
+/// table or its JSON, and names the files written.
+fn run_figure<R: Experiment, E: std::error::Error + Send + Sync + 'static>(
+    args: FigureArgs,
+    adjust: impl FnOnce(&mut FigureConfig),
+    steps: impl FnOnce(&FigureConfig) -> usize,
+    body: impl FnOnce(&FigureConfig, &indicatif::ProgressBar) -> Result<R, E>,
+) -> Result<()> {
+    if args.trials == 0 || args.max_iters == 0 {
+        bail!("--trials and --max-iters must be at least 1");
+    }
+    let mut config = FigureConfig {
+        trials: args.trials,
+        adaptive_rho: args.adaptive_rho,
+        max_iters: args.max_iters,
+        agent_program: Some(agent_program()?),
+        ..FigureConfig::default()
+    };
+    adjust(&mut config);
+    let steps = steps(&config);
+    let bar = if steps > 0 {
+        progress_bar(
+            steps as u64,
+            "{bar:30} {pos}/{len}, {elapsed} elapsed, ~{eta} left  {msg}",
+        )
+    } else {
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.enable_steady_tick(Duration::from_millis(200));
+        bar
+    };
+    let result = body(&config, &bar);
+    bar.finish_and_clear();
+    let report = result?;
+    let written = write(&report, &args.out)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", report.render());
+    }
+    report_written(&written);
+    Ok(())
+}
+
+/// Names the files an experiment wrote (on stderr: stdout holds its table or JSON).
+pub fn report_written(paths: &[impl AsRef<Path>]) {
+    for path in paths {
+        eprintln!("wrote {}", path.as_ref().display());
     }
 }

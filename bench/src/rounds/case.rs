@@ -1,0 +1,355 @@
+//! What `admm-ta bench rounds` measures: the steps, payloads and barriers of a case, the
+//! cases of a sweep and the run's settings.
+
+use admm_ta_runtime::transport::Transport;
+use admm_ta_runtime::wait::WaitStrategy;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// What the agents compute each round.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StepKind {
+    /// Read one value per neighbour: the round is the exchange alone.
+    Touch,
+    /// Average the whole payloads (every byte read).
+    Average,
+    /// The primal consensus ADMM step on uniform `n × n` costs (payload `n × n`).
+    Primal,
+}
+
+impl StepKind {
+    /// Every step, in the order of the command line's help.
+    pub const ALL: [StepKind; 3] = [Self::Touch, Self::Average, Self::Primal];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Touch => "touch",
+            Self::Average => "average",
+            Self::Primal => "primal",
+        }
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for StepKind {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}
+
+/// Which barrier ends a round.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Barrier {
+    /// Each agent waits for its neighbours' messages only.
+    Neighbour,
+    /// Every agent also waits for the whole team (threads and ipc).
+    Global,
+}
+
+impl Barrier {
+    /// Both kinds, in the order of the command line's help.
+    pub const ALL: [Barrier; 2] = [Self::Neighbour, Self::Global];
+
+    /// The kind of a run with or without a global barrier.
+    pub fn of(global: bool) -> Self {
+        if global {
+            Self::Global
+        } else {
+            Self::Neighbour
+        }
+    }
+
+    pub fn is_global(self) -> bool {
+        self == Self::Global
+    }
+
+    /// `neighbour` or `global`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Neighbour => "neighbour",
+            Self::Global => "global",
+        }
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for Barrier {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}
+
+/// Payload of `rows × cols` f64 values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct PayloadShape {
+    pub rows: usize,
+    pub cols: usize,
+}
+
+impl PayloadShape {
+    pub fn values(self) -> usize {
+        self.rows * self.cols
+    }
+}
+
+impl std::fmt::Display for PayloadShape {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}x{}", self.rows, self.cols)
+    }
+}
+
+impl std::str::FromStr for PayloadShape {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (r, c) = s
+            .split_once(['x', 'X', '×'])
+            .ok_or_else(|| format!("payload '{s}' is not ROWSxCOLS (e.g. 10x10)"))?;
+        let parse = |t: &str| {
+            t.trim()
+                .parse::<usize>()
+                .ok()
+                .filter(|&v| (1..=2000).contains(&v))
+                .ok_or_else(|| format!("payload '{s}': dimensions must be 1…2000"))
+        };
+        Ok(Self {
+            rows: parse(r)?,
+            cols: parse(c)?,
+        })
+    }
+}
+
+/// One measured configuration.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Case {
+    pub agents: usize,
+    pub topology: String,
+    pub payload: PayloadShape,
+    pub transport: Transport,
+    pub wait: WaitStrategy,
+    pub global_barrier: bool,
+    pub step: StepKind,
+}
+
+impl Case {
+    /// `global` or `neighbour`.
+    pub fn barrier_name(&self) -> &'static str {
+        Barrier::of(self.global_barrier).name()
+    }
+
+    /// The first six columns of the Markdown tables: agents, graph, payload, transport,
+    /// wait, barrier.
+    pub fn columns(&self) -> String {
+        format!(
+            "| {} | {} | {} | {} | {} | {} |",
+            self.agents,
+            self.topology,
+            self.payload,
+            self.transport.name(),
+            self.wait.name(),
+            self.barrier_name()
+        )
+    }
+}
+
+/// Which configurations to measure. `None` axes take the preset's sweep.
+#[derive(Debug, Clone, Default)]
+pub struct SweepSpec {
+    pub agents: Option<Vec<usize>>,
+    pub topologies: Option<Vec<String>>,
+    pub payloads: Option<Vec<PayloadShape>>,
+    pub transports: Option<Vec<Transport>>,
+    pub waits: Option<Vec<WaitStrategy>>,
+    pub barriers: Option<Vec<Barrier>>,
+}
+
+/// Settings of a benchmark run.
+#[derive(Debug, Clone)]
+pub struct RoundsConfig {
+    pub sweep: SweepSpec,
+    pub quick: bool,
+    pub step: StepKind,
+    /// Recorded rounds per case (after the warm-up).
+    pub rounds: u64,
+    pub warmup: u64,
+    /// Measurements of every case; transports of one configuration are interleaved.
+    pub repeat: usize,
+    pub agent_program: Option<PathBuf>,
+    pub round_timeout: Duration,
+}
+
+impl RoundsConfig {
+    /// The preset's rounds: 1000 after 100 (`--quick`: 400 after 50).
+    pub fn new(quick: bool) -> Self {
+        Self {
+            sweep: SweepSpec::default(),
+            quick,
+            step: StepKind::Touch,
+            rounds: if quick { 400 } else { 1000 },
+            warmup: if quick { 50 } else { 100 },
+            repeat: 1,
+            agent_program: None,
+            round_timeout: Duration::from_secs(30),
+        }
+    }
+}
+
+/// The transports a sweep measures unless told otherwise.
+pub const DEFAULT_TRANSPORTS: [Transport; 3] = [Transport::Threads, Transport::Ipc, Transport::Uds];
+
+/// The cases of `config`, in run order, without duplicates. Invalid combinations (a global
+/// barrier on uds or zenoh) are left out.
+pub fn cases(config: &RoundsConfig) -> Vec<Case> {
+    let s = &config.sweep;
+    let base = Case {
+        agents: 10,
+        topology: "complete".into(),
+        payload: PayloadShape { rows: 10, cols: 10 },
+        transport: Transport::Ipc,
+        wait: WaitStrategy::Auto,
+        global_barrier: false,
+        step: config.step,
+    };
+    let transports = s.transports.clone().unwrap_or(DEFAULT_TRANSPORTS.to_vec());
+    let given = s.agents.is_some()
+        || s.topologies.is_some()
+        || s.payloads.is_some()
+        || s.waits.is_some()
+        || s.barriers.is_some();
+    // Each block: (agents, topologies, payloads, waits, barriers).
+    type Block = (
+        Vec<usize>,
+        Vec<String>,
+        Vec<PayloadShape>,
+        Vec<WaitStrategy>,
+        Vec<bool>,
+    );
+    let p = |r, c| PayloadShape { rows: r, cols: c };
+    let strings = |v: &[&str]| v.iter().map(|t| t.to_string()).collect::<Vec<_>>();
+    let blocks: Vec<Block> = if given {
+        vec![(
+            s.agents.clone().unwrap_or(vec![base.agents]),
+            s.topologies.clone().unwrap_or(vec![base.topology.clone()]),
+            s.payloads.clone().unwrap_or(vec![base.payload]),
+            s.waits.clone().unwrap_or(vec![base.wait]),
+            s.barriers
+                .as_ref()
+                .map_or(vec![false], |b| b.iter().map(|b| b.is_global()).collect()),
+        )]
+    } else if config.quick {
+        vec![
+            (
+                vec![2, 10, 50],
+                strings(&["complete", "ring"]),
+                vec![base.payload],
+                vec![base.wait],
+                vec![false],
+            ),
+            (
+                vec![10],
+                strings(&["complete"]),
+                vec![p(1, 1), p(50, 50), p(200, 200)],
+                vec![base.wait],
+                vec![false],
+            ),
+            (
+                vec![4],
+                strings(&["complete"]),
+                vec![base.payload],
+                vec![
+                    WaitStrategy::Block,
+                    WaitStrategy::SpinThenBlock,
+                    WaitStrategy::Spin,
+                ],
+                vec![false],
+            ),
+            (
+                vec![10],
+                strings(&["complete"]),
+                vec![base.payload],
+                vec![base.wait],
+                vec![true],
+            ),
+        ]
+    } else {
+        vec![
+            (
+                vec![2, 4, 10, 20, 50, 100],
+                strings(&["complete", "chain", "ring", "random:0.2"]),
+                vec![base.payload],
+                vec![base.wait],
+                vec![false],
+            ),
+            (
+                vec![4, 10],
+                strings(&["complete"]),
+                vec![p(1, 1), p(10, 10), p(50, 50), p(100, 100), p(200, 200)],
+                vec![base.wait],
+                vec![false],
+            ),
+            (
+                vec![2, 10],
+                strings(&["complete"]),
+                vec![base.payload],
+                vec![
+                    WaitStrategy::Block,
+                    WaitStrategy::SpinThenBlock,
+                    WaitStrategy::Spin,
+                ],
+                vec![false],
+            ),
+            (
+                vec![10, 50],
+                strings(&["complete"]),
+                vec![base.payload],
+                vec![base.wait],
+                vec![false, true],
+            ),
+        ]
+    };
+    let mut out: Vec<Case> = Vec::new();
+    for (agents, topologies, payloads, waits, barriers) in blocks {
+        for &n in &agents {
+            for topology in &topologies {
+                for &payload in &payloads {
+                    for &wait in &waits {
+                        for &global_barrier in &barriers {
+                            for &transport in &transports {
+                                if global_barrier && !transport.capabilities().global_barrier {
+                                    continue;
+                                }
+                                let payload = if config.step == StepKind::Primal {
+                                    p(n, n)
+                                } else {
+                                    payload
+                                };
+                                let case = Case {
+                                    agents: n,
+                                    topology: topology.clone(),
+                                    payload,
+                                    transport,
+                                    wait,
+                                    global_barrier,
+                                    step: config.step,
+                                };
+                                if !out.contains(&case) {
+                                    out.push(case);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out
+}

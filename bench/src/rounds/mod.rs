@@ -1,0 +1,218 @@
+//! The consensus-round latency harness (`admm-ta bench rounds`): teams of agents exchange
+//! payloads for a fixed number of rounds after a warm-up, on every transport in **one run**
+//! (so the ratios are comparable on a shared machine), sweeping team size, topology,
+//! payload size, wait strategy and barrier kind.
+//!
+//! Per case it reports percentiles (p50/p90/p99/p99.9/max) over every agent's recorded
+//! rounds of the round time and of the exchange overhead (round time minus compute), the
+//! CPU time and context switches per agent-round (`getrusage(RUSAGE_THREAD)`), and start-up.
+//! Outputs: a Markdown table on stdout, `rounds.json`, `rounds.csv` and SVG plots of latency
+//! versus team size and versus payload size per transport.
+//!
+//! The default sweep varies one axis at a time around a baseline (10 agents, complete
+//! graph, 10×10 payload, default wait, neighbour barrier); giving any axis on the command
+//! line sweeps the cross product of the given lists instead (the baseline for the others).
+//!
+//! [`case`]: what a case is and which cases a sweep has; [`report`]: the results and their
+//! tables, CSV and plots; here: measuring a case and running a sweep.
+
+pub mod case;
+pub mod report;
+
+use crate::rounds::case::{Case, RoundsConfig, StepKind, cases};
+use crate::rounds::report::{CaseFailure, CaseResult, RoundsReport};
+use admm_ta_agents::probe::ProbeStep;
+use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_runtime::error_text::one_line;
+use admm_ta_runtime::options::error::ConfigError;
+use admm_ta_runtime::options::run::RunOptions;
+use admm_ta_runtime::options::{SolveOptions, StopRule};
+use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
+use admm_ta_runtime::runner::RunError;
+use admm_ta_runtime::solve::error::SolveError;
+use admm_ta_runtime::solve::solve;
+use admm_ta_topologies::TopologySpec;
+
+/// Why a case could not be measured.
+#[derive(Debug, thiserror::Error)]
+pub enum MeasureError {
+    #[error("{0}")]
+    Case(String),
+    #[error(transparent)]
+    Options(#[from] ConfigError),
+    #[error(transparent)]
+    Run(#[from] RunError),
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+}
+
+/// Measures one case.
+pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, MeasureError> {
+    let bad = |e: &dyn std::fmt::Display| MeasureError::Case(e.to_string());
+    let graph = case
+        .topology
+        .parse::<TopologySpec>()
+        .map_err(|e| bad(&e))?
+        .build(case.agents, 0)
+        .map_err(|e| bad(&e))?;
+    let total_rounds = config.rounds + config.warmup;
+    let options = RunOptions::builder()
+        .transport(case.transport)
+        .wait(case.wait)
+        .global_barrier(case.global_barrier)
+        .warmup_rounds(config.warmup)
+        .round_timeout(config.round_timeout)
+        .agent_program(config.agent_program.clone())
+        .build()?;
+    let (latency, usage, startup, wall) = match case.step {
+        StepKind::Touch | StepKind::Average => {
+            let step = if case.step == StepKind::Touch {
+                ProbeStep::Touch
+            } else {
+                ProbeStep::Average
+            };
+            let run = ProbeRun {
+                rounds: total_rounds,
+                ..ProbeRun::new(case.payload.values(), step, options)
+            };
+            let r = run_probe(&graph, &run)?;
+            (
+                r.latency,
+                r.usage,
+                r.startup.map(|d| d.as_secs_f64() * 1e3),
+                r.wall,
+            )
+        }
+        StepKind::Primal => {
+            let n = case.agents;
+            let problem = TaskAssignmentProblem::new(
+                CostMatrix::uniform(n, n, 1).map_err(|e| bad(&e))?,
+                CaseChoice::Auto,
+            )
+            .map_err(|e| bad(&e))?;
+            let started = std::time::Instant::now();
+            let options = SolveOptions::builder()
+                .transport(case.transport)
+                .stop(StopRule::MaxIters)
+                .max_iters(total_rounds as usize)
+                .warmup_rounds(config.warmup)
+                .wait(case.wait)
+                .global_barrier(case.global_barrier)
+                .round_timeout(config.round_timeout)
+                .agent_program(config.agent_program.clone())
+                .fault_injection(false)
+                .build()?;
+            let report = solve(&problem, &graph, &options)?;
+            (
+                report.round_latency_us.unwrap_or_default(),
+                report.agent_usage.unwrap_or_default(),
+                report.startup_ms,
+                started.elapsed(),
+            )
+        }
+    };
+    let recorded = latency.round.count.max(1);
+    let per_round = |v: u64| v as f64 / recorded as f64;
+    Ok(CaseResult {
+        case: case.clone(),
+        payload_bytes: case.payload.values() * 8,
+        recorded: latency.round.count,
+        round_us: latency.round.into(),
+        overhead_us: latency.overhead.into(),
+        compute_p50_us: latency.compute.p50,
+        wait_p50_us: latency.wait.p50,
+        publish_p50_us: latency.publish.p50,
+        barrier_p50_us: latency.barrier.p50,
+        cpu_us_per_round: per_round(usage.cpu_ns) / 1e3,
+        voluntary_switches_per_round: per_round(usage.voluntary_switches),
+        involuntary_switches_per_round: per_round(usage.involuntary_switches),
+        startup_ms: startup,
+        wall_ms: wall.as_secs_f64() * 1e3,
+        repeats: 1,
+        round_p50_range_us: (latency.round.p50, latency.round.p50),
+    })
+}
+
+/// The repetition with the median round p50, carrying the spread of all of them.
+fn median_of(mut repeats: Vec<CaseResult>) -> CaseResult {
+    repeats.sort_by(|a, b| a.round_us.p50.total_cmp(&b.round_us.p50));
+    let range = (
+        repeats.first().map_or(0.0, |r| r.round_us.p50),
+        repeats.last().map_or(0.0, |r| r.round_us.p50),
+    );
+    let count = repeats.len();
+    let mut median = repeats.swap_remove(count / 2);
+    median.repeats = count;
+    median.round_p50_range_us = range;
+    median
+}
+
+/// Runs every case of `config`; `progress` sees each result (or failure) as it comes. A
+/// failing case is recorded and the sweep goes on.
+pub fn run(
+    config: &RoundsConfig,
+    progress: &mut dyn FnMut(&Case, Result<&CaseResult, &str>),
+) -> RoundsReport {
+    let mut report = RoundsReport {
+        cores: std::thread::available_parallelism().map_or(1, |c| c.get()),
+        rounds: config.rounds,
+        warmup: config.warmup,
+        step: config.step,
+        results: Vec::new(),
+        failures: Vec::new(),
+    };
+    let cases = cases(config);
+    // An unrecorded first run warms the binary, the page cache and the CPU clocks, so that
+    // the first measured case is not an outlier.
+    if let Some(first) = cases.first() {
+        let warm = RoundsConfig {
+            rounds: config.rounds.min(100),
+            warmup: 0,
+            ..config.clone()
+        };
+        let _ = measure(first, &warm);
+    }
+    // Configurations that differ only by transport are measured together, repetition by
+    // repetition, so that every transport sees the same state of the machine.
+    let mut start = 0;
+    while start < cases.len() {
+        let same = |c: &Case| {
+            Case {
+                transport: cases[start].transport,
+                ..c.clone()
+            } == cases[start]
+        };
+        let end = start + cases[start..].iter().take_while(|c| same(c)).count();
+        let group = &cases[start..end];
+        let mut measured: Vec<Result<Vec<CaseResult>, String>> =
+            group.iter().map(|_| Ok(Vec::new())).collect();
+        for _ in 0..config.repeat.max(1) {
+            for (case, slot) in group.iter().zip(measured.iter_mut()) {
+                if let Ok(results) = slot {
+                    match measure(case, config) {
+                        Ok(r) => results.push(r),
+                        Err(e) => *slot = Err(one_line(&e)),
+                    }
+                }
+            }
+        }
+        for (case, outcome) in group.iter().zip(measured) {
+            match outcome {
+                Ok(results) => {
+                    let result = median_of(results);
+                    progress(case, Ok(&result));
+                    report.results.push(result);
+                }
+                Err(error) => {
+                    progress(case, Err(&error));
+                    report.failures.push(CaseFailure {
+                        case: case.clone(),
+                        error,
+                    });
+                }
+            }
+        }
+        start = end;
+    }
+    report
+}

@@ -1,0 +1,324 @@
+//! What `admm-ta bench rounds` reports: each case's latency tails, CPU usage and start-up,
+//! rendered as Markdown tables, `rounds.csv` and SVG plots.
+
+use crate::experiment::{Experiment, OutputFile};
+use crate::plot::{Chart, Scale, Series};
+use crate::rounds::case::{Case, DEFAULT_TRANSPORTS, PayloadShape, StepKind};
+use admm_ta_runtime::latency::Percentiles;
+use admm_ta_runtime::transport::Transport;
+use admm_ta_runtime::wait::WaitStrategy;
+use serde::Serialize;
+
+/// Percentiles of one quantity, in microseconds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Tail {
+    pub p50: f64,
+    pub p90: f64,
+    pub p99: f64,
+    pub p999: f64,
+    pub max: f64,
+}
+
+impl From<Percentiles> for Tail {
+    fn from(p: Percentiles) -> Self {
+        Self {
+            p50: p.p50,
+            p90: p.p90,
+            p99: p.p99,
+            p999: p.p999,
+            max: p.max,
+        }
+    }
+}
+
+/// What one case measured.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseResult {
+    #[serde(flatten)]
+    pub case: Case,
+    pub payload_bytes: usize,
+    /// Agent-rounds recorded (agents × rounds after the warm-up).
+    pub recorded: u64,
+    /// Round time, µs.
+    pub round_us: Tail,
+    /// Round time minus compute time, µs: what the exchange and the barriers cost.
+    pub overhead_us: Tail,
+    pub compute_p50_us: f64,
+    pub wait_p50_us: f64,
+    pub publish_p50_us: f64,
+    pub barrier_p50_us: f64,
+    /// CPU time per agent-round, µs (user + system).
+    pub cpu_us_per_round: f64,
+    pub voluntary_switches_per_round: f64,
+    pub involuntary_switches_per_round: f64,
+    pub startup_ms: Option<f64>,
+    pub wall_ms: f64,
+    /// Times the case was measured (`--repeat`); the numbers above are those of the
+    /// repetition with the median round p50.
+    pub repeats: usize,
+    /// Lowest and highest round p50 over the repetitions, µs: the run-to-run spread.
+    pub round_p50_range_us: (f64, f64),
+}
+
+/// A case that could not be measured.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseFailure {
+    #[serde(flatten)]
+    pub case: Case,
+    pub error: String,
+}
+
+/// Everything a benchmark run produced.
+#[derive(Debug, Clone, Serialize)]
+pub struct RoundsReport {
+    pub cores: usize,
+    pub rounds: u64,
+    pub warmup: u64,
+    pub step: StepKind,
+    pub results: Vec<CaseResult>,
+    pub failures: Vec<CaseFailure>,
+}
+
+/// Header of [`render_row`]'s Markdown table.
+pub const TABLE_HEADER: &str = "| agents | graph | payload | transport | wait | barrier | round p50 | p90 | p99 | p99.9 | max | overhead p50 | overhead p99 | compute p50 | CPU µs/round | csw/round | start-up ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+
+/// One Markdown table row (latencies in µs).
+pub fn render_row(r: &CaseResult) -> String {
+    let c = &r.case;
+    format!(
+        "{} {} | {:.1} | {:.1} | {:.1} | {:.0} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {} |",
+        c.columns(),
+        if r.repeats > 1 {
+            format!(
+                "{:.1} ({:.1}–{:.1})",
+                r.round_us.p50, r.round_p50_range_us.0, r.round_p50_range_us.1
+            )
+        } else {
+            format!("{:.1}", r.round_us.p50)
+        },
+        r.round_us.p90,
+        r.round_us.p99,
+        r.round_us.p999,
+        r.round_us.max,
+        r.overhead_us.p50,
+        r.overhead_us.p99,
+        r.compute_p50_us,
+        r.cpu_us_per_round,
+        r.voluntary_switches_per_round + r.involuntary_switches_per_round,
+        r.startup_ms.map_or("-".into(), |v| format!("{v:.0}")),
+    )
+}
+
+/// Ratios of round p50 between transports on otherwise equal cases (`ipc/threads`,
+/// `uds/ipc`, `zenoh/ipc`), as Markdown.
+pub fn render_ratios(report: &RoundsReport) -> String {
+    let mut lines = vec![
+        "| agents | graph | payload | wait | barrier | ipc / threads p50 | uds / ipc p50 | uds / ipc p99 | zenoh / ipc p50 | zenoh / ipc p99 |".to_string(),
+        "|---|---|---|---|---|---|---|---|---|---|".to_string(),
+    ];
+    let find = |case: &Case, t: Transport| {
+        report.results.iter().find(|r| {
+            let mut other = case.clone();
+            other.transport = t;
+            r.case == other
+        })
+    };
+    for r in report
+        .results
+        .iter()
+        .filter(|r| r.case.transport == Transport::Ipc)
+    {
+        let c = &r.case;
+        let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) if b > 0.0 => format!("{:.2}×", a / b),
+            _ => "-".into(),
+        };
+        let threads = find(c, Transport::Threads);
+        let uds = find(c, Transport::Uds);
+        let zenoh = find(c, Transport::Zenoh);
+        lines.push(format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            c.agents,
+            c.topology,
+            c.payload,
+            c.wait.name(),
+            c.barrier_name(),
+            ratio(Some(r.round_us.p50), threads.map(|t| t.round_us.p50)),
+            ratio(uds.map(|u| u.round_us.p50), Some(r.round_us.p50)),
+            ratio(uds.map(|u| u.round_us.p99), Some(r.round_us.p99)),
+            ratio(zenoh.map(|z| z.round_us.p50), Some(r.round_us.p50)),
+            ratio(zenoh.map(|z| z.round_us.p99), Some(r.round_us.p99)),
+        ));
+    }
+    lines.join("\n")
+}
+
+/// `rounds.csv`: one line per measured case.
+pub fn to_csv(report: &RoundsReport) -> String {
+    let mut out = String::from(
+        "agents,topology,payload,payload_bytes,transport,wait,barrier,step,recorded,round_p50_us,round_p90_us,round_p99_us,round_p999_us,round_max_us,overhead_p50_us,overhead_p90_us,overhead_p99_us,overhead_p999_us,overhead_max_us,compute_p50_us,wait_p50_us,publish_p50_us,barrier_p50_us,cpu_us_per_round,voluntary_switches_per_round,involuntary_switches_per_round,startup_ms,wall_ms,repeats,round_p50_min_us,round_p50_max_us\n",
+    );
+    for r in &report.results {
+        let c = &r.case;
+        let t = |t: &Tail| format!("{},{},{},{},{}", t.p50, t.p90, t.p99, t.p999, t.max);
+        out += &format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            c.agents,
+            c.topology,
+            c.payload,
+            r.payload_bytes,
+            c.transport.name(),
+            c.wait.name(),
+            c.barrier_name(),
+            c.step.name(),
+            r.recorded,
+            t(&r.round_us),
+            t(&r.overhead_us),
+            r.compute_p50_us,
+            r.wait_p50_us,
+            r.publish_p50_us,
+            r.barrier_p50_us,
+            r.cpu_us_per_round,
+            r.voluntary_switches_per_round,
+            r.involuntary_switches_per_round,
+            r.startup_ms.map_or(String::new(), |v| v.to_string())
+                + &format!(
+                    ",{},{},{},{}",
+                    r.wall_ms, r.repeats, r.round_p50_range_us.0, r.round_p50_range_us.1
+                ),
+        );
+    }
+    out
+}
+
+impl Experiment for RoundsReport {
+    fn json_file(&self) -> &'static str {
+        "rounds.json"
+    }
+
+    /// The ratios between transports (the rows are printed as they are measured).
+    fn render(&self) -> String {
+        format!(
+            "\nRatios on equal cases (round time):\n\n{}\n",
+            render_ratios(self)
+        )
+    }
+
+    /// `rounds.csv` and the plots.
+    fn files(&self) -> Vec<(String, OutputFile)> {
+        let mut files = vec![("rounds.csv".to_string(), OutputFile::Text(to_csv(self)))];
+        files.extend(
+            charts(self)
+                .into_iter()
+                .map(|(name, chart)| (name, OutputFile::Chart(chart))),
+        );
+        files
+    }
+}
+
+/// The plots: round latency (p50 solid, p99 dashed) per transport against team size (one
+/// chart per topology) and against payload size (one chart per team size).
+pub fn charts(report: &RoundsReport) -> Vec<(String, Chart)> {
+    let base_wait = WaitStrategy::Auto;
+    let transports: Vec<Transport> = DEFAULT_TRANSPORTS
+        .into_iter()
+        .filter(|t| report.results.iter().any(|r| r.case.transport == *t))
+        .collect();
+    let mut charts = Vec::new();
+    let mut topologies: Vec<String> = Vec::new();
+    for r in &report.results {
+        if !topologies.contains(&r.case.topology) {
+            topologies.push(r.case.topology.clone());
+        }
+    }
+    let base_payload = PayloadShape { rows: 10, cols: 10 };
+    for topology in &topologies {
+        let chart = Chart::new(
+            format!(
+                "round latency vs agents ({topology} graph, {} payload, {} step)",
+                if report.step == StepKind::Primal {
+                    "n×n".into()
+                } else {
+                    base_payload.to_string()
+                },
+                report.step.name()
+            ),
+            "agents",
+            "round time (µs), p50 solid, p99 dashed",
+        )
+        .y_scale(Scale::Log)
+        .colour_by_prefix();
+        let (chart, points_any) = with_transport_series(chart, report, &transports, 2, |c| {
+            (&c.topology == topology
+                && c.wait == base_wait
+                && !c.global_barrier
+                && (report.step == StepKind::Primal || c.payload == base_payload))
+                .then_some(c.agents as f64)
+        });
+        if points_any {
+            let slug: String = topology
+                .chars()
+                .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+                .collect();
+            charts.push((format!("rounds-agents-{slug}.svg"), chart));
+        }
+    }
+    let mut sizes: Vec<usize> = report.results.iter().map(|r| r.case.agents).collect();
+    sizes.sort_unstable();
+    sizes.dedup();
+    for n in sizes {
+        let chart = Chart::new(
+            format!(
+                "round latency vs payload ({n} agents, complete graph, {} step)",
+                report.step.name()
+            ),
+            "payload (bytes)",
+            "round time (µs), p50 solid, p99 dashed",
+        )
+        .x_scale(Scale::Log)
+        .y_scale(Scale::Log)
+        .colour_by_prefix();
+        let (chart, points_any) = with_transport_series(chart, report, &transports, 3, |c| {
+            (c.agents == n && c.topology == "complete" && c.wait == base_wait && !c.global_barrier)
+                .then_some((c.payload.values() * 8) as f64)
+        });
+        if points_any {
+            charts.push((format!("rounds-payload-{n}-agents.svg"), chart));
+        }
+    }
+    charts
+}
+
+/// Adds a p50 and a dashed p99 line per transport to `chart`, over the cases that `x` places
+/// (returns their x value, `None` to leave a case out); transports with fewer than
+/// `min_points` cases are skipped. Also says whether any line was added.
+fn with_transport_series(
+    mut chart: Chart,
+    report: &RoundsReport,
+    transports: &[Transport],
+    min_points: usize,
+    x: impl Fn(&Case) -> Option<f64>,
+) -> (Chart, bool) {
+    let mut any = false;
+    for &t in transports {
+        let mut rows: Vec<(f64, &CaseResult)> = report
+            .results
+            .iter()
+            .filter(|r| r.case.transport == t)
+            .filter_map(|r| x(&r.case).map(|x| (x, r)))
+            .collect();
+        rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if rows.len() < min_points {
+            continue;
+        }
+        any = true;
+        let pts = |f: fn(&CaseResult) -> f64| rows.iter().map(|(x, r)| (*x, f(r))).collect();
+        chart = chart
+            .series(Series::new(
+                format!("{} p50", t.name()),
+                pts(|r| r.round_us.p50),
+            ))
+            .series(Series::new(format!("{} p99", t.name()), pts(|r| r.round_us.p99)).dashed());
+    }
+    (chart, any)
+}
