@@ -53,6 +53,9 @@
 //! Demand uses a tolerance of `10⁻¹²` of the robot's cost range (so rounding in the price
 //! sums never drops a matched edge); the assignment's cost is optimal to within `n` times
 //! that.
+//!
+//! Size: one agent — the market, its distribution over the graph (both explained above) and
+//! the matching and clique search of its replicated state; about 100 lines are its unit tests.
 
 use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
 

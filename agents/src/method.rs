@@ -18,6 +18,9 @@
 //! assert_eq!(AgentMethod::Dual.payload_len(2, 2), 4); // ν and λ: 2 robot + 2 task prices
 //! assert_eq!(Method::Dual.info().summary, "Algorithm 2, exchanges n+m multipliers");
 //! ```
+//!
+//! Size: the types of the registry and its entries, one per method with its builder: apart,
+//! the entries and the types they fill would import each other.
 
 use crate::agent::AgentAlgorithm;
 use crate::cbaa::CbaaAgent;

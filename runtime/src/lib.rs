@@ -3,7 +3,8 @@
 //! Data flows one way: problem + graph + options → plan → team runner → transport → agents →
 //! report. The modules, by layer, top to bottom; a module names modules of its own layer or
 //! of lower ones only, no two files import each other (directly or around a circle), and no
-//! transport names another (`runtime/tests/layout.rs` checks all three on the sources).
+//! transport names another (`tests/layout.rs` at the workspace root checks all three on the
+//! sources, and the absence of cycles in every crate).
 //!
 //! **Entry points**
 //! * [`solve`]: one end-to-end solve (costs + graph + options → rounded, checked assignment

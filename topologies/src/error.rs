@@ -5,17 +5,18 @@ use std::path::PathBuf;
 pub enum TopologyError {
     #[error("a team needs at least one robot")]
     NoRobots,
+    /// `max`: the generators' limit on robot pairs.
     #[error(
-        "a {what} graph of {robots} robots has {pairs} robot pairs to consider; the limit is {max} (about 6300 robots)",
-        max = crate::generate::MAX_PAIRS
+        "a {what} graph of {robots} robots has {pairs} robot pairs to consider; the limit is {max} (about 6300 robots)"
     )]
     TooDense {
         what: &'static str,
         robots: usize,
         pairs: u128,
+        max: u128,
     },
-    #[error("too many robots: {0} (the limit is {max})", max = crate::graph::MAX_ROBOTS)]
-    TooManyRobots(usize),
+    #[error("too many robots: {robots} (the limit is {max})")]
+    TooManyRobots { robots: usize, max: usize },
     #[error("edge ({0}, {1}) names robot {2}, but robots are numbered 0..{3}")]
     OutOfRange(usize, usize, usize, usize),
     #[error("edge ({0}, {0}) is a self-loop")]

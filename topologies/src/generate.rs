@@ -17,6 +17,7 @@ fn check_pairs(what: &'static str, robots: usize) -> Result<(), TopologyError> {
             what,
             robots,
             pairs,
+            max: MAX_PAIRS,
         });
     }
     Ok(())

@@ -24,7 +24,10 @@ impl Graph {
             return Err(TopologyError::NoRobots);
         }
         if robots > MAX_ROBOTS {
-            return Err(TopologyError::TooManyRobots(robots));
+            return Err(TopologyError::TooManyRobots {
+                robots,
+                max: MAX_ROBOTS,
+            });
         }
         let mut neighbours = vec![Vec::new(); robots];
         for &(a, b) in edges {

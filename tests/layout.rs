@@ -1,18 +1,25 @@
-//! The runtime's layout rules, checked on its sources (`runtime/src`) at test time:
+//! The workspace's layout rules, checked on the sources of every crate at test time (the
+//! crates are the workspace's members and the root package; each crate's files are found by
+//! following `mod` declarations from its `src/lib.rs` or `src/main.rs`; tests, examples and
+//! benches are not sources):
 //!
-//! (a) no import cycle between its files: a file is a module (`mod.rs` stands for its
-//!     folder), and a module depends on every module it names by a `crate::…` path — in
-//!     `use` trees such as `use crate::{a, b::{c, d}}`, in paths written inline, and under
-//!     `#[cfg(…)]` as well (both builds count). Comments (doc links included) and string
-//!     literals are not code and do not count. A path names the longest module it starts
-//!     with (`crate::ipc::exchange::IpcExchange` names `ipc::exchange`);
-//! (b) no transport module (`sim`, `threads`, `ipc`, `uds`, `zenoh_net`, each with its
-//!     submodules) names another transport: what several of them share sits below them;
+//! (a) every source file belongs to a crate (a file no `mod` reaches is dead);
+//! (b) no import cycle between the files of a crate: a file is a module (`mod.rs` stands for
+//!     its folder), and a module depends on every module it names by a path — `crate::…`,
+//!     `super::…` and `self::…` (outside inline modules such as `mod tests`), or a child
+//!     module's name (`child::…`) — in `use` trees such as `use crate::{a, b::{c, d}}`, in
+//!     paths written inline, and under `#[cfg(…)]` as well (both builds count). Comments (doc
+//!     links included) and string literals are not code and do not count. A path names the
+//!     longest module it starts with (`crate::ipc::exchange::IpcExchange` names
+//!     `ipc::exchange`);
 //! (c) no file above 500 lines unless its module doc has a line starting with `//! Size:`
 //!     that says why;
-//! (d) data flows one way: a module names modules of its own layer or of lower layers only
-//!     ([`LAYERS`], the layers of `runtime/src/lib.rs`'s module map; a new top-level module
-//!     must be placed in one).
+//! (d) in the runtime, no transport module (`sim`, `threads`, `ipc`, `uds`, `zenoh_net`,
+//!     each with its submodules) names another transport: what several of them share sits
+//!     below them;
+//! (e) in the runtime, data flows one way: a module names modules of its own layer or of
+//!     lower layers only ([`LAYERS`], the layers of `runtime/src/lib.rs`'s module map; a new
+//!     top-level module must be placed in one).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -49,45 +56,125 @@ const LAYERS: [&[&str]; 5] = [
 /// Longest file without a stated reason.
 const MAX_LINES: usize = 500;
 
-/// One source file of the runtime.
+/// One source file of a crate.
 struct SourceFile {
     path: PathBuf,
-    /// `crate` for `lib.rs`, else the module path, e.g. `ipc::exchange`.
+    /// `crate` for the crate root, else the module path, e.g. `ipc::exchange`.
     module: String,
     text: String,
+    /// The text with comments and literals blanked ([`code_only`]).
+    code: String,
+    /// The modules it declares with `mod NAME;` (its children in other files).
+    children: Vec<String>,
 }
 
-fn sources() -> Vec<SourceFile> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+/// One crate of the workspace: a library or a binary.
+struct Crate {
+    /// `runtime (lib)`, `. (bin)`: the package's folder and the kind of target.
+    name: String,
+    /// The package's folder relative to the workspace root (`.` for the root package).
+    package: String,
+    files: Vec<SourceFile>,
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The package folders: the root and the workspace's members.
+fn packages() -> Vec<String> {
+    let manifest = std::fs::read_to_string(root().join("Cargo.toml")).unwrap();
+    let start = manifest
+        .find("members = [")
+        .expect("a workspace member list");
+    let list = &manifest[start..start + manifest[start..].find(']').unwrap()];
+    let mut packages = vec![".".to_string()];
+    packages.extend(list.split('"').skip(1).step_by(2).map(String::from));
+    assert!(packages.len() >= 5, "packages: {packages:?}");
+    packages
+}
+
+/// Every crate: each package's `src/lib.rs` and `src/main.rs` with the files they reach.
+fn crates() -> Vec<Crate> {
+    let mut crates = Vec::new();
+    for package in packages() {
+        for (kind, file) in [("lib", "lib.rs"), ("bin", "main.rs")] {
+            let path = root().join(&package).join("src").join(file);
+            if path.exists() {
+                crates.push(Crate {
+                    name: format!("{package} ({kind})"),
+                    package: package.clone(),
+                    files: crate_files(&path),
+                });
+            }
+        }
+    }
+    crates
+}
+
+/// The files of the crate rooted at `root_file`, found by following `mod NAME;`.
+fn crate_files(root_file: &Path) -> Vec<SourceFile> {
     let mut files = Vec::new();
-    collect(&root, &root, &mut files);
-    assert!(files.len() > 10, "found only {} files", files.len());
+    let mut pending = vec![(root_file.to_path_buf(), "crate".to_string())];
+    while let Some((path, module)) = pending.pop() {
+        let text =
+            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let code = code_only(&text);
+        let children = declared_modules(&code);
+        // A crate root and a `mod.rs` keep their children beside them; `a.rs` in `a/`.
+        let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+        let dir = if module == "crate" || name == "mod" {
+            path.parent().unwrap().to_path_buf()
+        } else {
+            path.with_extension("")
+        };
+        for child in &children {
+            let file = dir.join(format!("{child}.rs"));
+            let file = if file.exists() {
+                file
+            } else {
+                dir.join(child).join("mod.rs")
+            };
+            assert!(file.exists(), "{}: mod {child} has no file", path.display());
+            let child_module = if module == "crate" {
+                child.clone()
+            } else {
+                format!("{module}::{child}")
+            };
+            pending.push((file, child_module));
+        }
+        files.push(SourceFile {
+            path,
+            module,
+            text,
+            code,
+            children,
+        });
+    }
     files
 }
 
-fn collect(root: &Path, dir: &Path, files: &mut Vec<SourceFile>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            collect(root, &path, files);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            let relative = path.strip_prefix(root).unwrap().with_extension("");
-            let mut parts: Vec<String> = relative
-                .components()
-                .map(|c| c.as_os_str().to_string_lossy().into_owned())
-                .collect();
-            if parts.last().is_some_and(|p| p == "mod") {
-                parts.pop();
-            }
-            let module = if parts == ["lib"] {
-                "crate".to_string()
-            } else {
-                parts.join("::")
-            };
-            let text = std::fs::read_to_string(&path).unwrap();
-            files.push(SourceFile { path, module, text });
+/// The modules `code` declares in other files: `mod NAME;` (not inline `mod NAME { … }`).
+fn declared_modules(code: &str) -> Vec<String> {
+    let chars: Vec<char> = code.chars().collect();
+    let mut names = Vec::new();
+    let mut i = 0;
+    while let Some(found) = find(&chars, i, "mod") {
+        i = found + 3;
+        let before = found.checked_sub(1).map(|p| chars[p]);
+        if before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
+            continue;
+        }
+        if !chars.get(i).is_some_and(|c| c.is_whitespace()) {
+            continue;
+        }
+        if let Some((name, end)) = identifier(&chars, skip_space(&chars, i))
+            && chars.get(skip_space(&chars, end)) == Some(&';')
+        {
+            names.push(name);
         }
     }
+    names
 }
 
 /// `source` with comments, string literals and character literals blanked out (replaced by
@@ -190,24 +277,92 @@ fn raw_string_start(chars: &[char], i: usize) -> Option<usize> {
     (chars.get(j + hashes) == Some(&'"')).then_some(hashes)
 }
 
-/// Every path named after `crate::` in `code` (already stripped by [`code_only`]), as its
-/// segments; `use crate::{a, b::{c, d}}` gives `a`, `b::c` and `b::d`.
-fn crate_paths(code: &str) -> Vec<Vec<String>> {
-    let chars: Vec<char> = code.chars().collect();
-    let mut paths = Vec::new();
+/// The spans of the inline modules of `code` (`mod NAME { … }`), from `mod` to the closing
+/// brace.
+fn inline_modules(chars: &[char]) -> Vec<(usize, usize)> {
+    let mut spans = Vec::new();
     let mut i = 0;
-    while let Some(found) = find(&chars, i, "crate") {
-        i = found + "crate".len();
+    while let Some(found) = find(chars, i, "mod") {
+        i = found + 3;
         let before = found.checked_sub(1).map(|p| chars[p]);
-        if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == '$') {
+        if before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
             continue;
         }
-        let mut j = skip_space(&chars, i);
+        let Some((_, end)) = identifier(chars, skip_space(chars, i)) else {
+            continue;
+        };
+        let open = skip_space(chars, end);
+        if chars.get(open) != Some(&'{') {
+            continue;
+        }
+        let mut depth = 0;
+        let mut close = open;
+        for (k, &c) in chars.iter().enumerate().skip(open) {
+            match c {
+                '{' => depth += 1,
+                '}' => depth -= 1,
+                _ => {}
+            }
+            if depth == 0 {
+                close = k;
+                break;
+            }
+        }
+        spans.push((found, close));
+    }
+    spans
+}
+
+/// Every module path `code` (already stripped by [`code_only`]) names, as segments from the
+/// crate root: paths after `crate::`; after `super::` and `self::` outside inline modules,
+/// relative to `module` (the file's module, `[]` for the crate root); and after the name of
+/// one of its `children`. `use crate::{a, b::{c, d}}` gives `a`, `b::c` and `b::d`.
+fn module_paths(code: &str, module: &[String], children: &[String]) -> Vec<Vec<String>> {
+    let chars: Vec<char> = code.chars().collect();
+    let inline = inline_modules(&chars);
+    let mut paths = Vec::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let Some((word, end)) = identifier(&chars, i) else {
+            i += 1;
+            continue;
+        };
+        let start = i;
+        i = end;
+        let before = start.checked_sub(1).map(|p| chars[p]);
+        if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == '$' || c == ':') {
+            continue;
+        }
+        let mut j = skip_space(&chars, end);
         if !chars[j..].starts_with(&[':', ':']) {
             continue;
         }
         j += 2;
-        parse_tree(&chars, j, &mut Vec::new(), &mut paths);
+        let nested = inline.iter().any(|&(a, b)| a < start && start < b);
+        let mut prefix: Vec<String> = match word.as_str() {
+            "crate" => Vec::new(),
+            "self" | "super" if nested => continue,
+            "self" => module.to_vec(),
+            "super" => {
+                let mut parent = module[..module.len().saturating_sub(1)].to_vec();
+                // `super::super::…`
+                while let Some((next, end)) = identifier(&chars, skip_space(&chars, j))
+                    && next == "super"
+                    && chars[skip_space(&chars, end)..].starts_with(&[':', ':'])
+                {
+                    parent.pop();
+                    j = skip_space(&chars, end) + 2;
+                }
+                parent
+            }
+            child if !nested && children.iter().any(|c| c == child) => {
+                let mut path = module.to_vec();
+                path.push(child.to_string());
+                path
+            }
+            _ => continue,
+        };
+        i = parse_tree(&chars, j, &mut prefix, &mut paths).max(i);
     }
     paths
 }
@@ -313,20 +468,55 @@ fn target(path: &[String], modules: &BTreeSet<String>) -> String {
         .unwrap_or_else(|| "crate".to_string())
 }
 
-/// Module → the modules it names (not itself).
+/// Module → the modules it names (not itself), for the files of one crate. A path to an
+/// item the crate root re-exports (`crate::Graph`, with `pub use graph::Graph;` in
+/// `lib.rs`) names the module the item comes from.
 fn dependencies(files: &[SourceFile]) -> BTreeMap<String, BTreeSet<String>> {
     let modules: BTreeSet<String> = files.iter().map(|f| f.module.clone()).collect();
+    let reexported: BTreeMap<String, String> = files
+        .iter()
+        .filter(|f| f.module == "crate")
+        .flat_map(|f| module_paths(&f.code, &[], &f.children))
+        .filter_map(|p| Some((p.last()?.clone(), target(&p, &modules))))
+        .filter(|(_, module)| module != "crate")
+        .collect();
+    let target = |p: &[String]| match target(p, &modules) {
+        root if root == "crate" => p
+            .first()
+            .and_then(|item| reexported.get(item).cloned())
+            .unwrap_or(root),
+        module => module,
+    };
     files
         .iter()
         .map(|f| {
-            let deps = crate_paths(&code_only(&f.text))
+            let own: Vec<String> = if f.module == "crate" {
+                Vec::new()
+            } else {
+                f.module.split("::").map(String::from).collect()
+            };
+            let deps = module_paths(&f.code, &own, &f.children)
                 .iter()
-                .map(|p| target(p, &modules))
+                .map(|p| target(p))
                 .filter(|t| *t != f.module)
                 .collect();
             (f.module.clone(), deps)
         })
         .collect()
+}
+
+/// The runtime library's files.
+fn runtime() -> Vec<SourceFile> {
+    let runtime = crates()
+        .into_iter()
+        .find(|c| c.package == "runtime")
+        .expect("the runtime crate");
+    assert!(
+        runtime.files.len() > 10,
+        "found only {} files",
+        runtime.files.len()
+    );
+    runtime.files
 }
 
 /// A cycle of `graph`, if it has one, as the modules along it (the first repeated last).
@@ -383,17 +573,43 @@ fn transport_of(module: &str) -> Option<&'static str> {
 }
 
 #[test]
-fn no_import_cycle_between_runtime_files() {
-    let graph = dependencies(&sources());
-    if let Some(cycle) = find_cycle(&graph) {
-        panic!("import cycle: {}", cycle.join(" -> "));
+fn every_source_file_belongs_to_a_crate() {
+    let reached: BTreeSet<PathBuf> = crates()
+        .iter()
+        .flat_map(|c| c.files.iter().map(|f| f.path.clone()))
+        .collect();
+    let mut orphans = Vec::new();
+    for package in packages() {
+        let mut stack = vec![root().join(package).join("src")];
+        while let Some(dir) = stack.pop() {
+            for entry in std::fs::read_dir(&dir).unwrap() {
+                let path = entry.unwrap().path();
+                if path.is_dir() {
+                    stack.push(path);
+                } else if path.extension().is_some_and(|e| e == "rs") && !reached.contains(&path) {
+                    orphans.push(path.display().to_string());
+                }
+            }
+        }
+    }
+    assert!(orphans.is_empty(), "files no `mod` reaches: {orphans:?}");
+}
+
+#[test]
+fn no_import_cycle_in_any_crate() {
+    let crates = crates();
+    assert!(crates.len() >= 6, "found only {} crates", crates.len());
+    for krate in crates {
+        if let Some(cycle) = find_cycle(&dependencies(&krate.files)) {
+            panic!("import cycle in {}: {}", krate.name, cycle.join(" -> "));
+        }
     }
 }
 
 #[test]
 fn no_transport_names_another() {
     let mut crossings = Vec::new();
-    for (module, deps) in dependencies(&sources()) {
+    for (module, deps) in dependencies(&runtime()) {
         let Some(own) = transport_of(&module) else {
             continue;
         };
@@ -427,7 +643,7 @@ fn layer_of(module: &str) -> Option<usize> {
 #[test]
 fn no_module_names_a_higher_layer() {
     let mut upward = Vec::new();
-    for (module, deps) in dependencies(&sources()) {
+    for (module, deps) in dependencies(&runtime()) {
         let Some(own) = layer_of(&module) else {
             continue;
         };
@@ -446,7 +662,7 @@ fn no_module_names_a_higher_layer() {
 #[test]
 fn long_files_say_why() {
     let mut unexplained = Vec::new();
-    for file in sources() {
+    for file in crates().into_iter().flat_map(|c| c.files) {
         let lines = file.text.lines().count();
         let reason = file
             .text
@@ -479,8 +695,35 @@ fn the_parser_reads_nested_use_trees_and_skips_comments_and_strings() {
         $crate::not_ours::X;
         "##,
     );
-    let paths: Vec<String> = crate_paths(&code).iter().map(|p| p.join("::")).collect();
+    let paths: Vec<String> = module_paths(&code, &[], &[])
+        .iter()
+        .map(|p| p.join("::"))
+        .collect();
     assert_eq!(paths, ["a", "b::c", "b::d", "", "e::f::G", "h::i", "j::K"]);
+    // Relative paths, seen from module `m::n` with a child `k` declared by `mod k;`.
+    let code = code_only(
+        r#"
+        mod k;
+        use super::sibling::X;
+        use self::k::Y;
+        fn f() { k::run(); other::k::no(); super::super::top(); }
+        #[cfg(test)]
+        mod tests {
+            use super::*;
+            fn g() { self::h(); }
+        }
+        "#,
+    );
+    assert_eq!(declared_modules(&code), ["k"]);
+    let own = ["m".to_string(), "n".to_string()];
+    let paths: Vec<String> = module_paths(&code, &own, &["k".to_string()])
+        .iter()
+        .map(|p| p.join("::"))
+        .collect();
+    assert_eq!(
+        paths,
+        ["m::sibling::X", "m::n::k::Y", "m::n::k::run", "top"]
+    );
     let modules: BTreeSet<String> = ["a", "b", "b::d", "e", "h"]
         .into_iter()
         .map(String::from)
