@@ -44,3 +44,19 @@ fn invalid_options_are_refused_before_anything_runs() {
     assert!(matches!(refused, Error::Solve(SolveError::Config(_))));
     assert_eq!(refused.to_string(), "--max-iters must be at least 1");
 }
+
+#[test]
+fn the_readme_example_runs() -> Result<(), Box<dyn std::error::Error>> {
+    use admm_ta::{Method, generate};
+    let costs = CostMatrix::from_csv_str("0.9,0.1\n0.4,0.3\n0.2,0.8\n")?;
+    let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto)?;
+    let report = Solver::new(problem)
+        .topology(generate::chain(3)?)
+        .method(Method::Dual)
+        .transport(Transport::Threads)
+        .check(true)
+        .solve()?;
+    assert_eq!(report.assignment, [1, 1, 0]);
+    assert!(report.check.unwrap().optimal);
+    Ok(())
+}

@@ -1,7 +1,9 @@
 //! Pure algorithms of admm-ta: the task assignment model, one agent's consensus ADMM step
 //! over preallocated buffers, the projections it needs, rounding, stopping rules and the
 //! centralized oracle. No I/O, no threads, no transport: runners in `admm-ta-runtime`
-//! drive the agents through [`agent::ConsensusAgent`].
+//! drive the agents through [`agent::ConsensusAgent`]. The methods and what each needs and
+//! supports are declared once, in the registry of [`method`]; [`method_agent::MethodAgent`]
+//! runs any of them.
 
 pub mod agent;
 pub mod cbaa;

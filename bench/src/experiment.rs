@@ -1,6 +1,6 @@
 //! The one run → report → write path every experiment shares: an experiment runs into a
 //! report that implements [`Experiment`] (its JSON file, its printed table, its other files:
-//! CSV tables and SVG charts), and [`write`] puts all of it into the output directory.
+//! CSV tables and SVG charts), and [`write()`] puts all of it into the output directory.
 
 use crate::plot::{Chart, PlotError};
 use serde::Serialize;

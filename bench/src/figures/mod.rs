@@ -1,15 +1,15 @@
 //! The paper's figures and two beyond it, each one command (`admm-ta experiment NAME`)
 //! writing a JSON file and SVG plots shaped like the paper's:
 //!
-//! * [`fig1_convergence`]: 50×50, complete graph — the team's relaxed cost per iteration
+//! * [`convergence::fig1_convergence`]: 50×50, complete graph — the team's relaxed cost per iteration
 //!   against the Hungarian optimum (paper Fig. 1 left: primal ADMM-TA within 50 iterations),
 //!   plus the three ADMM methods' relative gaps on log axes;
-//! * [`fig1_topologies`]: 50 robots × 30 tasks on complete, random and chain graphs (paper
+//! * [`convergence::fig1_topologies`]: 50 robots × 30 tasks on complete, random and chain graphs (paper
 //!   Fig. 1 right: all converge, the chain slowest, "about 200 iterations");
-//! * [`fig2_scaling`]: iterations versus team size for ADMM-TA, CBAA, the market and the
+//! * [`scaling::fig2_scaling`]: iterations versus team size for ADMM-TA, CBAA, the market and the
 //!   distributed Hungarian method on the complete graph, and ADMM-TA versus distributed
 //!   Hungarian on random graphs (paper Fig. 2);
-//! * [`ipc_scaling`] (beyond the paper): wall time to the optimal assignment with one
+//! * [`scaling::ipc_scaling`] (beyond the paper): wall time to the optimal assignment with one
 //!   process per robot over iceoryx2, and the round latency, versus team size per method.
 //!
 //! [`convergence`] holds the first two, [`scaling`] the other two; each returns a report that
