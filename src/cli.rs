@@ -309,9 +309,16 @@ pub enum Experiment {
 
 #[derive(Args, Debug)]
 pub struct SolveArgs {
-    /// Cost CSV: one row per robot, one column per task, no header.
+    /// Cost CSV: one row per robot, one column per task, no header; `inf` marks a forbidden
+    /// pair (`-inf` with --maximize).
     #[arg(long, conflicts_with_all = ["robots", "tasks"])]
     pub costs: Option<PathBuf>,
+    /// File of forbidden robot–task pairs, one `robot,task` per line (0-based).
+    #[arg(long)]
+    pub forbidden: Option<PathBuf>,
+    /// The matrix holds profits to maximise (scipy's maximize=True): `-inf` is forbidden.
+    #[arg(long)]
+    pub maximize: bool,
     /// Number of robots for random uniform [0,1) costs.
     #[arg(long, requires = "tasks")]
     pub robots: Option<usize>,
@@ -321,8 +328,9 @@ pub struct SolveArgs {
     /// Seed of the random costs, random topologies and tie-breaking.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Coverage case: auto (from the shape), 1 (n = m, one robot per task) or 2 (n ≥ m, at
-    /// least one robot per task).
+    /// Coverage case: auto (1 for n = m, 2 for n > m, idle for n < m), 1 (n = m, one robot
+    /// per task), 2 (n ≥ m, every robot works, every task at least one robot) or idle
+    /// (scipy's rectangular meaning: min(n, m) pairs, surplus robots idle or tasks unserved).
     #[arg(long, value_enum, default_value = "auto")]
     pub case: CaseChoice,
     /// complete | chain | ring | star | grid | random:P | geometric:R | FILE.toml

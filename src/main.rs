@@ -3,6 +3,7 @@
 
 mod cli;
 mod commands;
+mod exit;
 mod output;
 
 use clap::Parser;
@@ -25,11 +26,11 @@ fn main() -> ExitCode {
         }
     };
     match commands::run(args.command) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => ExitCode::from(code),
         Err(error) => {
             // One line naming the problem, with its causes; never a backtrace.
             eprintln!("error: {error:#}");
-            ExitCode::FAILURE
+            ExitCode::from(exit::code_of(&error))
         }
     }
 }

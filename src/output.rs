@@ -1,5 +1,6 @@
 //! Human and JSON renderings of a solve report.
 
+use admm_ta::agents::problem::{AssignmentCase, IDLE};
 use admm_ta::runtime::transport::Execution;
 use admm_ta::{Method, SolveReport, StopRule};
 use anyhow::Result;
@@ -18,12 +19,16 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         );
     }
     println!(
-        "method {}, transport {}: {} robots × {} tasks (Case {}), topology {}",
+        "method {}, transport {}: {} robots × {} tasks ({}{}), topology {}",
         report.method.name(),
         report.transport.name(),
         report.robots,
         report.tasks,
-        report.case,
+        match report.case {
+            AssignmentCase::Idle => "case idle".to_string(),
+            case => format!("Case {}", case.number()),
+        },
+        if report.maximize { ", maximizing" } else { "" },
         report.topology
     );
     let inner = if report.method == Method::Primal {
@@ -72,17 +77,35 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
                 .degraded
                 .as_ref()
                 .map_or(robot, |d| d.survivors[robot]);
-            format!("{robot}→{task}")
+            if *task == IDLE {
+                format!("{robot}→-")
+            } else {
+                format!("{robot}→{task}")
+            }
         })
         .collect();
     println!("assignment (robot→task): {}", pairs.join(" "));
+    if !report.idle_robots.is_empty() {
+        println!("idle robots: {:?}", report.idle_robots);
+    }
+    if !report.unserved_tasks.is_empty() {
+        println!("unserved tasks: {:?}", report.unserved_tasks);
+    }
     println!(
-        "cost {:.6}{}",
+        "{} {:.6}{}{}",
+        if report.maximize { "profit" } else { "cost" },
         report.cost,
         if report.repaired {
             " (robots' choices conflicted and were repaired)"
         } else {
             ""
+        },
+        if report.certified {
+            ""
+        } else if report.method == Method::Cbaa {
+            " — NOT certified optimal (CBAA is a heuristic)"
+        } else {
+            " — NOT certified optimal (the best assignment found when the run stopped)"
         }
     );
     if let Some(startup) = report.startup_ms {

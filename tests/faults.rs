@@ -168,6 +168,7 @@ fn every_injected_fault_is_reported_with_the_failed_agent() {
         let pid = launcher.id();
         let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
         assert!(!exit.success(), "{kind}: the run succeeded");
+        assert_eq!(exit.code(), Some(4), "{kind}: an agent failure exits 4");
         let stderr = stderr_of(&mut launcher);
         assert_failure_line(&stderr, &needles);
         assert!(

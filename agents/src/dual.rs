@@ -226,7 +226,7 @@ impl DualAgent {
     /// `(Ã_i x)_c` for a task row `c = n + t`.
     fn task_row(&self, x_t: f64) -> f64 {
         match self.case {
-            AssignmentCase::One => x_t,
+            AssignmentCase::One | AssignmentCase::Idle => x_t,
             AssignmentCase::Two => -x_t,
         }
     }
@@ -269,7 +269,9 @@ impl DualAgent {
         let c = self.robots + t;
         let theta_t = self.task_row(self.x[t]) / self.settings.rho + self.kappa[c];
         match self.case {
-            AssignmentCase::One => self.costs[t] + (theta_own + theta_t) / two_d,
+            AssignmentCase::One | AssignmentCase::Idle => {
+                self.costs[t] + (theta_own + theta_t) / two_d
+            }
             AssignmentCase::Two => self.costs[t] + theta_own / two_d - theta_t.max(0.0) / two_d,
         }
     }
@@ -283,7 +285,7 @@ impl DualAgent {
                 let n = self.robots;
                 let (costs, kappa) = (&self.costs, &self.kappa);
                 let response = |t: usize| match self.case {
-                    AssignmentCase::One => (
+                    AssignmentCase::One | AssignmentCase::Idle => (
                         f64::NEG_INFINITY,
                         -two_d_rho * costs[t] - rho * kappa[n + t],
                     ),
@@ -323,7 +325,7 @@ impl DualAgent {
         for t in 0..self.tasks {
             let theta = self.task_row(self.x[t]) / rho + self.kappa[n + t];
             out[n + t] = match self.case {
-                AssignmentCase::One => theta / two_d,
+                AssignmentCase::One | AssignmentCase::Idle => theta / two_d,
                 AssignmentCase::Two => (theta / two_d).max(0.0),
             };
         }
@@ -356,7 +358,9 @@ impl DualAgent {
             }
         }
         let reduced = |t: usize| match self.case {
-            AssignmentCase::One => self.costs[t] + prices[self.index] + prices[n + t],
+            AssignmentCase::One | AssignmentCase::Idle => {
+                self.costs[t] + prices[self.index] + prices[n + t]
+            }
             AssignmentCase::Two => self.costs[t] + prices[self.index] - prices[n + t],
         };
         // Worst case of s_i over every common multiplier within `radius` of ours.
@@ -611,7 +615,7 @@ mod tests {
         for (t, xt) in x.iter().enumerate() {
             let theta = agent.task_row(*xt) / rho + agent.kappa[n + t];
             theta2 += match agent.case {
-                AssignmentCase::One => theta * theta,
+                AssignmentCase::One | AssignmentCase::Idle => theta * theta,
                 AssignmentCase::Two => theta.max(0.0).powi(2),
             };
         }

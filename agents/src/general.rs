@@ -58,7 +58,7 @@ impl GeneralProblem {
         };
         let alpha = vec![vec![0.0; m]; n];
         match case {
-            AssignmentCase::One => Self {
+            AssignmentCase::One | AssignmentCase::Idle => Self {
                 dim: m,
                 a: (0..n)
                     .map(|i| [robot_row(i), identity(1.0)].concat())

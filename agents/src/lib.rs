@@ -7,14 +7,18 @@
 
 pub mod agent;
 pub mod cbaa;
+pub mod costs;
 pub mod dist_hungarian;
 pub mod dual;
+pub mod feasibility;
+pub mod forbidden;
 pub mod general;
 pub mod local_stop;
 pub mod lsap;
 pub mod market;
 pub mod method;
 pub mod method_agent;
+pub mod normalise;
 pub mod oracle;
 pub mod primal;
 pub mod probe;

@@ -10,28 +10,34 @@
 pub enum LsapError {
     #[error("cost matrix has {0} values for a {1}×{2} shape")]
     Shape(usize, usize, usize),
-    #[error("cost ({0}, {1}) is not a finite number")]
+    #[error("cost ({0}, {1}) is not a number or −∞ (+∞ marks a forbidden pair)")]
     NonFinite(usize, usize),
+    #[error("cost matrix is infeasible: no assignment avoids the forbidden (+∞) pairs")]
+    Infeasible,
 }
 
 /// Minimises `Σ_r cost[r][col_of_row[r]]` over injective maps from the smaller side into the
 /// larger one. `cost` is row-major `rows × cols`. Returns, for every row, its column
-/// (`Some`) — or `None` for rows left out when `rows > cols`.
+/// (`Some`) — or `None` for rows left out when `rows > cols`. `+∞` marks a forbidden pair
+/// (as in scipy); [`LsapError::Infeasible`] when no assignment avoids them.
 pub fn solve(cost: &[f64], rows: usize, cols: usize) -> Result<Vec<Option<usize>>, LsapError> {
     if cost.len() != rows * cols {
         return Err(LsapError::Shape(cost.len(), rows, cols));
     }
-    if let Some(k) = cost.iter().position(|c| !c.is_finite()) {
+    if let Some(k) = cost
+        .iter()
+        .position(|c| c.is_nan() || *c == f64::NEG_INFINITY)
+    {
         return Err(LsapError::NonFinite(k / cols.max(1), k % cols.max(1)));
     }
     if rows == 0 || cols == 0 {
         return Ok(vec![None; rows]);
     }
     if rows <= cols {
-        let col4row = ShortestAugmentingPath::new(rows, cols).run(|r, c| cost[r * cols + c]);
+        let col4row = ShortestAugmentingPath::new(rows, cols).run(|r, c| cost[r * cols + c])?;
         Ok(col4row.into_iter().map(Some).collect())
     } else {
-        let row4col = ShortestAugmentingPath::new(cols, rows).run(|r, c| cost[c * cols + r]);
+        let row4col = ShortestAugmentingPath::new(cols, rows).run(|r, c| cost[c * cols + r])?;
         let mut out = vec![None; rows];
         for (col, row) in row4col.into_iter().enumerate() {
             out[row] = Some(col);
@@ -74,9 +80,11 @@ impl ShortestAugmentingPath {
         }
     }
 
-    fn run(mut self, cost: impl Fn(usize, usize) -> f64) -> Vec<usize> {
+    fn run(mut self, cost: impl Fn(usize, usize) -> f64) -> Result<Vec<usize>, LsapError> {
         for current in 0..self.rows {
-            let (sink, min_value) = self.augmenting_path(current, &cost);
+            let (sink, min_value) = self
+                .augmenting_path(current, &cost)
+                .ok_or(LsapError::Infeasible)?;
             // Update the dual potentials of the rows and columns on the search tree.
             self.u[current] += min_value;
             for r in 0..self.rows {
@@ -100,7 +108,7 @@ impl ShortestAugmentingPath {
                 }
             }
         }
-        self.col4row
+        Ok(self.col4row)
     }
 
     /// Dijkstra over reduced costs from an unassigned row to the nearest free column.
@@ -108,7 +116,7 @@ impl ShortestAugmentingPath {
         &mut self,
         start: usize,
         cost: &impl Fn(usize, usize) -> f64,
-    ) -> (usize, f64) {
+    ) -> Option<(usize, f64)> {
         let mut min_value = 0.0;
         let mut remaining = self.cols;
         for (k, slot) in self.remaining.iter_mut().enumerate() {
@@ -136,14 +144,18 @@ impl ShortestAugmentingPath {
                     best_index = k;
                 }
             }
-            // Finite costs and rows ≤ cols guarantee a free column is always reachable.
+            // Finite costs and rows ≤ cols guarantee a free column is always reachable;
+            // forbidden (+∞) pairs may leave none.
+            if best_index == UNSET || lowest == f64::INFINITY {
+                return None;
+            }
             min_value = lowest;
             let c = self.remaining[best_index];
             self.visited_cols[c] = true;
             remaining -= 1;
             self.remaining[best_index] = self.remaining[remaining];
             if self.row4col[c] == UNSET {
-                return (c, min_value);
+                return Some((c, min_value));
             }
             row = self.row4col[c];
         }
@@ -218,6 +230,15 @@ mod tests {
             Err(LsapError::NonFinite(0, 1))
         );
         assert_eq!(solve(&[1.0], 1, 2), Err(LsapError::Shape(1, 1, 2)));
+        let inf = f64::INFINITY;
+        assert_eq!(
+            solve(&[inf, 1.0, inf, 2.0], 2, 2),
+            Err(LsapError::Infeasible)
+        );
+        assert_eq!(
+            solve(&[inf, 1.0, 2.0, inf], 2, 2).unwrap(),
+            vec![Some(1), Some(0)]
+        );
         assert_eq!(solve(&[], 0, 3).unwrap(), Vec::<Option<usize>>::new());
     }
 }

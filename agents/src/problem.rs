@@ -2,9 +2,14 @@
 //!
 //! `n` robots, `m` tasks, robot `i` pays `α_i[t]` for task `t`. Every robot does exactly one
 //! task; in Case 1 (`n = m`) every task gets exactly one robot, in Case 2 (`n > m`) every task
-//! gets at least one. The LP relaxation replaces `x ∈ {0,1}` by `0 ≤ x ≤ 1`; its constraint
-//! matrix is a bipartite incidence matrix (totally unimodular), so its vertices are
-//! assignments in both cases.
+//! gets at least one. `idle` is scipy's rectangular meaning: `min(n, m)` robot–task pairs,
+//! each robot at most one task and each task at most one robot. The LP relaxation replaces
+//! `x ∈ {0,1}` by `0 ≤ x ≤ 1`; its constraint matrix is a bipartite incidence matrix (totally
+//! unimodular), so its vertices are assignments in every case.
+//!
+//! A cost of `+∞` marks a *forbidden* pair (`−∞` with `--maximize`), as in scipy's
+//! `linear_sum_assignment`. The problem checks Hall's condition when it is built
+//! ([`crate::feasibility`]) and carries the [`crate::normalise`]d problem the agents solve.
 //!
 //! ```
 //! use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
@@ -13,271 +18,10 @@
 //! assert_eq!(problem.cost_of(&[0, 1]).unwrap(), 0.30000000000000004);
 //! ```
 //!
-//! Size: the cost matrix with its CSV reading and every check of its data, the cases and the
-//! problem built from them; about 90 lines are unit tests.
+//! The cost data and its errors live in [`crate::costs`] (re-exported here).
 
-use admm_ta_topologies::rng::SeededRng;
-use serde::{Deserialize, Serialize};
-use std::path::Path;
-
-/// Largest cost matrix accepted (entries), refused before anything is allocated for it.
-pub const MAX_COST_ENTRIES: usize = 50_000_000;
-
-/// Problems with the cost data or the problem shape.
-#[derive(Debug, thiserror::Error, Clone, PartialEq)]
-pub enum ProblemError {
-    #[error("cannot read cost file {path}: {reason}")]
-    Io { path: String, reason: String },
-    #[error("the cost file is empty (expected one row per robot, one column per task)")]
-    Empty,
-    #[error(
-        "line {line}, column {column}: '{text}' is not a number (cost files are plain comma-separated numbers, no header)"
-    )]
-    NotANumber {
-        line: usize,
-        column: usize,
-        text: String,
-    },
-    #[error("line {line} has {found} values but the first row has {expected} (ragged rows)")]
-    Ragged {
-        line: usize,
-        found: usize,
-        expected: usize,
-    },
-    #[error("cost of robot {robot} for task {task} is {value} (costs must be finite numbers)")]
-    NonFinite {
-        robot: usize,
-        task: usize,
-        value: f64,
-    },
-    #[error("the problem has zero {0}")]
-    Zero(&'static str),
-    #[error(
-        "{robots} robots cannot cover {tasks} tasks: every task needs a robot, so robots must be at least tasks (n ≥ m)"
-    )]
-    TooFewRobots { robots: usize, tasks: usize },
-    #[error("Case 1 needs as many robots as tasks, got {robots} robots and {tasks} tasks")]
-    NotSquare { robots: usize, tasks: usize },
-    #[error("the problem is too large: {robots} × {tasks} costs (limit {limit} entries)")]
-    TooLarge {
-        robots: usize,
-        tasks: usize,
-        limit: usize,
-    },
-    #[error(
-        "cost file {path} is {bytes} bytes, more than any cost matrix within the limit of {limit} entries can take"
-    )]
-    FileTooLarge {
-        path: String,
-        bytes: u64,
-        limit: usize,
-    },
-    #[error("assignment has {found} entries for {expected} robots")]
-    WrongLength { expected: usize, found: usize },
-    #[error("robot {robot} is assigned task {task}, but tasks are numbered 0..{tasks}")]
-    TaskOutOfRange {
-        robot: usize,
-        task: usize,
-        tasks: usize,
-    },
-}
-
-/// Robot-by-task costs, row-major: row `i` is `α_i`, one column per task.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CostMatrix {
-    robots: usize,
-    tasks: usize,
-    values: Vec<f64>,
-}
-
-impl CostMatrix {
-    /// Builds a matrix from row-major values, checking shape and finiteness.
-    pub fn new(robots: usize, tasks: usize, values: Vec<f64>) -> Result<Self, ProblemError> {
-        if robots == 0 {
-            return Err(ProblemError::Zero("robots"));
-        }
-        if tasks == 0 {
-            return Err(ProblemError::Zero("tasks"));
-        }
-        check_size(robots, tasks)?;
-        if values.len() != robots * tasks {
-            return Err(ProblemError::Ragged {
-                line: values.len() / tasks + 1,
-                found: values.len() % tasks,
-                expected: tasks,
-            });
-        }
-        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
-            return Err(ProblemError::NonFinite {
-                robot: k / tasks,
-                task: k % tasks,
-                value: values[k],
-            });
-        }
-        Ok(Self {
-            robots,
-            tasks,
-            values,
-        })
-    }
-
-    /// Parses a cost CSV: one line per robot, comma-separated costs per task, no header.
-    /// Blank lines and lines starting with `#` are skipped.
-    pub fn from_csv_str(text: &str) -> Result<Self, ProblemError> {
-        let mut values = Vec::new();
-        let mut tasks = None;
-        let mut robots = 0;
-        for (index, raw) in text.lines().enumerate() {
-            let line = raw.trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
-            }
-            let mut count = 0;
-            for (column, cell) in line.split(',').enumerate() {
-                let cell = cell.trim();
-                let value: f64 = cell.parse().map_err(|_| ProblemError::NotANumber {
-                    line: index + 1,
-                    column: column + 1,
-                    text: cell.chars().take(40).collect(),
-                })?;
-                if !value.is_finite() {
-                    return Err(ProblemError::NonFinite {
-                        robot: robots,
-                        task: column,
-                        value,
-                    });
-                }
-                values.push(value);
-                count += 1;
-            }
-            match tasks {
-                None => tasks = Some(count),
-                Some(expected) if expected != count => {
-                    return Err(ProblemError::Ragged {
-                        line: index + 1,
-                        found: count,
-                        expected,
-                    });
-                }
-                Some(_) => {}
-            }
-            robots += 1;
-            check_size(robots, count)?;
-        }
-        let tasks = tasks.ok_or(ProblemError::Empty)?;
-        Self::new(robots, tasks, values)
-    }
-
-    /// Reads a cost CSV file (see [`CostMatrix::from_csv_str`]).
-    pub fn read_csv(path: &Path) -> Result<Self, ProblemError> {
-        let io = |e: std::io::Error| ProblemError::Io {
-            path: path.display().to_string(),
-            reason: e.to_string(),
-        };
-        let meta = std::fs::metadata(path).map_err(io)?;
-        // A full-precision cost with its separator fits in 32 bytes; allow twice that for
-        // padding, and refuse bigger files before reading them into memory.
-        if meta.len() > 64 * MAX_COST_ENTRIES as u64 {
-            return Err(ProblemError::FileTooLarge {
-                path: path.display().to_string(),
-                bytes: meta.len(),
-                limit: MAX_COST_ENTRIES,
-            });
-        }
-        Self::from_csv_str(&std::fs::read_to_string(path).map_err(io)?)
-    }
-
-    /// Uniform `[0, 1)` costs drawn from `seed`.
-    pub fn uniform(robots: usize, tasks: usize, seed: u64) -> Result<Self, ProblemError> {
-        check_size(robots, tasks)?;
-        let mut rng = SeededRng::for_stream(seed, 0x636f737473);
-        let values = (0..robots * tasks).map(|_| rng.uniform()).collect();
-        Self::new(robots, tasks, values)
-    }
-
-    /// The CSV text of the matrix (round-trips exactly).
-    pub fn to_csv(&self) -> String {
-        let mut out = String::new();
-        for i in 0..self.robots {
-            let row: Vec<String> = self.row(i).iter().map(|v| format!("{v:?}")).collect();
-            out.push_str(&row.join(","));
-            out.push('\n');
-        }
-        out
-    }
-
-    pub fn robots(&self) -> usize {
-        self.robots
-    }
-
-    pub fn tasks(&self) -> usize {
-        self.tasks
-    }
-
-    /// `α_i`: robot `i`'s cost for every task.
-    pub fn row(&self, robot: usize) -> &[f64] {
-        &self.values[robot * self.tasks..(robot + 1) * self.tasks]
-    }
-
-    pub fn get(&self, robot: usize, task: usize) -> f64 {
-        self.values[robot * self.tasks + task]
-    }
-
-    /// All costs, row-major.
-    pub fn values(&self) -> &[f64] {
-        &self.values
-    }
-
-    /// A spread of the costs that ignores shifts and follows scaling: `√12 · std`, which
-    /// equals `max − min` for uniform costs but is not driven by a single outlier.
-    /// Falls back to 1 for constant costs.
-    pub fn spread(&self) -> f64 {
-        let count = self.values.len() as f64;
-        let mean = self.values.iter().sum::<f64>() / count;
-        let var = self
-            .values
-            .iter()
-            .map(|v| (v - mean) * (v - mean))
-            .sum::<f64>()
-            / count;
-        let spread = (12.0 * var).sqrt();
-        if spread > 0.0 && spread.is_finite() {
-            spread
-        } else {
-            1.0
-        }
-    }
-}
-
-fn check_size(robots: usize, tasks: usize) -> Result<(), ProblemError> {
-    match robots.checked_mul(tasks) {
-        Some(entries) if entries <= MAX_COST_ENTRIES => Ok(()),
-        _ => Err(ProblemError::TooLarge {
-            robots,
-            tasks,
-            limit: MAX_COST_ENTRIES,
-        }),
-    }
-}
-
-/// Which coverage constraint (1d) applies.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum AssignmentCase {
-    /// `n = m`: every task exactly one robot.
-    One,
-    /// `n > m`: every task at least one robot.
-    Two,
-}
-
-impl AssignmentCase {
-    /// 1 or 2, as the paper numbers them.
-    pub fn number(self) -> u8 {
-        match self {
-            Self::One => 1,
-            Self::Two => 2,
-        }
-    }
-}
+pub use crate::costs::{AssignmentCase, CostMatrix, MAX_COST_ENTRIES, ProblemError, read_bounded};
+use crate::normalise;
 
 /// How to pick the case: from the shape, or forced.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -289,18 +33,18 @@ pub enum CaseChoice {
 
 impl CaseChoice {
     /// Every choice, in the order of the command line's help.
-    pub const ALL: [CaseChoice; 3] = [
+    pub const ALL: [CaseChoice; 4] = [
         Self::Auto,
         Self::Forced(AssignmentCase::One),
         Self::Forced(AssignmentCase::Two),
+        Self::Forced(AssignmentCase::Idle),
     ];
 
-    /// The name used on the command line: `auto`, `1` or `2`.
+    /// The name used on the command line: `auto`, `1`, `2` or `idle`.
     pub fn name(self) -> &'static str {
         match self {
             Self::Auto => "auto",
-            Self::Forced(AssignmentCase::One) => "1",
-            Self::Forced(AssignmentCase::Two) => "2",
+            Self::Forced(case) => case.name(),
         }
     }
 }
@@ -316,39 +60,124 @@ impl clap::ValueEnum for CaseChoice {
     }
 }
 
-/// Problem 1: costs plus the coverage case. Always feasible once constructed.
+/// The task index of an idle robot in an assignment (case `idle` with `n > m`).
+pub const IDLE: usize = usize::MAX;
+
+/// Problem 1: costs plus the coverage case, checked feasible (Hall's condition) when built.
+/// `costs` are the user's numbers (profits when `maximize`); the agents solve
+/// [`TaskAssignmentProblem::internal`], the [`crate::normalise`]d problem.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TaskAssignmentProblem {
     costs: CostMatrix,
     case: AssignmentCase,
+    maximize: bool,
+    normalised: Option<Box<Normalised>>,
+}
+
+/// The problem the agents solve, and how its costs relate to the user's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Normalised {
+    /// Allowed costs shifted and scaled to `[0, 1]`, forbidden pairs at a penalty above any
+    /// allowed assignment, idle robots as extra zero-cost tasks (see [`crate::normalise`]).
+    pub problem: TaskAssignmentProblem,
+    /// User cost (minimisation sign) `= shift + scale · (normalised cost − raise)` for every
+    /// real pair.
+    pub shift: f64,
+    pub scale: f64,
+    /// Added to every real task's normalised cost (1 with an idle task, else 0).
+    pub raise: f64,
+    /// Why the floating-point methods cannot resolve these costs, if they cannot.
+    pub unresolved: Option<String>,
 }
 
 impl TaskAssignmentProblem {
-    /// Checks `n ≥ m` and the case against the shape. `Auto` picks Case 1 for square
-    /// problems and Case 2 otherwise; Case 2 may be forced on a square problem (it then
-    /// coincides with Case 1), Case 1 cannot be forced on `n > m`.
+    /// Checks the case against the shape and Hall's condition. `Auto` picks Case 1 for square
+    /// problems, Case 2 for `n > m` and `idle` for `n < m`; Case 2 may be forced on a square
+    /// problem (it then coincides with Case 1), Case 1 cannot be forced on `n ≠ m`.
     pub fn new(costs: CostMatrix, choice: CaseChoice) -> Result<Self, ProblemError> {
-        let (robots, tasks) = (costs.robots(), costs.tasks());
-        if robots < tasks {
-            return Err(ProblemError::TooFewRobots { robots, tasks });
-        }
-        let case = match choice {
-            CaseChoice::Auto if robots == tasks => AssignmentCase::One,
-            CaseChoice::Auto => AssignmentCase::Two,
-            CaseChoice::Forced(AssignmentCase::One) if robots != tasks => {
-                return Err(ProblemError::NotSquare { robots, tasks });
-            }
-            CaseChoice::Forced(case) => case,
-        };
-        Ok(Self { costs, case })
+        Self::build(costs, choice, false)
     }
 
+    /// As [`TaskAssignmentProblem::new`] with profits to maximise (scipy's `maximize=True`):
+    /// `−∞` marks a forbidden pair.
+    pub fn maximizing(costs: CostMatrix, choice: CaseChoice) -> Result<Self, ProblemError> {
+        Self::build(costs, choice, true)
+    }
+
+    fn build(costs: CostMatrix, choice: CaseChoice, maximize: bool) -> Result<Self, ProblemError> {
+        let case = resolve_case(costs.robots(), costs.tasks(), choice)?;
+        let wrong = if maximize {
+            f64::INFINITY
+        } else {
+            f64::NEG_INFINITY
+        };
+        if let Some(k) = costs.values().iter().position(|&v| v == wrong) {
+            return Err(ProblemError::NonFinite {
+                robot: k / costs.tasks(),
+                task: k % costs.tasks(),
+                value: wrong,
+            });
+        }
+        let mut problem = Self {
+            costs,
+            case,
+            maximize,
+            normalised: None,
+        };
+        if problem.costs.has_forbidden() {
+            normalise::check_hall(&problem.costs, case)?;
+        }
+        let parts = normalise::normalise(&problem.costs, case, maximize)?;
+        problem.normalised = Some(Box::new(Normalised {
+            problem: TaskAssignmentProblem::internal_from(parts.matrix, parts.case)?,
+            shift: parts.shift,
+            scale: parts.scale,
+            raise: parts.raise,
+            unresolved: parts.unresolved,
+        }));
+        Ok(problem)
+    }
+
+    /// A problem exactly as given (finite costs, no normalisation): the normalised problem
+    /// itself, as agents started from a scenario file rebuild it.
+    pub fn internal_from(costs: CostMatrix, case: AssignmentCase) -> Result<Self, ProblemError> {
+        let case = resolve_case(costs.robots(), costs.tasks(), CaseChoice::Forced(case))?;
+        if let Some(k) = costs.values().iter().position(|v| !v.is_finite()) {
+            return Err(ProblemError::NonFinite {
+                robot: k / costs.tasks(),
+                task: k % costs.tasks(),
+                value: costs.values()[k],
+            });
+        }
+        Ok(Self {
+            costs,
+            case,
+            maximize: false,
+            normalised: None,
+        })
+    }
+
+    /// The problem the agents solve (this one when it is already normalised).
+    pub fn internal(&self) -> &TaskAssignmentProblem {
+        self.normalised.as_ref().map_or(self, |n| &n.problem)
+    }
+
+    /// The normalisation, for a problem built from user costs.
+    pub fn normalised(&self) -> Option<&Normalised> {
+        self.normalised.as_deref()
+    }
+
+    /// The user's costs (profits when maximising).
     pub fn costs(&self) -> &CostMatrix {
         &self.costs
     }
 
     pub fn case(&self) -> AssignmentCase {
         self.case
+    }
+
+    pub fn maximize(&self) -> bool {
+        self.maximize
     }
 
     pub fn robots(&self) -> usize {
@@ -359,22 +188,44 @@ impl TaskAssignmentProblem {
         self.costs.tasks()
     }
 
-    /// Whether `assignment` (task per robot) satisfies (1b)–(1d).
+    /// An assignment of [`TaskAssignmentProblem::internal`] as this problem's: extra
+    /// (idle) tasks become [`IDLE`].
+    pub fn from_internal(&self, assignment: &[usize]) -> Vec<usize> {
+        let m = self.tasks();
+        assignment
+            .iter()
+            .map(|&t| if t >= m { IDLE } else { t })
+            .collect()
+    }
+
+    /// Whether `assignment` (task per robot, [`IDLE`] for an idle robot) uses allowed pairs
+    /// only and covers the tasks as the case requires.
     pub fn is_feasible(&self, assignment: &[usize]) -> bool {
-        if assignment.len() != self.robots() || assignment.iter().any(|&t| t >= self.tasks()) {
+        let (n, m) = (self.robots(), self.tasks());
+        if assignment.len() != n {
             return false;
         }
-        let mut load = vec![0usize; self.tasks()];
-        for &t in assignment {
+        let mut load = vec![0usize; m];
+        for (i, &t) in assignment.iter().enumerate() {
+            if t == IDLE && self.case == AssignmentCase::Idle {
+                continue;
+            }
+            if t >= m || !self.costs.is_allowed(i, t) {
+                return false;
+            }
             load[t] += 1;
         }
         match self.case {
             AssignmentCase::One => load.iter().all(|&l| l == 1),
             AssignmentCase::Two => load.iter().all(|&l| l >= 1),
+            AssignmentCase::Idle => {
+                load.iter().all(|&l| l <= 1) && load.iter().sum::<usize>() == n.min(m)
+            }
         }
     }
 
-    /// Objective (1a) of an assignment; checks lengths and task indices, not coverage.
+    /// Objective (1a) of an assignment in the user's numbers (a profit total when
+    /// maximising); checks lengths, task indices and forbidden pairs, not coverage.
     pub fn cost_of(&self, assignment: &[usize]) -> Result<f64, ProblemError> {
         if assignment.len() != self.robots() {
             return Err(ProblemError::WrongLength {
@@ -384,12 +235,18 @@ impl TaskAssignmentProblem {
         }
         let mut total = 0.0;
         for (robot, &task) in assignment.iter().enumerate() {
+            if task == IDLE && self.case == AssignmentCase::Idle {
+                continue;
+            }
             if task >= self.tasks() {
                 return Err(ProblemError::TaskOutOfRange {
                     robot,
                     task,
                     tasks: self.tasks(),
                 });
+            }
+            if !self.costs.is_allowed(robot, task) {
+                return Err(ProblemError::Forbidden { robot, task });
             }
             total += self.costs.get(robot, task);
         }
@@ -411,6 +268,25 @@ impl TaskAssignmentProblem {
             })
             .sum()
     }
+}
+
+fn resolve_case(
+    robots: usize,
+    tasks: usize,
+    choice: CaseChoice,
+) -> Result<AssignmentCase, ProblemError> {
+    Ok(match choice {
+        CaseChoice::Auto if robots == tasks => AssignmentCase::One,
+        CaseChoice::Auto if robots > tasks => AssignmentCase::Two,
+        CaseChoice::Auto => AssignmentCase::Idle,
+        CaseChoice::Forced(AssignmentCase::One) if robots != tasks => {
+            return Err(ProblemError::NotSquare { robots, tasks });
+        }
+        CaseChoice::Forced(AssignmentCase::Two) if robots < tasks => {
+            return Err(ProblemError::TooFewRobots { robots, tasks });
+        }
+        CaseChoice::Forced(case) => case,
+    })
 }
 
 #[cfg(test)]
@@ -448,8 +324,13 @@ mod tests {
                 ..
             })
         ));
+        let forbidden = CostMatrix::from_csv_str("1,2\n3,inf\n").unwrap();
+        assert!(!forbidden.is_allowed(1, 1) && forbidden.is_allowed(1, 0));
         assert!(matches!(
-            CostMatrix::from_csv_str("1,2\n3,inf\n"),
+            TaskAssignmentProblem::new(
+                CostMatrix::from_csv_str("1,2\n3,-inf\n").unwrap(),
+                CaseChoice::Auto
+            ),
             Err(ProblemError::NonFinite {
                 robot: 1,
                 task: 1,
@@ -470,8 +351,9 @@ mod tests {
         let auto = |c: &CostMatrix| TaskAssignmentProblem::new(c.clone(), CaseChoice::Auto);
         assert_eq!(auto(&square).unwrap().case(), AssignmentCase::One);
         assert_eq!(auto(&tall).unwrap().case(), AssignmentCase::Two);
+        assert_eq!(auto(&wide).unwrap().case(), AssignmentCase::Idle);
         assert!(matches!(
-            auto(&wide),
+            TaskAssignmentProblem::new(wide.clone(), CaseChoice::Forced(AssignmentCase::Two)),
             Err(ProblemError::TooFewRobots { .. })
         ));
         assert!(TaskAssignmentProblem::new(tall, CaseChoice::Forced(AssignmentCase::One)).is_err());

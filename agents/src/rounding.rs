@@ -11,9 +11,11 @@
 //!   robots, then cheapest among those.
 
 use crate::oracle;
-use crate::problem::{AssignmentCase, CostMatrix, TaskAssignmentProblem};
+use crate::problem::{AssignmentCase, IDLE, TaskAssignmentProblem};
 
-/// The feasible assignment closest to `x` (column-major `tasks × robots`).
+/// The feasible assignment closest to `x` (column-major `tasks × robots`). Non-finite
+/// entries (which a diverging iterate could hold) count as 0, so this never fails on a
+/// shape the case admits.
 pub fn local_assignment(
     x: &[f64],
     tasks: usize,
@@ -21,10 +23,25 @@ pub fn local_assignment(
     case: AssignmentCase,
 ) -> Vec<usize> {
     let negated: Vec<f64> = (0..robots)
-        .flat_map(|j| x[j * tasks..(j + 1) * tasks].iter().map(|v| -v))
+        .flat_map(|j| {
+            x[j * tasks..(j + 1) * tasks]
+                .iter()
+                .map(|v| if v.is_finite() { -v } else { 0.0 })
+        })
         .collect();
-    let costs = CostMatrix::new(robots, tasks, negated).expect("iterates are finite");
-    oracle::solve_costs(&costs, case).expect("finite costs always have an assignment")
+    oracle::solve_values(&negated, robots, tasks, case)
+        .unwrap_or_else(|_| fallback(robots, tasks, case))
+}
+
+/// A feasible assignment of a shape without forbidden pairs (robot `i` takes task `i mod m`
+/// or `i`), for the unreachable case where the solver fails.
+fn fallback(robots: usize, tasks: usize, case: AssignmentCase) -> Vec<usize> {
+    (0..robots)
+        .map(|i| match case {
+            AssignmentCase::Idle if i >= tasks => IDLE,
+            _ => i % tasks,
+        })
+        .collect()
 }
 
 /// Per-column argmax of `x` (first on ties) into `out` (one task per robot).
@@ -34,11 +51,13 @@ pub fn argmax_assignment(x: &[f64], tasks: usize, out: &mut [usize]) {
     }
 }
 
-/// Index of the largest entry (the first on ties; 0 for an empty slice).
+/// Index of the largest entry in the total order (the first on ties; 0 for an empty slice);
+/// `NaN` never wins.
 pub fn argmax(column: &[f64]) -> usize {
     let mut best = 0;
     for (t, v) in column.iter().enumerate() {
-        if *v > column[best] {
+        let current = column[best];
+        if !v.is_nan() && (current.is_nan() || v.total_cmp(&current).is_gt()) {
             best = t;
         }
     }
@@ -50,46 +69,67 @@ pub fn argmax(column: &[f64]) -> usize {
 pub fn covers(assignment: &[usize], case: AssignmentCase, load: &mut [u32]) -> bool {
     load.fill(0);
     for &t in assignment {
+        if t >= load.len() {
+            return false;
+        }
         load[t] += 1;
     }
     match case {
         AssignmentCase::One => load.iter().all(|&l| l == 1),
         AssignmentCase::Two => load.iter().all(|&l| l >= 1),
+        AssignmentCase::Idle => load.iter().all(|&l| l <= 1),
     }
 }
 
-/// Makes the robots' choices a feasible assignment. Returns it and whether anything had
-/// to change.
+/// Makes the robots' choices a feasible assignment on allowed pairs. Returns it and whether
+/// anything had to change. The assignment changes the fewest robots, then is cheapest;
+/// forbidden pairs are never used.
 pub fn repair(problem: &TaskAssignmentProblem, decisions: &[usize]) -> (Vec<usize>, bool) {
     if problem.is_feasible(decisions) {
         return (decisions.to_vec(), false);
     }
     let costs = problem.costs();
+    let (n, m) = (problem.robots(), problem.tasks());
     let (lo, hi) = costs
-        .values()
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &c| {
+        .allowed_values()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
             (lo.min(c), hi.max(c))
         });
-    // Moving one robot more must cost more than any difference in assignment cost.
-    let penalty = (hi - lo) * problem.robots() as f64 + 1.0;
-    let values = (0..problem.robots())
-        .flat_map(|i| {
-            (0..problem.tasks()).map(move |t| {
-                let keep = decisions.get(i) == Some(&t);
-                costs.get(i, t) - lo + if keep { 0.0 } else { penalty }
-            })
+    let sign = if problem.maximize() { -1.0 } else { 1.0 };
+    let spread = if hi > lo { hi - lo } else { 1.0 };
+    // Costs normalised to [0, 1]; moving one robot more costs more than any difference in
+    // assignment cost.
+    let penalty = n as f64 + 1.0;
+    let values: Vec<f64> = (0..n * m)
+        .map(|k| {
+            let (i, t) = (k / m, k % m);
+            if !costs.is_allowed(i, t) {
+                return f64::INFINITY;
+            }
+            let base = if sign > 0.0 {
+                (costs.get(i, t) - lo) / spread
+            } else {
+                (hi - costs.get(i, t)) / spread
+            };
+            let keep = decisions.get(i) == Some(&t);
+            base.clamp(0.0, 1.0) + if keep { 0.0 } else { penalty }
         })
         .collect();
-    let shifted = CostMatrix::new(problem.robots(), problem.tasks(), values).expect("finite");
-    let assignment = oracle::solve_costs(&shifted, problem.case()).expect("finite costs");
-    (assignment, true)
+    match oracle::solve_values(&values, n, m, problem.case()) {
+        Ok(assignment) => (assignment, true),
+        // Hall's condition was checked when the problem was built; the exact optimum then
+        // exists.
+        Err(_) => match oracle::solve(problem) {
+            Ok(optimum) => (optimum.assignment, true),
+            Err(_) => (decisions.to_vec(), false),
+        },
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::CaseChoice;
+    use crate::problem::{CaseChoice, CostMatrix};
 
     #[test]
     fn repair_changes_fewest_robots() {

@@ -23,12 +23,14 @@ pub enum Perturbation {
 }
 
 /// Step `δ` of the lattice the costs lie on, when they lie on one with fewer distinct
-/// values than entries (integer or fixed-point data); `None` for generic real costs.
+/// values than entries (integer or fixed-point data); `None` for generic real costs. Only
+/// allowed pairs count.
 pub fn lattice_step(costs: &CostMatrix) -> Option<f64> {
-    let mut values = costs.values().to_vec();
+    let mut values: Vec<f64> = costs.allowed_values().collect();
+    let entries = values.len();
     values.sort_unstable_by(f64::total_cmp);
     values.dedup();
-    if values.len() < 2 || values.len() == costs.values().len() {
+    if values.len() < 2 || values.len() == entries {
         return None;
     }
     let step = values

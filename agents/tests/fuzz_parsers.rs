@@ -36,13 +36,22 @@ proptest! {
     }
 
     #[test]
-    fn csv_parser_accepts_only_finite_rectangular_matrices(text in csv_like()) {
+    fn csv_parser_accepts_only_numeric_rectangular_matrices(text in csv_like()) {
         if let Ok(costs) = CostMatrix::from_csv_str(&text) {
             prop_assert!(costs.robots() >= 1 && costs.tasks() >= 1);
             for r in 0..costs.robots() {
                 prop_assert_eq!(costs.row(r).len(), costs.tasks());
-                prop_assert!(costs.row(r).iter().all(|v| v.is_finite()));
+                // ±∞ mark forbidden pairs; NaN is never accepted.
+                prop_assert!(costs.row(r).iter().all(|v| !v.is_nan()));
+                for t in 0..costs.tasks() {
+                    prop_assert_eq!(costs.is_allowed(r, t), costs.get(r, t).is_finite());
+                }
             }
+            // Building a problem never panics: it is a problem or one error.
+            let _ = admm_ta_agents::problem::TaskAssignmentProblem::new(
+                costs,
+                admm_ta_agents::problem::CaseChoice::Auto,
+            );
         }
     }
 

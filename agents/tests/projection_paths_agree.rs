@@ -46,7 +46,7 @@ fn kkt_certificate(z: &Mat<f64>, case: AssignmentCase) {
             assert_eq!(x[(r, c)], (z[(r, c)] - (u[r] + v[c])).clamp(0.0, 1.0));
         }
         match case {
-            AssignmentCase::One => assert!((row_sum - 1.0).abs() <= 1e-9),
+            AssignmentCase::One | AssignmentCase::Idle => assert!((row_sum - 1.0).abs() <= 1e-9),
             AssignmentCase::Two => {
                 assert!(u[r] <= 0.0 && row_sum >= 1.0 - 1e-9);
                 assert!(u[r] == 0.0 || (row_sum - 1.0).abs() <= 1e-9);

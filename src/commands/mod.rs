@@ -13,16 +13,16 @@ pub mod topology;
 use crate::cli::Command;
 use anyhow::Result;
 
-/// Runs the subcommand.
-pub fn run(command: Command) -> Result<()> {
+/// Runs the subcommand; its exit code (see [`crate::exit`]).
+pub fn run(command: Command) -> Result<u8> {
     match command {
-        Command::Solve(args) => solve::run(args),
-        Command::Demo(args) => demo::run(args),
-        Command::Agent(args) => agent::run(args),
-        Command::Collect(args) => collect::run(args),
-        Command::Host(args) => host::run(args),
-        Command::Bench { bench } => bench::run(bench),
-        Command::Experiment { experiment } => experiment::run(experiment),
-        Command::Topology(args) => topology::run(args),
+        Command::Solve(args) => solve::run(args).map(|outcome| outcome.code()),
+        Command::Demo(args) => demo::run(args).map(|()| 0),
+        Command::Agent(args) => agent::run(args).map(|()| 0),
+        Command::Collect(args) => collect::run(args).map(|()| 0),
+        Command::Host(args) => host::run(args).map(|()| 0),
+        Command::Bench { bench } => bench::run(bench).map(|()| 0),
+        Command::Experiment { experiment } => experiment::run(experiment).map(|()| 0),
+        Command::Topology(args) => topology::run(args).map(|()| 0),
     }
 }

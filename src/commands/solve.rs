@@ -2,19 +2,36 @@
 
 use crate::cli::SolveArgs;
 use crate::commands::shared::agent_program;
+use crate::exit::{Outcome, UsageError};
 use crate::output;
+use admm_ta::agents::forbidden;
 use admm_ta::{CostMatrix, Perturbation, SolveOptions, TaskAssignmentProblem, TopologySpec};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 
-pub fn run(args: SolveArgs) -> Result<()> {
+pub fn run(args: SolveArgs) -> Result<Outcome> {
     let costs = match (&args.costs, args.robots, args.tasks) {
         (Some(path), _, _) => CostMatrix::read_csv(path)?,
         (None, Some(robots), Some(tasks)) => CostMatrix::uniform(robots, tasks, args.seed)?,
         _ => {
-            bail!("give the costs with --costs FILE.csv, or --robots N --tasks M for random costs")
+            return Err(UsageError(
+                "give the costs with --costs FILE.csv, or --robots N --tasks M for random costs"
+                    .into(),
+            )
+            .into());
         }
     };
-    let problem = TaskAssignmentProblem::new(costs, args.case)?;
+    let costs = match &args.forbidden {
+        Some(path) => {
+            let pairs = forbidden::read(path, costs.robots(), costs.tasks())?;
+            forbidden::apply(&costs, &pairs, args.maximize)?
+        }
+        None => costs,
+    };
+    let problem = if args.maximize {
+        TaskAssignmentProblem::maximizing(costs, args.case)?
+    } else {
+        TaskAssignmentProblem::new(costs, args.case)?
+    };
     let spec: TopologySpec = args.topology.parse()?;
     let graph = spec
         .build(problem.robots(), args.seed)
@@ -24,7 +41,12 @@ pub fn run(args: SolveArgs) -> Result<()> {
         "off" | "0" => Perturbation::Off,
         value => match value.parse::<f64>() {
             Ok(eps) if eps > 0.0 && eps.is_finite() => Perturbation::Fixed(eps),
-            _ => bail!("--perturb must be auto, off or a positive number, got '{value}'"),
+            _ => {
+                return Err(UsageError(format!(
+                    "--perturb must be auto, off or a positive number, got '{value}'"
+                ))
+                .into());
+            }
         },
     };
     let options = SolveOptions::builder()
@@ -50,7 +72,8 @@ pub fn run(args: SolveArgs) -> Result<()> {
         .wait(args.wait)
         .build()?;
     let report = admm_ta::solve(&problem, &graph, &options)?;
-    output::print_report(&report, args.json)
+    output::print_report(&report, args.json)?;
+    Ok(Outcome::of(&report))
 }
 
 /// `auto` (None) or a number (the options check that it is a positive one).
@@ -60,6 +83,9 @@ fn parse_rho(text: &str) -> Result<Option<f64>> {
     }
     match text.parse::<f64>() {
         Ok(rho) => Ok(Some(rho)),
-        Err(_) => bail!("--rho (ρ) must be auto or a positive number, got '{text}'"),
+        Err(_) => Err(UsageError(format!(
+            "--rho (ρ) must be auto or a positive number, got '{text}'"
+        ))
+        .into()),
     }
 }

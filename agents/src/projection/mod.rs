@@ -42,7 +42,9 @@ pub fn polytope_violation(
     }
     for sum in rows {
         worst = worst.max(match case {
-            crate::problem::AssignmentCase::One => (sum - 1.0).abs(),
+            crate::problem::AssignmentCase::One | crate::problem::AssignmentCase::Idle => {
+                (sum - 1.0).abs()
+            }
             crate::problem::AssignmentCase::Two => 1.0 - sum,
         });
     }

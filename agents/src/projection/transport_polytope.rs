@@ -122,7 +122,7 @@ impl DualPoint {
         for (g, &u) in self.grad_u.iter_mut().zip(&self.u) {
             *g -= 1.0;
             residual = residual.max(match case {
-                AssignmentCase::One => g.abs(),
+                AssignmentCase::One | AssignmentCase::Idle => g.abs(),
                 AssignmentCase::Two => (u - (u + *g).min(0.0)).abs(),
             });
         }

@@ -83,7 +83,8 @@ pub(crate) fn member_scenario(
             options.method().name()
         )
     })?;
-    let plan = prepare(&problem, &graph, &options, method).map_err(|e| e.to_string())?;
+    // The agents solve the normalised problem, as a solve's do.
+    let plan = prepare(problem.internal(), &graph, &options, method).map_err(|e| e.to_string())?;
     let stop = LocalCertifiedStop::new(plan.diameter, problem.robots(), plan.tolerance)
         .map_err(|e| e.to_string())?;
     let mut scenario = Scenario::new(
@@ -274,7 +275,8 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
     }
     let (latency, _) = merge_outcomes(reports.iter().map(|r| &r.outcome))
         .map_err(|e| format!("agent {}'s result: {}", e.agent, e.source))?;
-    let assignment: Vec<usize> = reports.iter().map(|r| r.outcome.task).collect();
+    let internal: Vec<usize> = reports.iter().map(|r| r.outcome.task).collect();
+    let assignment = problem.from_internal(&internal);
     if !problem.is_feasible(&assignment) {
         return Err(format!(
             "the agents' tasks {assignment:?} are not a feasible assignment"

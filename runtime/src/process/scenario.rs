@@ -17,7 +17,7 @@ use admm_ta_agents::method::{AgentMethod, AgentSettings};
 use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::primal::ProjectionPath;
 use admm_ta_agents::probe::{ProbeAgent, ProbeStep};
-use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_agents::problem::{AssignmentCase, CostMatrix, TaskAssignmentProblem};
 use admm_ta_topologies::Graph;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -249,7 +249,7 @@ impl Scenario {
         let values = self.cost_bits.iter().map(|&b| f64::from_bits(b)).collect();
         let costs = CostMatrix::new(self.robots, self.tasks, values)
             .map_err(|e| ScenarioError::Inconsistent(e.to_string()))?;
-        TaskAssignmentProblem::new(costs, CaseChoice::Forced(self.case))
+        TaskAssignmentProblem::internal_from(costs, self.case)
             .map_err(|e| ScenarioError::Inconsistent(e.to_string()))
     }
 

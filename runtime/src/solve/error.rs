@@ -15,6 +15,8 @@ pub enum CannotContinue {
     TooFewRobots { survivors: usize, tasks: usize },
     #[error("without robot {failed} the communication graph is disconnected")]
     Disconnected { failed: usize },
+    #[error("the survivors' problem: {0}")]
+    Infeasible(String),
     #[error("the survivors' re-solve failed too: {}", one_line(.0.as_ref()))]
     ResolveFailed(Box<SolveError>),
 }
@@ -25,6 +27,15 @@ pub enum SolveError {
     /// Options no solve can run (for callers that build them on the way).
     #[error(transparent)]
     Config(#[from] ConfigError),
+    /// The method cannot take this problem (case or shape); names the methods that can.
+    #[error("{0}")]
+    Unsupported(String),
+    /// The costs span more than the method resolves in floating point.
+    #[error("{0}")]
+    Unresolvable(String),
+    /// A bug: a result that does not fit the problem (never reported as a solution).
+    #[error("internal error: {0}")]
+    Internal(String),
     #[error("the topology has {graph} robots but the costs have {problem}")]
     SizeMismatch { graph: usize, problem: usize },
     /// The method's memory estimate ([`admm_ta_agents::method::Memory`]) is above the limit.

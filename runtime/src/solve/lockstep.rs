@@ -5,7 +5,7 @@
 use crate::options::{SolveOptions, StopRule};
 use crate::runner::LockstepWatch;
 use crate::sim::{LockstepSim, RoundView};
-use crate::solve::trace::{Tracer, relaxed_objective, within_0_1pct};
+use crate::solve::trace::{Affine, Tracer, relaxed_objective, within_0_1pct};
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::oracle::OptimalAssignment;
@@ -31,6 +31,7 @@ enum Central<'p> {
     /// The paper's criterion, with the centralized optimum (experiments only).
     Oracle {
         problem: &'p TaskAssignmentProblem,
+        affine: Affine,
         optimal_cost: f64,
     },
 }
@@ -51,6 +52,7 @@ impl<'p> SolveWatch<'p> {
         tolerance: f64,
         tracer: Option<Tracer<'p>>,
         optimum: Option<&OptimalAssignment>,
+        affine: Affine,
     ) -> Self {
         let central = match options.stop() {
             StopRule::Agreement => Central::Agreement(AgreementStop::new(options.stop_rounds())),
@@ -59,9 +61,13 @@ impl<'p> SolveWatch<'p> {
                 streak: AgreementStreak::default(),
                 tolerance,
             },
-            StopRule::Oracle => Central::Oracle {
-                problem,
-                optimal_cost: optimum.expect("oracle stop has the optimum").cost,
+            StopRule::Oracle => match optimum {
+                Some(optimum) => Central::Oracle {
+                    problem,
+                    affine,
+                    optimal_cost: affine.apply(optimum.cost),
+                },
+                None => Central::None,
             },
             StopRule::Local | StopRule::MaxIters => Central::None,
         };
@@ -93,8 +99,12 @@ impl LockstepWatch for SolveWatch<'_> {
             }
             Central::Oracle {
                 problem,
+                affine,
                 optimal_cost,
-            } => within_0_1pct(relaxed_objective(problem, &sim.view()), *optimal_cost),
+            } => within_0_1pct(
+                affine.apply(relaxed_objective(problem, &sim.view())),
+                *optimal_cost,
+            ),
         }
     }
 }

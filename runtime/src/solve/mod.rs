@@ -9,6 +9,7 @@ pub mod error;
 pub(crate) mod lockstep;
 pub mod report;
 pub(crate) mod trace;
+pub(crate) mod user;
 
 use crate::exchange::header::RoundHeader;
 use crate::exchange::round_loop::AgentStop;
@@ -19,14 +20,15 @@ use crate::runner::{RunError, TeamRun, run_team_watched};
 use crate::solve::error::{CannotContinue, SolveError};
 use crate::solve::lockstep::SolveWatch;
 use crate::solve::report::{Degraded, SolveReport};
-use crate::solve::trace::Tracer;
+use crate::solve::trace::{Affine, Tracer};
 use crate::transport::Execution;
 use crate::usage::ThreadUsage;
 use crate::workload::Workload;
 use crate::workload::plan::prepare;
 use admm_ta_agents::local_stop::LocalCertifiedStop;
+use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle::{self, OptimalAssignment};
-use admm_ta_agents::problem::TaskAssignmentProblem;
+use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rounding;
 use admm_ta_agents::ties;
 use admm_ta_topologies::Graph;
@@ -37,13 +39,15 @@ use std::time::Instant;
 pub const MEMORY_LIMIT_BYTES: f64 = 8.0 * (1u64 << 30) as f64;
 
 /// Solves `problem` on `graph` as `options` say; with [`OnFailure::Continue`], a failed
-/// agent process is dropped and the survivors re-solve without it.
+/// agent process is dropped and the survivors re-solve without it. The agents solve the
+/// normalised problem ([`TaskAssignmentProblem::internal`]); the report is in the user's
+/// numbers.
 pub fn solve(
     problem: &TaskAssignmentProblem,
     graph: &Graph,
     options: &SolveOptions,
 ) -> Result<SolveReport, SolveError> {
-    let (first, failed, lost_rounds) = match solve_once(problem, graph, options) {
+    let (first, failed, lost_rounds) = match solve_user(problem, graph, options) {
         Err(
             first @ SolveError::Run(RunError::Launch(LaunchError::AgentFailed {
                 index, round, ..
@@ -78,7 +82,8 @@ fn solve_without(
 ) -> Result<(Vec<usize>, SolveReport), CannotContinue> {
     let survivors: Vec<usize> = (0..problem.robots()).filter(|&r| r != failed).collect();
     let (n, m) = (survivors.len(), problem.tasks());
-    if n < m {
+    let idle = problem.case() == AssignmentCase::Idle;
+    if n < m && !idle {
         return Err(CannotContinue::TooFewRobots {
             survivors: n,
             tasks: m,
@@ -88,10 +93,20 @@ fn solve_without(
         .iter()
         .flat_map(|&r| problem.costs().row(r).iter().copied())
         .collect();
-    let costs = admm_ta_agents::problem::CostMatrix::new(n, m, values)
-        .expect("rows of a valid matrix form a valid matrix");
-    let reduced = TaskAssignmentProblem::new(costs, admm_ta_agents::problem::CaseChoice::Auto)
-        .expect("n ≥ m survivors form a valid problem");
+    let choice = if idle {
+        CaseChoice::Forced(AssignmentCase::Idle)
+    } else {
+        CaseChoice::Auto
+    };
+    let reduced = CostMatrix::new(n.max(1), m, values)
+        .and_then(|costs| {
+            if problem.maximize() {
+                TaskAssignmentProblem::maximizing(costs, choice)
+            } else {
+                TaskAssignmentProblem::new(costs, choice)
+            }
+        })
+        .map_err(|e| CannotContinue::Infeasible(e.to_string()))?;
     let new_index = |r: usize| if r > failed { r - 1 } else { r };
     let edges: Vec<(usize, usize)> = graph
         .edges()
@@ -111,16 +126,49 @@ fn solve_without(
         .on_failure(OnFailure::Abort)
         .fault_injection(false)
         .build()
-        .expect("valid options stay valid without failure recovery and fault injection");
-    let report = solve_once(&reduced, &subgraph, &again)
+        .map_err(|e| CannotContinue::ResolveFailed(Box::new(SolveError::Config(e))))?;
+    let report = solve_user(&reduced, &subgraph, &again)
         .map_err(|second| CannotContinue::ResolveFailed(Box::new(second)))?;
     Ok((survivors, report))
+}
+
+/// One run of the user's problem: refuse what the method cannot solve faithfully, run the
+/// normalised problem, report in the user's numbers.
+fn solve_user(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    options: &SolveOptions,
+) -> Result<SolveReport, SolveError> {
+    user::check_supported(problem, options.method())?;
+    let needs_optimum = options.method() == Method::Hungarian
+        || options.check()
+        || options.stop() == StopRule::Oracle;
+    let exact = if needs_optimum {
+        Some(oracle::solve(problem).map_err(|e| SolveError::Internal(e.to_string()))?)
+    } else {
+        None
+    };
+    let internal_optimum = match &exact {
+        Some(exact) => Some(user::internal_optimum(problem, exact)?),
+        None => None,
+    };
+    let internal = problem.internal();
+    let report = solve_once(
+        internal,
+        graph,
+        options,
+        internal_optimum,
+        user::affine(problem),
+    )?;
+    user::to_user(problem, report, exact.as_ref())
 }
 
 fn solve_once(
     problem: &TaskAssignmentProblem,
     graph: &Graph,
     options: &SolveOptions,
+    optimum: Option<OptimalAssignment>,
+    affine: Affine,
 ) -> Result<SolveReport, SolveError> {
     let (n, m) = (problem.robots(), problem.tasks());
     if graph.robots() != n {
@@ -145,19 +193,21 @@ fn solve_once(
         Some(method) => Some(prepare(problem, graph, options, method)?),
         None => None,
     };
-    let optimum = (options.check() || options.stop() == StopRule::Oracle)
-        .then(|| oracle::solve(problem).expect("validated costs have an optimum"));
     let started = Instant::now();
-    let mut tracer = optimum.as_ref().map(|o| Tracer::new(problem, o));
+    let mut tracer = optimum
+        .as_ref()
+        .filter(|_| options.check() || options.stop() == StopRule::Oracle)
+        .map(|o| Tracer::new(problem, o, affine));
     if let Some(t) = tracer.as_mut() {
         t.record = options.trace();
     }
     let run = match &plan {
         None => {
             tracer = None;
-            let optimum = optimum.clone().unwrap_or_else(|| {
-                oracle::solve(problem).expect("validated costs have an optimum")
-            });
+            let optimum = match optimum.clone() {
+                Some(optimum) => optimum,
+                None => oracle::solve(problem).map_err(|e| SolveError::Internal(e.to_string()))?,
+            };
             RunResult::centralized(optimum)
         }
         Some(plan) => {
@@ -175,6 +225,7 @@ fn solve_once(
                 plan.tolerance,
                 tracer.take(),
                 optimum.as_ref(),
+                affine,
             );
             let team = run_team_watched(
                 Workload::Solve {
@@ -202,11 +253,11 @@ fn solve_once(
     let (assignment, repaired) = rounding::repair(problem, &run.decisions);
     let cost = problem
         .cost_of(&assignment)
-        .expect("repaired assignment is in range");
+        .map_err(|e| SolveError::Internal(format!("the repaired assignment: {e}")))?;
     let check = match (tracer, optimum) {
         (Some(t), _) => Some(t.finish(cost)),
-        (None, Some(o)) => Some(Tracer::new(problem, &o).finish(cost)),
-        (None, None) => None,
+        (None, Some(o)) if options.check() => Some(Tracer::new(problem, &o, affine).finish(cost)),
+        _ => None,
     };
     Ok(SolveReport {
         degraded: None,
@@ -220,7 +271,11 @@ fn solve_once(
         rho: plan.as_ref().map_or(0.0, |p| p.rho),
         robots: n,
         tasks: m,
-        case: problem.case().number(),
+        case: problem.case(),
+        maximize: false,
+        certified: false,
+        idle_robots: Vec::new(),
+        unserved_tasks: Vec::new(),
         topology: graph.name().to_string(),
         // The centralized solver reports the perturbation a team would have used.
         perturbation: plan.as_ref().map_or_else(

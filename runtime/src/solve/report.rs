@@ -5,7 +5,8 @@ use crate::options::StopRule;
 use crate::transport::Transport;
 use crate::usage::ThreadUsage;
 use admm_ta_agents::method::Method;
-use serde::Serialize;
+use admm_ta_agents::problem::{AssignmentCase, IDLE};
+use serde::{Serialize, Serializer};
 
 /// A failed robot and how the survivors went on (`--on-failure continue`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -52,7 +53,8 @@ pub struct TracePoint {
 /// The outcome of a solve.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SolveReport {
-    /// Task index per robot (always feasible).
+    /// Task index per robot (always feasible; [`IDLE`] for an idle robot, `null` in JSON).
+    #[serde(serialize_with = "tasks_or_null")]
     pub assignment: Vec<usize>,
     pub cost: f64,
     pub iterations: usize,
@@ -65,7 +67,19 @@ pub struct SolveReport {
     pub rho: f64,
     pub robots: usize,
     pub tasks: usize,
-    pub case: u8,
+    /// `1`, `2` or `"idle"` in JSON.
+    #[serde(serialize_with = "case_label")]
+    pub case: AssignmentCase,
+    /// The costs are profits and `cost` is their total (scipy's `maximize=True`).
+    pub maximize: bool,
+    /// The method proved this assignment optimal (the centralized solver; market and
+    /// distributed Hungarian when their protocol finished; an ADMM method whose local or
+    /// certified stop fired). `false`: the best assignment found, not proved optimal.
+    pub certified: bool,
+    /// Robots without a task (`--case idle` with more robots than tasks).
+    pub idle_robots: Vec<usize>,
+    /// Tasks without a robot (`--case idle` with more tasks than robots).
+    pub unserved_tasks: Vec<usize>,
     pub topology: String,
     /// Tie-breaking perturbation added to the costs (`null`: none).
     pub perturbation: Option<f64>,
@@ -105,4 +119,19 @@ pub struct SolveReport {
     /// `robots`, `cost` and `check` are then the survivors'.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub degraded: Option<Degraded>,
+}
+
+fn tasks_or_null<S: Serializer>(assignment: &[usize], s: S) -> Result<S::Ok, S::Error> {
+    s.collect_seq(
+        assignment
+            .iter()
+            .map(|&t| if t == IDLE { None } else { Some(t) }),
+    )
+}
+
+fn case_label<S: Serializer>(case: &AssignmentCase, s: S) -> Result<S::Ok, S::Error> {
+    match case {
+        AssignmentCase::Idle => s.serialize_str("idle"),
+        other => s.serialize_u8(other.number()),
+    }
 }

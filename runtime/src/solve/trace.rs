@@ -36,9 +36,30 @@ pub(crate) fn within_0_1pct(value: f64, optimum: f64) -> bool {
     relative_gap(value, optimum).abs() <= 1e-3
 }
 
+/// The user's cost (minimisation sign) of a normalised one: `offset + factor · cost`
+/// (`offset` = the shift times the number of robot–task pairs of an assignment), so the
+/// paper's 0.1 % criterion reads the user's numbers, not the normalised ones.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Affine {
+    pub offset: f64,
+    pub factor: f64,
+}
+
+impl Affine {
+    pub const IDENTITY: Self = Self {
+        offset: 0.0,
+        factor: 1.0,
+    };
+
+    pub fn apply(self, cost: f64) -> f64 {
+        self.offset + self.factor * cost
+    }
+}
+
 /// Follows the run against the optimum (only when checking).
 pub(crate) struct Tracer<'p> {
     problem: &'p TaskAssignmentProblem,
+    affine: Affine,
     optimal_cost: f64,
     first_within: Option<usize>,
     settled_within: Option<usize>,
@@ -49,10 +70,15 @@ pub(crate) struct Tracer<'p> {
 }
 
 impl<'p> Tracer<'p> {
-    pub(crate) fn new(problem: &'p TaskAssignmentProblem, optimum: &OptimalAssignment) -> Self {
+    pub(crate) fn new(
+        problem: &'p TaskAssignmentProblem,
+        optimum: &OptimalAssignment,
+        affine: Affine,
+    ) -> Self {
         Self {
             problem,
-            optimal_cost: optimum.cost,
+            affine,
+            optimal_cost: affine.apply(optimum.cost),
             first_within: None,
             settled_within: None,
             optimal_since: None,
@@ -70,7 +96,7 @@ impl<'p> Tracer<'p> {
         for i in 0..self.problem.robots() {
             self.decisions[i] = rounding::argmax(view.columns.own_column(i));
         }
-        let relaxed_cost = relaxed_objective(self.problem, view);
+        let relaxed_cost = self.affine.apply(relaxed_objective(self.problem, view));
         if within_0_1pct(relaxed_cost, self.optimal_cost) {
             self.first_within.get_or_insert(view.round);
             self.settled_within.get_or_insert(view.round);
@@ -81,7 +107,8 @@ impl<'p> Tracer<'p> {
             .problem
             .is_feasible(&self.decisions)
             .then(|| self.problem.cost_of(&self.decisions).ok())
-            .flatten();
+            .flatten()
+            .map(|c| self.affine.apply(c));
         if self.record {
             self.trace.push(TracePoint {
                 round: view.round,
@@ -97,8 +124,9 @@ impl<'p> Tracer<'p> {
         }
     }
 
+    /// The check of a run ending at `cost` (normalised).
     pub(crate) fn finish(self, cost: f64) -> OracleCheck {
-        let gap = self.relative_gap(cost);
+        let gap = self.relative_gap(self.affine.apply(cost));
         OracleCheck {
             optimal_cost: self.optimal_cost,
             gap,

@@ -1,0 +1,143 @@
+//! Between the user's problem and the normalised one the agents solve
+//! ([`admm_ta_agents::normalise`]): what each method can take, and the report in the user's
+//! numbers (assignment with idle robots, cost, the exact check).
+
+use crate::options::StopRule;
+use crate::solve::error::SolveError;
+use crate::solve::report::SolveReport;
+use crate::solve::trace::Affine;
+use admm_ta_agents::method::Method;
+use admm_ta_agents::oracle::OptimalAssignment;
+use admm_ta_agents::problem::{AssignmentCase, IDLE, TaskAssignmentProblem};
+
+/// The methods that take `--case idle` with fewer robots than tasks.
+const IDLE_WIDE_METHODS: [Method; 2] = [Method::Hungarian, Method::DistHungarian];
+
+/// Refuses, with one line, what `method` cannot solve faithfully.
+pub(crate) fn check_supported(
+    problem: &TaskAssignmentProblem,
+    method: Method,
+) -> Result<(), SolveError> {
+    let (n, m) = (problem.robots(), problem.tasks());
+    if problem.case() == AssignmentCase::Idle && n < m && !IDLE_WIDE_METHODS.contains(&method) {
+        return Err(SolveError::Unsupported(format!(
+            "--case idle with fewer robots than tasks ({n} robots, {m} tasks) runs with --method hungarian or dist-hungarian, not {}",
+            method.name()
+        )));
+    }
+    if method != Method::Hungarian
+        && let Some(why) = problem.normalised().and_then(|n| n.unresolved.as_ref())
+    {
+        return Err(SolveError::Unresolvable(format!(
+            "--method {} cannot solve this problem faithfully: {why}",
+            method.name()
+        )));
+    }
+    Ok(())
+}
+
+/// User cost (minimisation sign) of a normalised cost.
+pub(crate) fn affine(problem: &TaskAssignmentProblem) -> Affine {
+    match problem.normalised() {
+        None => Affine::IDENTITY,
+        Some(n) => {
+            let pairs = problem.robots().min(problem.tasks()) as f64;
+            Affine {
+                offset: (n.shift - n.scale * n.raise) * pairs,
+                factor: n.scale,
+            }
+        }
+    }
+}
+
+/// A user assignment on the internal shape: idle robots take the idle task.
+pub(crate) fn to_internal(problem: &TaskAssignmentProblem, assignment: &[usize]) -> Vec<usize> {
+    let idle = problem.tasks();
+    assignment
+        .iter()
+        .map(|&t| if t == IDLE { idle } else { t })
+        .collect()
+}
+
+/// The exact optimum as the internal problem's assignment and cost.
+pub(crate) fn internal_optimum(
+    problem: &TaskAssignmentProblem,
+    exact: &OptimalAssignment,
+) -> Result<OptimalAssignment, SolveError> {
+    let assignment = to_internal(problem, &exact.assignment);
+    let cost = problem
+        .internal()
+        .cost_of(&assignment)
+        .map_err(|e| SolveError::Internal(format!("the optimum does not map back: {e}")))?;
+    Ok(OptimalAssignment { assignment, cost })
+}
+
+/// Whether `cost` is optimal against `optimum` (user numbers): within 1e-9 relative, with an
+/// absolute floor of 1e-12 of the allowed costs' range.
+pub(crate) fn is_optimal(problem: &TaskAssignmentProblem, cost: f64, optimum: f64) -> bool {
+    let sign = if problem.maximize() { -1.0 } else { 1.0 };
+    let range = problem.normalised().map_or(1.0, |n| n.scale);
+    sign * (cost - optimum) <= (1e-9 * optimum.abs()).max(1e-12 * range)
+}
+
+/// The report of a run of the internal problem, in the user's numbers.
+pub(crate) fn to_user(
+    problem: &TaskAssignmentProblem,
+    mut report: SolveReport,
+    exact: Option<&OptimalAssignment>,
+) -> Result<SolveReport, SolveError> {
+    let assignment = match (report.method, exact) {
+        // The centralized solver's answer is the exact optimum of the user's numbers.
+        (Method::Hungarian, Some(exact)) => exact.assignment.clone(),
+        _ => problem.from_internal(&report.assignment),
+    };
+    if !problem.is_feasible(&assignment) {
+        return Err(SolveError::Internal(format!(
+            "the {} run ended with an assignment that is not feasible for the problem",
+            report.method.name()
+        )));
+    }
+    report.cost = problem
+        .cost_of(&assignment)
+        .map_err(|e| SolveError::Internal(e.to_string()))?;
+    let m = problem.tasks();
+    let mut served = vec![false; m];
+    for &t in assignment.iter().filter(|&&t| t != IDLE) {
+        served[t] = true;
+    }
+    report.idle_robots = (0..assignment.len())
+        .filter(|&i| assignment[i] == IDLE)
+        .collect();
+    report.unserved_tasks = (0..m).filter(|&t| !served[t]).collect();
+    report.assignment = assignment;
+    report.tasks = m;
+    report.case = problem.case();
+    report.maximize = problem.maximize();
+    if let (Some(check), Some(exact)) = (report.check.as_mut(), exact) {
+        check.optimal_cost = exact.cost;
+        let sign = if problem.maximize() { -1.0 } else { 1.0 };
+        let diff = sign * (report.cost - exact.cost);
+        check.gap = if exact.cost != 0.0 {
+            diff / exact.cost.abs()
+        } else {
+            diff
+        };
+        check.optimal = is_optimal(problem, report.cost, exact.cost);
+    }
+    report.certified = certified(&report);
+    Ok(report)
+}
+
+/// Whether the method certifies its result optimal: the centralized solver; the optimal
+/// protocols (market, distributed Hungarian) when they finished; the ADMM methods when a
+/// stop rule that proves optimality fired. CBAA is a heuristic and never certifies.
+fn certified(report: &SolveReport) -> bool {
+    match report.method {
+        Method::Hungarian => true,
+        Method::Cbaa => false,
+        Method::Market | Method::DistHungarian => report.converged,
+        Method::Primal | Method::Dual | Method::InexactDual => {
+            report.converged && matches!(report.stop, StopRule::Local | StopRule::Certified)
+        }
+    }
+}

@@ -1,0 +1,79 @@
+//! Exit codes of the command line, from typed outcomes and errors (never from message text):
+//!
+//! | code | meaning |
+//! | --- | --- |
+//! | 0 | success: a certified/optimal assignment, or a run that finished as asked |
+//! | 1 | unexpected internal error |
+//! | 2 | bad input or bad options |
+//! | 3 | infeasible problem (no assignment avoids the forbidden pairs) |
+//! | 4 | agent or transport failure (also `--on-failure continue` giving up) |
+//! | 5 | round limit reached without a certified assignment (the best one is printed) |
+//! | 6 | `--check` found the result not optimal |
+
+use admm_ta::agents::lsap::LsapError;
+use admm_ta::agents::problem::ProblemError;
+use admm_ta::runtime::solve::report::SolveReport;
+use admm_ta::{ConfigError, SolveError, StopRule, TopologyError};
+
+/// A bad command line or input found by the command itself.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct UsageError(pub String);
+
+/// How a solve that printed its report ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    Success,
+    /// The round limit ended the run before any certificate (exit 5).
+    Uncertified,
+    /// `--check` found the assignment not optimal (exit 6).
+    NotOptimal,
+}
+
+impl Outcome {
+    /// The outcome of a report: with `--check`, the centralized optimum decides; otherwise a
+    /// run that hit the round limit without its stop rule firing is uncertified (unless the
+    /// user asked for exactly that many rounds with `--stop max-iters`).
+    pub fn of(report: &SolveReport) -> Self {
+        match &report.check {
+            Some(check) if !check.optimal => Self::NotOptimal,
+            Some(_) => Self::Success,
+            None if !report.converged && report.stop != StopRule::MaxIters => Self::Uncertified,
+            None => Self::Success,
+        }
+    }
+
+    pub fn code(self) -> u8 {
+        match self {
+            Self::Success => 0,
+            Self::Uncertified => 5,
+            Self::NotOptimal => 6,
+        }
+    }
+}
+
+/// The exit code of an error: the first typed cause found in its chain decides.
+pub fn code_of(error: &anyhow::Error) -> u8 {
+    for cause in error.chain() {
+        if let Some(e) = cause.downcast_ref::<ProblemError>() {
+            return match e {
+                ProblemError::Infeasible(_) => 3,
+                _ => 2,
+            };
+        }
+        if let Some(e) = cause.downcast_ref::<SolveError>() {
+            return match e {
+                SolveError::Run(_) | SolveError::CannotContinue { .. } => 4,
+                SolveError::Internal(_) => 1,
+                _ => 2,
+            };
+        }
+        if let Some(LsapError::Infeasible) = cause.downcast_ref::<LsapError>() {
+            return 3;
+        }
+        if cause.is::<ConfigError>() || cause.is::<TopologyError>() || cause.is::<UsageError>() {
+            return 2;
+        }
+    }
+    1
+}
