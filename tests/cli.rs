@@ -256,6 +256,17 @@ fn bad_input_gives_one_clear_line() {
             "self-loop",
         ),
         (
+            format!(
+                "--robots 3 --tasks 3 --topology {}",
+                file("three.toml", "robots = 3\nedges = [[0, 1, 2]]\n")
+            ),
+            "exactly two robots",
+        ),
+        (
+            "--robots 3 --tasks 3 --topology /dev/zero.toml".into(),
+            "cannot read",
+        ),
+        (
             "--robots 3 --tasks 3 --topology hypercube".into(),
             "unknown topology",
         ),

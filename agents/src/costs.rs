@@ -12,7 +12,7 @@ pub const MAX_COST_ENTRIES: usize = 50_000_000;
 /// Problems with the cost data or the problem shape.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum ProblemError {
-    #[error("cannot read cost file {path}: {reason}")]
+    #[error("cannot read {path}: {reason}")]
     Io { path: String, reason: String },
     #[error("the cost file is empty (expected one row per robot, one column per task)")]
     Empty,

@@ -20,9 +20,13 @@ use std::path::Path;
 #[serde(deny_unknown_fields)]
 struct TopologyFile {
     robots: usize,
+    /// Read as lists so that an edge with other than two robots is an error, not truncated.
     #[serde(default)]
-    edges: Vec<[usize; 2]>,
+    edges: Vec<Vec<usize>>,
 }
+
+/// Largest topology file read (bytes).
+pub const MAX_TOPOLOGY_BYTES: u64 = 256 << 20;
 
 /// Parses topology TOML text; `origin` names the source in error messages.
 pub fn parse(text: &str, origin: &Path) -> Result<Graph, TopologyError> {
@@ -30,7 +34,21 @@ pub fn parse(text: &str, origin: &Path) -> Result<Graph, TopologyError> {
         path: origin.to_path_buf(),
         reason: e.message().to_string(),
     })?;
-    let edges: Vec<(usize, usize)> = file.edges.iter().map(|e| (e[0], e[1])).collect();
+    let mut edges = Vec::with_capacity(file.edges.len());
+    for (k, edge) in file.edges.iter().enumerate() {
+        match edge.as_slice() {
+            [a, b] => edges.push((*a, *b)),
+            other => {
+                return Err(TopologyError::Parse {
+                    path: origin.to_path_buf(),
+                    reason: format!(
+                        "edge {k} ({other:?}) has {} robots; an edge joins exactly two robots",
+                        other.len()
+                    ),
+                });
+            }
+        }
+    }
     let name = origin
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -38,12 +56,25 @@ pub fn parse(text: &str, origin: &Path) -> Result<Graph, TopologyError> {
     Graph::from_edges(file.robots, &edges, name)
 }
 
-/// Reads and parses a topology file.
+/// Reads and parses a topology file (a regular file of at most [`MAX_TOPOLOGY_BYTES`]).
 pub fn read(path: &Path) -> Result<Graph, TopologyError> {
-    let text = std::fs::read_to_string(path).map_err(|e| TopologyError::Io {
+    use std::io::Read;
+    let io = |reason: String| TopologyError::Io {
         path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
+        reason,
+    };
+    let meta = std::fs::metadata(path).map_err(|e| io(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(io("not a regular file".into()));
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_TOPOLOGY_BYTES + 1).read_to_end(&mut bytes))
+        .map_err(|e| io(e.to_string()))?;
+    if bytes.len() as u64 > MAX_TOPOLOGY_BYTES {
+        return Err(io(format!("larger than {MAX_TOPOLOGY_BYTES} bytes")));
+    }
+    let text = String::from_utf8(bytes).map_err(|_| io("not UTF-8 text".into()))?;
     parse(&text, path)
 }
 
@@ -74,6 +105,14 @@ mod tests {
             back.edges().collect::<Vec<_>>(),
             g.edges().collect::<Vec<_>>()
         );
+        let three = parse("robots = 3\nedges = [[0, 1, 2]]", Path::new("t.toml"));
+        assert!(
+            three
+                .unwrap_err()
+                .to_string()
+                .contains("edge 0 ([0, 1, 2]) has 3 robots; an edge joins exactly two robots")
+        );
+        assert!(parse("robots = 3\nedges = [[0]]", Path::new("t.toml")).is_err());
         let bad = parse("robots = 3\nedges = [[0, 1], [1, 1]]", Path::new("t.toml"));
         assert_eq!(bad.unwrap_err(), TopologyError::SelfLoop(1));
         let unknown = parse("robots = 3\nedgez = []", Path::new("t.toml")).unwrap_err();

@@ -159,8 +159,9 @@ pub struct Team {
 
 impl Team {
     pub fn read(path: &Path) -> Result<Self, String> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("cannot read team file {}: {e}", path.display()))?;
+        // A regular file of bounded size, like every input file.
+        let text = admm_ta_agents::problem::read_bounded(path, 16 << 20)
+            .map_err(|e| format!("cannot read team file: {e}"))?;
         let file: TeamFile = toml::from_str(&text)
             .map_err(|e| format!("team file {}: {}", path.display(), e.message()))?;
         let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
