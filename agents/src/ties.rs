@@ -24,12 +24,17 @@ pub enum Perturbation {
 
 /// Step `δ` of the lattice the costs lie on, when they lie on one with fewer distinct
 /// values than entries (integer or fixed-point data); `None` for generic real costs. Only
-/// allowed pairs count.
+/// allowed pairs count; constant costs have step 1.
 pub fn lattice_step(costs: &CostMatrix) -> Option<f64> {
     let mut values: Vec<f64> = costs.allowed_values().collect();
     let entries = values.len();
     values.sort_unstable_by(f64::total_cmp);
     values.dedup();
+    if values.len() == 1 && entries > 1 {
+        // Constant costs: every assignment is optimal and lies on every lattice; step 1 (the
+        // normalised spread) lets the perturbation pick one the robots agree on.
+        return Some(1.0);
+    }
     if values.len() < 2 || values.len() == entries {
         return None;
     }
@@ -81,6 +86,8 @@ mod tests {
             CostMatrix::new(3, 3, vec![1.0, 3.0, 2.0, 2.0, 1.0, 3.0, 5.0, 1.0, 1.0]).unwrap();
         assert_eq!(lattice_step(&ints), Some(1.0));
         assert_eq!(epsilon(&ints, Perturbation::Auto), Some(0.25));
+        let constant = CostMatrix::new(2, 2, vec![3.0; 4]).unwrap();
+        assert_eq!(lattice_step(&constant), Some(1.0));
         let reals = CostMatrix::uniform(5, 5, 1).unwrap();
         assert_eq!(lattice_step(&reals), None);
         assert_eq!(epsilon(&reals, Perturbation::Auto), None);
