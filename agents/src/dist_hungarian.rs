@@ -62,13 +62,21 @@ impl DistHungarianAgent {
         if self.solved || self.known_rows < self.robots {
             return;
         }
-        let costs = CostMatrix::new(self.robots, self.tasks, self.known.clone())
-            .expect("every row known and finite");
-        let assignment = crate::oracle::solve_costs(&costs, self.case)
-            .expect("finite costs always have an assignment");
+        // Every row is known and was checked finite; a failure (which Hall's condition,
+        // checked before the run, rules out) keeps the cheapest task and never panics.
+        let Ok(assignment) = CostMatrix::new(self.robots, self.tasks, self.known.clone())
+            .map_err(|_| ())
+            .and_then(|costs| crate::oracle::solve_costs(&costs, self.case).map_err(|_| ()))
+        else {
+            self.solved = true;
+            return;
+        };
         self.task = assignment[self.index];
         self.column.fill(0.0);
-        self.column[self.task] = 1.0;
+        // An idle robot (`--case idle`) has no task: an all-zero column.
+        if let Some(slot) = self.column.get_mut(self.task) {
+            *slot = 1.0;
+        }
         self.solved = true;
     }
 }

@@ -170,6 +170,6 @@ pub fn resolution(costs: &CostMatrix, lo: f64, hi: f64, raise: f64) -> Option<St
         String::new()
     };
     Some(format!(
-        "the costs span {lo:e} to {hi:e}: {tiny} of {allowed} allowed costs differ from the cheapest by less than {RESOLUTION:e} of that range, below what this method resolves in floating point (use --method hungarian{sentinel})"
+        "the costs span {lo:e} to {hi:e}: {tiny} of {allowed} allowed costs differ from the cheapest by less than {RESOLUTION:e} of that range, below what this method resolves in floating point (use --method hungarian or dist-hungarian, which solve the exact numbers{sentinel})"
     ))
 }

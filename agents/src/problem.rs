@@ -162,6 +162,27 @@ impl TaskAssignmentProblem {
         self.normalised.as_ref().map_or(self, |n| &n.problem)
     }
 
+    /// The user's exact numbers in the minimisation sign, on the user's shape and case,
+    /// forbidden pairs at the largest double (and masked): what a method that solves exactly
+    /// (the distributed Hungarian) floods and solves, with no loss of precision.
+    pub fn exact(&self) -> Result<TaskAssignmentProblem, ProblemError> {
+        let (n, m) = (self.robots(), self.tasks());
+        let mut allowed = vec![true; n * m];
+        let values = (0..n * m)
+            .map(|k| {
+                let (i, t) = (k / m, k % m);
+                if self.costs.is_allowed(i, t) {
+                    normalise::signed(self.maximize, self.costs.get(i, t))
+                } else {
+                    allowed[k] = false;
+                    f64::MAX
+                }
+            })
+            .collect();
+        let matrix = CostMatrix::with_mask(n, m, values, Some(allowed))?;
+        Self::internal_from(matrix, self.case)
+    }
+
     /// The normalisation, for a problem built from user costs.
     pub fn normalised(&self) -> Option<&Normalised> {
         self.normalised.as_deref()

@@ -150,18 +150,45 @@ fn solve_user(
         None
     };
     let oracle_ms = started.elapsed().as_secs_f64() * 1e3;
-    let internal_optimum = match &exact {
-        Some(exact) => Some(user::internal_optimum(problem, exact)?),
-        None => None,
+    let report = if options.method() == Method::DistHungarian {
+        // It solves exactly: the agents flood and solve the user's own numbers (no
+        // perturbation: every robot solves the same matrix the same way).
+        let exact_problem = problem
+            .exact()
+            .map_err(|e| SolveError::Internal(e.to_string()))?;
+        let optimum = match &exact {
+            Some(exact) => Some(OptimalAssignment {
+                assignment: exact.assignment.clone(),
+                cost: exact_problem
+                    .cost_of(&exact.assignment)
+                    .map_err(|e| SolveError::Internal(e.to_string()))?,
+            }),
+            None => None,
+        };
+        let unperturbed = options
+            .to_builder()
+            .perturbation(admm_ta_agents::ties::Perturbation::Off)
+            .build()?;
+        solve_once(
+            &exact_problem,
+            graph,
+            &unperturbed,
+            optimum,
+            Affine::IDENTITY,
+        )?
+    } else {
+        let internal_optimum = match &exact {
+            Some(exact) => Some(user::internal_optimum(problem, exact)?),
+            None => None,
+        };
+        solve_once(
+            problem.internal(),
+            graph,
+            options,
+            internal_optimum,
+            user::affine(problem),
+        )?
     };
-    let internal = problem.internal();
-    let report = solve_once(
-        internal,
-        graph,
-        options,
-        internal_optimum,
-        user::affine(problem),
-    )?;
     let mut report = user::to_user(problem, report, exact.as_ref())?;
     if report.method == Method::Hungarian {
         // The centralized solver's work is the exact optimum.

@@ -25,7 +25,7 @@ pub(crate) fn check_supported(
             method.name()
         )));
     }
-    if method != Method::Hungarian
+    if !matches!(method, Method::Hungarian | Method::DistHungarian)
         && let Some(why) = problem.normalised().and_then(|n| n.unresolved.as_ref())
     {
         return Err(SolveError::Unresolvable(format!(
@@ -116,7 +116,8 @@ pub(crate) fn to_user(
     if let (Some(check), Some(exact)) = (report.check.as_mut(), exact) {
         check.optimal_cost = exact.cost;
         let sign = if problem.maximize() { -1.0 } else { 1.0 };
-        let diff = sign * (report.cost - exact.cost);
+        // `+ 0.0`: no "-0" gap for profits.
+        let diff = sign * (report.cost - exact.cost) + 0.0;
         check.gap = if exact.cost != 0.0 {
             diff / exact.cost.abs()
         } else {
