@@ -5,7 +5,7 @@
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::method::{AgentMethod, AgentSettings};
 use admm_ta_agents::method_agent::MethodAgent;
-use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
+use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -42,7 +42,18 @@ fn team_rounds(
     rounds: usize,
 ) -> usize {
     let costs = CostMatrix::uniform(robots, tasks, 11).unwrap();
-    let rho = method.method().default_rho(&costs, (robots - 1) as f64);
+    team_rounds_on(method, &costs, case, rounds)
+}
+
+/// As [`team_rounds`] on given costs (a normalised problem's, say).
+fn team_rounds_on(
+    method: AgentMethod,
+    costs: &CostMatrix,
+    case: AssignmentCase,
+    rounds: usize,
+) -> usize {
+    let (robots, tasks) = (costs.robots(), costs.tasks());
+    let rho = method.method().default_rho(costs, (robots - 1) as f64);
     let settings = AgentSettings::new(method, rho, 1, 1e-9);
     let mut agents: Vec<MethodAgent> = (0..robots)
         .map(|i| MethodAgent::new(i, costs.row(i).to_vec(), robots, case, robots - 1, settings))
@@ -92,5 +103,52 @@ fn every_method_steps_without_allocating_after_warm_up() {
             0,
             "{method:?}"
         );
+        // The normalised problems of forbidden pairs and of idle robots.
+        for (text, choice) in [
+            (forbidden_text(), CaseChoice::Auto),
+            (idle_text(), CaseChoice::Forced(AssignmentCase::Idle)),
+        ] {
+            let problem =
+                TaskAssignmentProblem::new(CostMatrix::from_csv_str(&text).unwrap(), choice)
+                    .unwrap();
+            let internal = problem.internal();
+            assert_eq!(
+                team_rounds_on(method, internal.costs(), internal.case(), 40),
+                0,
+                "{method:?} on {choice:?}"
+            );
+        }
     }
+}
+
+/// 10 × 10 with every third pair forbidden (`inf`), feasible.
+fn forbidden_text() -> String {
+    (0..10)
+        .map(|i| {
+            (0..10)
+                .map(|j| {
+                    if (i + 2 * j) % 3 == 1 && i != j {
+                        "inf".to_string()
+                    } else {
+                        format!("{}", ((i * 7 + j * 3) % 11) as f64 / 11.0 + 0.01 * j as f64)
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"
+        })
+        .collect()
+}
+
+/// 12 robots, 5 tasks, scipy's idle meaning.
+fn idle_text() -> String {
+    (0..12)
+        .map(|i| {
+            (0..5)
+                .map(|j| format!("{}", ((i * 5 + j * 7) % 13) as f64 + 0.001 * i as f64))
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"
+        })
+        .collect()
 }
