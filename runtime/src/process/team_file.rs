@@ -230,6 +230,14 @@ impl Team {
                 costs.robots()
             ));
         }
+        // A team runs the paper's cases (1 and 2): every robot works.
+        if costs.robots() < costs.tasks() {
+            return Err(format!(
+                "{} robots cannot cover {} tasks: a team file's problem needs at least as many robots as tasks",
+                costs.robots(),
+                costs.tasks()
+            ));
+        }
         let problem =
             TaskAssignmentProblem::new(costs, CaseChoice::Auto).map_err(|e| e.to_string())?;
         let graph = if f.topology.ends_with(".toml") {
