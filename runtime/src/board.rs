@@ -7,8 +7,9 @@
 //!   [`arrivals_target`]), the last round it published, and its process id (members of an
 //!   independently started team);
 //! * the failure line: the agent marked as failed (the first mark wins), the team's shape
-//!   (tasks and payload length, so an agent of another shape is refused) and the count of
-//!   members that left.
+//!   (tasks and payload length, so an agent of another shape is refused), the count of
+//!   members that left, and the stop request (a termination signal, distinct from a
+//!   failure: [`Board::request_stop`]).
 //!
 //! Every process only touches it through atomics. The `ipc` and `uds` transports, the
 //! launcher and the team members all use it, so it sits below all of them.
@@ -69,6 +70,11 @@ pub enum BoardError {
         running_tasks: u64,
         running_payload_len: u64,
     },
+}
+
+fn decode_stop(word: u64) -> (i32, Option<usize>) {
+    let by = word >> 8;
+    ((word & 0xff) as i32, (by != 0).then(|| by as usize - 1))
 }
 
 /// `shm` as the name of a shared-memory segment.
@@ -217,6 +223,31 @@ impl Board {
             Ok(_) => None,
             Err(first) => Some(first as usize - 1),
         }
+    }
+
+    /// Asks every process of the team to stop because of termination signal `signal`, sent
+    /// to agent `by` (`None`: to the launcher or a host). The first request wins; returns
+    /// the one already there, if another was first.
+    pub fn request_stop(&self, signal: i32, by: Option<usize>) -> Option<(i32, Option<usize>)> {
+        let word = (signal as u64 & 0xff) | (by.map_or(0, |a| a as u64 + 1) << 8);
+        match self.word(LINE * (self.agents + 1) + 32).compare_exchange(
+            0,
+            word,
+            Ordering::AcqRel,
+            Ordering::Acquire,
+        ) {
+            Ok(_) => None,
+            Err(first) => Some(decode_stop(first)),
+        }
+    }
+
+    /// The stop request on the board, if any: the signal and the agent it was sent to
+    /// (`None`: the launcher or a host). Distinct from a failure: nobody is to blame.
+    pub fn stop_requested(&self) -> Option<(i32, Option<usize>)> {
+        let word = self
+            .word(LINE * (self.agents + 1) + 32)
+            .load(Ordering::Acquire);
+        (word != 0).then(|| decode_stop(word))
     }
 
     /// The agent marked as failed, if any.

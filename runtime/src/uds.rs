@@ -84,6 +84,14 @@ fn transport(agent: usize, what: impl Into<String>) -> ExchangeError {
     }
 }
 
+/// A stop request (termination signal) during start-up, as the agent's one-line error.
+fn stop_during_startup(agent: usize, board: &Board) -> Result<(), String> {
+    match crate::signals::stop_signal(Some(board)) {
+        Some(signal) => Err(ExchangeError::Stopped { agent, signal }.to_string()),
+        None => Ok(()),
+    }
+}
+
 impl UdsExchange {
     /// Connects agent `endpoint.index` to all its neighbours, waiting for them until
     /// `deadline`.
@@ -116,6 +124,7 @@ impl UdsExchange {
                 match UnixStream::connect(&path) {
                     Ok(s) => break s,
                     Err(_) if Instant::now() < deadline => {
+                        stop_during_startup(i, &board)?;
                         std::thread::sleep(Duration::from_millis(1));
                     }
                     Err(e) => {
@@ -164,6 +173,10 @@ impl UdsExchange {
                     links[k] = Some(link(j, stream));
                 }
                 Err(e) if e.kind() == ErrorKind::WouldBlock && Instant::now() < deadline => {
+                    if let Err(e) = stop_during_startup(i, &board) {
+                        let _ = std::fs::remove_file(&own);
+                        return Err(e);
+                    }
                     std::thread::sleep(Duration::from_millis(1));
                 }
                 Err(e) => {
@@ -292,7 +305,18 @@ impl UdsExchange {
         }
     }
 
+    /// Asks the team to stop: this agent got termination signal `signal` (first request wins).
+    pub fn request_stop(&self, signal: i32) {
+        let _ = self.board.request_stop(signal, Some(self.index));
+    }
+
     fn check_failure(&self, round: u64) -> Result<(), ExchangeError> {
+        if let Some(signal) = crate::signals::stop_signal(Some(&self.board)) {
+            return Err(ExchangeError::Stopped {
+                agent: self.index,
+                signal,
+            });
+        }
         match self.board.failed() {
             Some(failed) => Err(ExchangeError::PeerFailed {
                 agent: self.index,

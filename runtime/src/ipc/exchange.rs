@@ -37,9 +37,10 @@ use crate::ipc::services::{
     SUBSCRIBER_BUFFER, ServiceError, Svc, open_barrier_service, open_bridge_wake_service,
     open_round_service, open_wake_service,
 };
+use crate::signals::stop_signal;
 use crate::wait::{Arrival, WaitPolicy};
 use admm_ta_agents::agent::Inbox;
-use iceoryx2::port::listener::Listener;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
@@ -143,6 +144,7 @@ impl IpcExchange {
             NodeName::new(&node_name(i)).map_err(|e| err(format!("bad node name: {e:?}")))?;
         let node = NodeBuilder::new()
             .name(&name)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
             .config(config)
             .create::<Svc>()
             .map_err(|e| err(format!("cannot create the iceoryx2 node: {e:?}")))?;
@@ -210,6 +212,9 @@ impl IpcExchange {
         let started = Instant::now();
         let mut last_scan = Instant::now();
         while own_round.dynamic_config().number_of_subscribers() < degree {
+            if let Some(signal) = stop_signal(Some(&board)) {
+                return Err(ExchangeError::Stopped { agent: i, signal });
+            }
             if let Some(failed) = board.failed() {
                 return Err(ExchangeError::PeerFailed {
                     agent: i,
@@ -285,6 +290,11 @@ impl IpcExchange {
         let _ = self.board.mark_failed(agent);
     }
 
+    /// Asks the team to stop: this agent got termination signal `signal` (first request wins).
+    pub fn request_stop(&self, signal: i32) {
+        let _ = self.board.request_stop(signal, Some(self.index));
+    }
+
     /// The agent that published the fewest rounds: after a timeout, the one everybody is
     /// waiting for, directly or through a chain of blocked neighbours.
     pub fn laggard(&self) -> usize {
@@ -308,6 +318,12 @@ impl IpcExchange {
             round,
             how: how.into(),
         };
+        if let Some(signal) = stop_signal(Some(&self.board)) {
+            return Err(ExchangeError::Stopped {
+                agent: self.index,
+                signal,
+            });
+        }
         if let Some(agent) = self.board.failed() {
             let how = if agent == self.index {
                 "was reported failed by a neighbour"
@@ -414,9 +430,16 @@ impl IpcExchange {
     ) -> Result<(), ExchangeError> {
         let left = deadline.saturating_duration_since(Instant::now());
         if !left.is_zero() {
-            listener
-                .timed_wait(|_| {}, left)
-                .map_err(|e| transport(agent, format!("waiting for a wake-up failed: {e:?}")))?;
+            match listener.timed_wait(|_| {}, left) {
+                // A termination signal woke us: the caller looks at it next.
+                Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
+                Err(e) => {
+                    return Err(transport(
+                        agent,
+                        format!("waiting for a wake-up failed: {e:?}"),
+                    ));
+                }
+            }
         }
         Ok(())
     }

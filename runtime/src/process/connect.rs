@@ -64,7 +64,7 @@ pub(crate) fn connect(
                 neighbours,
             };
             let mut exchange =
-                IpcExchange::connect(&endpoint, &config, deadline).map_err(|e| e.to_string())?;
+                IpcExchange::connect(&endpoint, &config, deadline).map_err(stop_or_text)?;
             exchange.inject(fault);
             Ok(Endpoint::Ipc(Box::new(exchange)))
         }
@@ -97,7 +97,7 @@ pub(crate) fn connect(
             };
             let mut exchange =
                 crate::zenoh_net::exchange::ZenohExchange::connect(&endpoint, deadline)
-                    .map_err(|e| e.to_string())?;
+                    .map_err(stop_or_text)?;
             exchange.inject(fault);
             Ok(Endpoint::Zenoh(Box::new(exchange)))
         }
@@ -108,6 +108,15 @@ pub(crate) fn connect(
             scenario.transport
         )),
     }
+}
+
+/// A start-up error as one line; a stop request (termination signal) is recorded as this
+/// process's, so that it ends as if it had got the signal.
+fn stop_or_text(error: ExchangeError) -> String {
+    if let ExchangeError::Stopped { signal, .. } = error {
+        crate::signals::record(signal);
+    }
+    error.to_string()
 }
 
 /// The neighbour an exchange error is the fault of, if any.
@@ -128,6 +137,16 @@ impl Endpoint {
             Self::Uds(e) => e.as_mut(),
             #[cfg(feature = "zenoh")]
             Self::Zenoh(e) => e.as_mut(),
+        }
+    }
+
+    /// Asks the rest of the team to stop: this agent got termination signal `signal`.
+    pub(crate) fn request_stop(&self, signal: i32) {
+        match self {
+            Self::Ipc(exchange) => exchange.request_stop(signal),
+            Self::Uds(exchange) => exchange.request_stop(signal),
+            #[cfg(feature = "zenoh")]
+            Self::Zenoh(exchange) => exchange.request_stop(signal),
         }
     }
 

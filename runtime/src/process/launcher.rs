@@ -17,6 +17,8 @@ use crate::process::agent::{AgentReport, log_path, result_path};
 use crate::process::connect::{LauncherSupport, SupportError};
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
+use crate::signals;
+use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
@@ -53,6 +55,23 @@ pub enum LaunchError {
         /// Dead iceoryx2 nodes removed by the dead-node cleanup.
         dead_nodes: usize,
     },
+    /// A termination signal stopped the run (to the launcher, or to agent `by`): nobody
+    /// failed.
+    #[error(
+        "stopped by {}{}: {stopped} agent(s) stopped, {killed} killed, {}",
+        crate::signals::name(*signal),
+        by.map_or(String::new(), |a| format!(" to agent {a}")),
+        if *leftovers == 0 { "run files removed".to_string() } else { format!("{leftovers} run file(s) left") }
+    )]
+    Stopped {
+        signal: i32,
+        by: Option<usize>,
+        /// Agents that exited by themselves within the grace period.
+        stopped: usize,
+        /// Agents killed after it.
+        killed: usize,
+        leftovers: usize,
+    },
     #[error("agent {index} exited without a readable result")]
     MissingResult {
         index: usize,
@@ -84,6 +103,10 @@ pub struct ProcessRun {
 /// How long the other agents have to stop by themselves after a failure before they are
 /// killed (they notice within a 20 ms sleep slice, or after their current step).
 const FAILURE_GRACE: Duration = Duration::from_secs(2);
+
+/// How long agents have to leave by themselves after a stop request (termination signal)
+/// before they are killed; they notice within a 20 ms wait slice.
+const STOP_GRACE: Duration = Duration::from_millis(500);
 
 /// Children and namespace of a run; dropping it kills and reaps every child still running,
 /// then removes the run's files.
@@ -146,6 +169,76 @@ fn describe_exit(status: ExitStatus) -> Option<String> {
     })
 }
 
+/// The termination signal in an agent's exit description (`exit code 143`), if any.
+fn stopped_by_signal(how: &str) -> Option<i32> {
+    how.strip_prefix("exit code ")
+        .and_then(|c| c.parse().ok())
+        .and_then(signals::stopped_by_exit_code)
+}
+
+/// A stop request: a termination signal to the launcher, or one an agent got (on the board);
+/// the signal and the agent it went to.
+fn stop_request(guard: &RunGuard) -> Option<(i32, Option<usize>)> {
+    if let Some(signal) = signals::received() {
+        return Some((signal, None));
+    }
+    guard.board.as_ref()?.stop_requested()
+}
+
+/// Stops every agent after `stop`: the request on the board (and the signal forwarded to
+/// each child, for agents that do not read the board), a grace period to leave cleanly
+/// (cut short by a second termination signal), then SIGKILL; every child is reaped and the
+/// run's files removed.
+fn stop_team(mut guard: RunGuard, (signal, by): (i32, Option<usize>)) -> LaunchError {
+    signals::record(signal);
+    if let Some(board) = &guard.board {
+        let _ = board.request_stop(signal, by);
+    }
+    let signals_before = signals::count();
+    for child in guard.children.iter().flatten() {
+        // SAFETY: signalling our own unreaped child (its pid cannot be reused yet).
+        unsafe { libc::kill(child.id() as libc::pid_t, signal) };
+    }
+    let grace_ends = std::time::Instant::now() + STOP_GRACE;
+    let (mut stopped, mut killed) = (0, 0);
+    // Agents that ended before the request count as stopped.
+    stopped += guard.children.iter().filter(|c| c.is_none()).count();
+    loop {
+        for slot in guard.children.iter_mut() {
+            if let Some(child) = slot
+                && !matches!(child.try_wait(), Ok(None))
+            {
+                *slot = None;
+                stopped += 1;
+            }
+        }
+        if guard.children.iter().all(Option::is_none) {
+            break;
+        }
+        let second = signals::count() > signals_before.max(1);
+        if std::time::Instant::now() >= grace_ends || second {
+            for slot in guard.children.iter_mut() {
+                if let Some(mut child) = slot.take() {
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    killed += 1;
+                }
+            }
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let namespace = guard.namespace.clone();
+    drop(guard);
+    LaunchError::Stopped {
+        signal,
+        by,
+        stopped,
+        killed,
+        leftovers: namespace.leftovers().len(),
+    }
+}
+
 /// Runs `scenario` (its run id, prefix, root and board are filled in here) with one process
 /// per agent started from `agent_program` (the `admm-ta` binary); `fault_injection`: pass
 /// the `ADMM_TA_FAULT` test switch on to the agents.
@@ -154,6 +247,7 @@ pub fn launch(
     agent_program: &Path,
     fault_injection: bool,
 ) -> Result<ProcessRun, LaunchError> {
+    let _signals = signals::install();
     let namespace = RunNamespace::create().map_err(LaunchError::RunDirectory)?;
     let mut guard = RunGuard {
         namespace: namespace.clone(),
@@ -186,6 +280,20 @@ pub fn launch(
         let log =
             std::fs::File::create(log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
         let mut command = Command::new(agent_program);
+        let launcher_pid = std::process::id() as libc::pid_t;
+        // SAFETY: only async-signal-safe calls between fork and exec.
+        unsafe {
+            command.pre_exec(move || {
+                // The agent gets SIGTERM (and stops cleanly) when the launcher dies, even by
+                // SIGKILL; a launcher that died before this line is caught by the pid check.
+                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0
+                    || libc::getppid() != launcher_pid
+                {
+                    return Err(std::io::Error::other("the launcher is gone"));
+                }
+                Ok(())
+            });
+        }
         if !fault_injection {
             command.env_remove(crate::fault::FAULT_ENV);
         }
@@ -216,6 +324,9 @@ pub fn launch(
     let mut grace_ends = None;
     let mut killed = 0;
     while guard.children.iter().any(Option::is_some) {
+        if let Some(stop) = stop_request(&guard) {
+            return Err(stop_team(guard, stop));
+        }
         let mut progressed = false;
         for (index, slot) in guard.children.iter_mut().enumerate() {
             let Some(child) = slot.as_mut() else {
@@ -232,6 +343,13 @@ pub fn launch(
             };
             *slot = None;
             progressed = true;
+            if let Some(signal) = how.as_deref().and_then(stopped_by_signal) {
+                // The agent got a termination signal itself: the team stops, nobody failed.
+                let board = guard.board.as_ref().expect("the board exists");
+                let _ = board.request_stop(signal, Some(index));
+                failures[index] = how;
+                break;
+            }
             if how.is_some() {
                 failure_order.push(index);
             }

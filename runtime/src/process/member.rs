@@ -176,6 +176,7 @@ impl Membership {
 
 /// Runs agent `id` of the team in `team_path` to the end; errors are one line.
 pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
+    let _signals = crate::signals::install();
     let started = Instant::now();
     let team = Team::read(team_path)?;
     let n = team.file.robots;
@@ -213,7 +214,11 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
     let membership = Membership::join(&scenario, &namespace, &[id], deadline)?;
     let report = run_scenario(&scenario, id, &namespace.dir, &result, false);
-    if report.is_err() {
+    if let Some(signal) = crate::signals::received() {
+        // A termination signal (to us, or to another member: then it is on the board
+        // already): the whole team stops, nobody failed.
+        let _ = membership.board().request_stop(signal, Some(id));
+    } else if report.is_err() {
         // No launcher reports us: tell the others (the first mark wins, so an agent that
         // stopped because of another's failure changes nothing).
         let _ = membership.board().mark_failed(id);
