@@ -47,6 +47,9 @@ pub enum Command {
     },
     /// Print a generated topology in the topology file format (TOML).
     Topology(TopologyArgs),
+    /// Run many teams of agent processes at once (a stress test): failures, wall time,
+    /// per-run p50/p99 and anything left behind; non-zero exit on any failure or leftover.
+    Stress(crate::commands::stress::StressArgs),
 }
 
 #[derive(Args, Debug)]

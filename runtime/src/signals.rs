@@ -116,13 +116,6 @@ pub fn stopped_by_exit_code(code: i32) -> Option<i32> {
     TERMINATION.into_iter().find(|&s| code == 128 + s)
 }
 
-/// Why an agent must stop now, if it must: a termination signal to this process, or a stop
-/// request on the team's `board` (the signal went to the launcher, a host or another agent).
-/// Two atomic loads: cheap enough for every round.
-pub fn stop_signal(board: Option<&crate::board::Board>) -> Option<i32> {
-    received().or_else(|| board.and_then(|b| b.stop_requested()).map(|(s, _)| s))
-}
-
 /// `SIGINT`, `SIGTERM`, `SIGHUP`, or `signal N`.
 pub fn name(signal: i32) -> String {
     match signal {

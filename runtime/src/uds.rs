@@ -16,7 +16,7 @@
 //! in 20 ms slices, looking at the run's failure mark in between. A neighbour's end of file
 //! is reported as its failure. There is no global barrier.
 
-use crate::board::Board;
+use crate::board::{Board, Rendezvous};
 use crate::error_text::one_line;
 use crate::exchange::header::{
     RoundHeader, words_as_bytes as as_bytes, words_as_bytes_mut as as_bytes_mut,
@@ -86,7 +86,7 @@ fn transport(agent: usize, what: impl Into<String>) -> ExchangeError {
 
 /// A stop request (termination signal) during start-up, as the agent's one-line error.
 fn stop_during_startup(agent: usize, board: &Board) -> Result<(), String> {
-    match crate::signals::stop_signal(Some(board)) {
+    match board.stop_signal() {
         Some(signal) => Err(ExchangeError::Stopped { agent, signal }.to_string()),
         None => Ok(()),
     }
@@ -98,6 +98,7 @@ impl UdsExchange {
     pub fn connect(endpoint: &UdsEndpoint, deadline: Instant) -> Result<Self, String> {
         let i = endpoint.index;
         let board = Board::open(&endpoint.board_shm, endpoint.agents).map_err(|e| one_line(&e))?;
+        board.set_registered(i);
         let own = socket_path(&endpoint.socket_dir, i);
         let _ = std::fs::remove_file(&own);
         let listener = UnixListener::bind(&own)
@@ -195,6 +196,18 @@ impl UdsExchange {
             }
         }
         let _ = std::fs::remove_file(&own);
+        // Nobody's round deadline starts before the whole team is connected.
+        board.set_connected(i);
+        let team: Vec<usize> = (0..endpoint.agents).collect();
+        board
+            .await_connected(&team, deadline)
+            .map_err(|waited| match waited {
+                Rendezvous::Stopped(signal) => ExchangeError::Stopped { agent: i, signal }.to_string(),
+                Rendezvous::Failed(failed) => format!("agent {i}: stopped at start-up because agent {failed} failed"),
+                Rendezvous::NeverConnected(missing) => format!(
+                    "agent {i}: the team did not connect before the start-up deadline; missing: agent(s) {missing:?} (not started, started too late, or stuck)"
+                ),
+            })?;
         let links: Vec<Link> = links.into_iter().flatten().collect();
         for l in &links {
             l.stream
@@ -311,7 +324,7 @@ impl UdsExchange {
     }
 
     fn check_failure(&self, round: u64) -> Result<(), ExchangeError> {
-        if let Some(signal) = crate::signals::stop_signal(Some(&self.board)) {
+        if let Some(signal) = self.board.stop_signal() {
             return Err(ExchangeError::Stopped {
                 agent: self.index,
                 signal,

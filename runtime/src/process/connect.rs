@@ -61,6 +61,7 @@ pub(crate) fn connect(
                     .local_agents
                     .as_ref()
                     .is_some_and(|local| neighbours.iter().any(|j| !local.contains(j))),
+                local_agents: scenario.local_agents.clone(),
                 neighbours,
             };
             let mut exchange =

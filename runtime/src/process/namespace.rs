@@ -27,12 +27,12 @@ impl RunNamespace {
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.subsec_nanos());
         let id = format!(
-            "{:x}{:05x}{:x}",
-            std::process::id(),
+            "{}{:05x}{:x}",
+            run_id_prefix(std::process::id()),
             nanos >> 12,
             COUNTER.fetch_add(1, Ordering::Relaxed)
         );
-        let runs = std::env::temp_dir().join("admm-ta-runs");
+        let runs = runs_dir();
         sweep_abandoned(&runs);
         let dir = runs.join(&id);
         std::fs::create_dir_all(&dir)?;
@@ -107,6 +107,23 @@ impl RunNamespace {
             _ => Ok(()),
         }
     }
+}
+
+/// The directory of launcher runs (one subdirectory per run, named by its id).
+pub fn runs_dir() -> PathBuf {
+    std::env::temp_dir().join("admm-ta-runs")
+}
+
+/// The id prefix of every run a launcher in process `pid` starts (its shared memory is
+/// named `adta<id>_…`, its run directory `<id>`): how a stress test finds what its runs
+/// left behind.
+pub fn run_id_prefix(pid: u32) -> String {
+    format!("{pid:x}")
+}
+
+/// Names in `/dev/shm` starting with `prefix`.
+pub fn shm_named(prefix: &str) -> Vec<PathBuf> {
+    shm_objects(prefix)
 }
 
 /// File of a run directory holding the launcher's pid.
