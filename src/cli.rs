@@ -77,8 +77,11 @@ pub struct AgentArgs {
     #[arg(long)]
     pub index: Option<usize>,
     /// The scenario file the launcher wrote.
-    #[arg(long)]
+    #[arg(long, requires = "scenario_digest")]
     pub scenario: Option<PathBuf>,
+    /// SHA-256 of the scenario file (hex): an agent refuses a file that differs.
+    #[arg(long)]
+    pub scenario_digest: Option<String>,
 }
 
 #[derive(Args, Debug)]

@@ -240,7 +240,7 @@ fn an_agent_with_another_team_shape_is_refused_and_the_team_runs_on() {
         }
     }
     let _end_team = EndTeam(pid);
-    let runs = std::env::temp_dir().join("admm-ta-runs");
+    let runs = admm_ta::runtime::process::namespace::runs_dir();
     let started = Instant::now();
     let scenario_path = loop {
         let found = std::fs::read_dir(&runs).ok().and_then(|d| {
@@ -271,10 +271,14 @@ fn an_agent_with_another_team_shape_is_refused_and_the_team_runs_on() {
     scenario["method"] = "dual".into();
     let dir = tempfile::tempdir().unwrap();
     let rogue_path = dir.path().join("scenario.json");
-    std::fs::write(&rogue_path, scenario.to_string()).unwrap();
+    let text = scenario.to_string();
+    admm_ta::runtime::process::private_dir::write_private_file(&rogue_path, text.as_bytes())
+        .unwrap();
+    let digest = admm_ta::runtime::process::private_dir::sha256_hex(text.as_bytes());
     let rogue = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
         .args(["agent", "--run", &run_id, "--index", "2", "--scenario"])
         .arg(&rogue_path)
+        .args(["--scenario-digest", &digest])
         .output()
         .unwrap();
     assert!(!rogue.status.success());

@@ -31,7 +31,8 @@ pub fn run(args: AgentArgs) -> Result<()> {
             run: Some(run),
             index: Some(index),
             scenario: Some(scenario),
-        } => (index, agent::run(&run, index, &scenario)),
+            scenario_digest: Some(digest),
+        } => (index, agent::run(&run, index, &scenario, &digest)),
         _ => bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
     };
     result.map_err(|e| {

@@ -56,13 +56,14 @@ pub fn relative_gap(cost: f64, optimum: f64) -> f64 {
 }
 
 /// Files a multi-process run of launcher `pid` may leave behind: shared memory with its
-/// prefix (`adta<pid in hex>…`) and its run directory (`<tmp>/admm-ta-runs/<pid in hex>…`).
+/// prefix (`adta<pid in hex>…`) and its run directory (`<runs>/<pid in hex>…` in the user's
+/// private runs directory).
 pub fn leftovers_of(pid: u32) -> Vec<PathBuf> {
     let mut found = Vec::new();
     for (dir, start) in [
         (PathBuf::from("/dev/shm"), format!("adta{pid:x}")),
         (
-            std::env::temp_dir().join("admm-ta-runs"),
+            admm_ta::runtime::process::namespace::runs_dir(),
             format!("{pid:x}"),
         ),
     ] {

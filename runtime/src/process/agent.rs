@@ -55,11 +55,18 @@ fn record_stop(scenario: &Scenario) {
     }
 }
 
-/// Runs agent `index` of run `run_id` (started by the launcher); errors are one line for
-/// the log.
-pub fn run(run_id: &str, index: usize, scenario_path: &Path) -> Result<(), String> {
+/// Runs agent `index` of run `run_id` (started by the launcher) from the scenario file the
+/// launcher wrote, whose SHA-256 is `scenario_digest`; errors are one line for the log.
+pub fn run(
+    run_id: &str,
+    index: usize,
+    scenario_path: &Path,
+    scenario_digest: &str,
+) -> Result<(), String> {
     let _signals = crate::signals::install();
-    let scenario = Scenario::read(scenario_path, run_id).map_err(|e| one_line(&e))?;
+    // Not a symlink, ours, mode 0600, and what the launcher wrote (its digest).
+    let bytes = crate::process::private_dir::read_verified(scenario_path, scenario_digest)?;
+    let scenario = Scenario::parse(&bytes, scenario_path, run_id).map_err(|e| one_line(&e))?;
     let run_dir = scenario_path.parent().unwrap_or(Path::new("."));
     run_scenario(
         &scenario,

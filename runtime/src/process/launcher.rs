@@ -16,6 +16,7 @@ use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::process::agent::{AgentReport, log_path, result_path};
 use crate::process::connect::{LauncherSupport, SupportError};
 use crate::process::namespace::RunNamespace;
+use crate::process::private_dir::{create_private_file, sha256_hex, write_private_file};
 use crate::process::scenario::Scenario;
 use crate::signals;
 use std::os::unix::process::CommandExt;
@@ -272,13 +273,17 @@ pub fn launch(
     let run_dir = namespace.dir.clone();
     let scenario_path = run_dir.join("scenario.json");
     let text = serde_json::to_string(&scenario).expect("a scenario serialises");
-    std::fs::write(&scenario_path, text).map_err(LaunchError::RunDirectory)?;
-    std::fs::create_dir_all(namespace.iceoryx_root()).map_err(LaunchError::RunDirectory)?;
+    // Exclusively, mode 0600; agents check owner, mode and this digest before reading it.
+    write_private_file(&scenario_path, text.as_bytes()).map_err(LaunchError::RunDirectory)?;
+    let scenario_digest = sha256_hex(text.as_bytes());
+    namespace
+        .create_iceoryx_root()
+        .map_err(LaunchError::RunDirectory)?;
 
     let spawned_unix_ns = unix_ns();
     for index in 0..scenario.robots {
         let log =
-            std::fs::File::create(log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
+            create_private_file(&log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
         let mut command = Command::new(agent_program);
         let launcher_pid = std::process::id() as libc::pid_t;
         // SAFETY: only async-signal-safe calls between fork and exec.
@@ -303,6 +308,7 @@ pub fn launch(
             .args(["--index", &index.to_string()])
             .arg("--scenario")
             .arg(&scenario_path)
+            .args(["--scenario-digest", &scenario_digest])
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(log)

@@ -137,8 +137,8 @@ impl Membership {
         for &slot in slots {
             board.set_member_pid(slot, std::process::id());
         }
-        std::fs::create_dir_all(&scenario.iceoryx_root)
-            .map_err(|e| format!("cannot create {}: {e}", scenario.iceoryx_root.display()))?;
+        // Mode 0700, ours, not a symlink (its name in /dev/shm is predictable).
+        crate::process::private_dir::ensure_private_dir(&scenario.iceoryx_root)?;
         if fresh {
             // Nodes of a dead team of this name.
             let _ = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)
