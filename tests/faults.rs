@@ -285,9 +285,8 @@ fn an_agent_with_another_team_shape_is_refused_and_the_team_runs_on() {
     assert_failure_line(
         &String::from_utf8_lossy(&rogue.stderr),
         &[
-            "agent 2",
-            "(payload 12)",
-            "running team is 6 robots × 6 tasks (payload 36)",
+            "agent 2's team file differs from the running team's (digest",
+            ": method and parameters differ",
         ],
     );
     // The team was not disturbed; end it by killing one of its agents.

@@ -8,8 +8,9 @@
 //!   independently started team) and whether it is connected (start-up rendezvous);
 //! * the failure line: the agent marked as failed (the first mark wins), the team's shape
 //!   (tasks and payload length, so an agent of another shape is refused), the count of
-//!   members that left, and the stop request (a termination signal, distinct from a
-//!   failure: [`Board::request_stop`]).
+//!   members that left, the stop request (a termination signal, distinct from a
+//!   failure: [`Board::request_stop`]) and whether the team's digest is written;
+//! * the team's digest (two lines: [`DIGEST_WORDS`] words).
 //!
 //! Every process only touches it through atomics. The `ipc` and `uds` transports, the
 //! launcher and the team members all use it, so it sits below all of them.
@@ -25,8 +26,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// Bytes of the board: the global barrier's line, one line per agent (two arrival counters
 /// and the last round it published), then the failure line (failed agent, team shape).
 fn board_size(agents: usize) -> usize {
-    LINE * (agents + 2)
+    LINE * (agents + 4)
 }
+
+/// Words of a team digest on the board (see `process::team_digest`): 256 bits over the
+/// whole team and 64 bits per part.
+pub const DIGEST_WORDS: usize = 8;
 
 const LINE: usize = 64;
 
@@ -337,6 +342,32 @@ impl Board {
             });
         }
         Ok(())
+    }
+
+    /// Writes the team's digest (its creator, before any agent reads it): the words, then
+    /// the flag that says they are there.
+    pub fn set_digest(&self, words: &[u64; DIGEST_WORDS]) {
+        let base = LINE * (self.agents + 2);
+        for (k, &w) in words.iter().enumerate() {
+            self.word(base + 8 * k).store(w, Ordering::Relaxed);
+        }
+        self.word(LINE * (self.agents + 1) + 40)
+            .store(1, Ordering::Release);
+    }
+
+    /// The team's digest, once its creator wrote it.
+    pub fn digest(&self) -> Option<[u64; DIGEST_WORDS]> {
+        if self
+            .word(LINE * (self.agents + 1) + 40)
+            .load(Ordering::Acquire)
+            == 0
+        {
+            return None;
+        }
+        let base = LINE * (self.agents + 2);
+        Some(std::array::from_fn(|k| {
+            self.word(base + 8 * k).load(Ordering::Relaxed)
+        }))
     }
 
     /// Agent `agent` has its publisher connected to every subscriber and its subscribers

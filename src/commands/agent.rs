@@ -37,7 +37,7 @@ pub fn run(args: AgentArgs) -> Result<()> {
     };
     result.map_err(|e| {
         // Exchange errors already start with "agent N:".
-        if e.starts_with(&format!("agent {index}:")) {
+        if e.starts_with(&format!("agent {index}:")) || e.starts_with(&format!("agent {index}'s")) {
             anyhow::anyhow!(e)
         } else {
             anyhow::anyhow!("agent {index}: {e}")

@@ -5,12 +5,15 @@
 //! A new process transport adds one arm to each `match` here; nothing else in the process
 //! orchestration names a transport.
 
+use crate::board::Board;
+use crate::error_text::one_line;
 use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::fault_for;
 use crate::ipc::exchange::{IpcEndpoint, IpcExchange};
 use crate::ipc::nodes::run_config;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
+use crate::process::team_digest::TeamDigest;
 use crate::transport::Transport;
 use crate::uds::{UdsEndpoint, UdsExchange};
 use crate::wait::WaitPolicy;
@@ -45,6 +48,11 @@ pub(crate) fn connect(
     };
     let policy = WaitPolicy::new(scenario.wait, scenario.robots);
     let neighbours = graph.neighbours(index).to_vec();
+    if matches!(scenario.transport, Transport::Ipc | Transport::Uds) {
+        // Another team's agent is refused by name before it opens a service.
+        let board = Board::open(&scenario.board_shm, scenario.robots).map_err(|e| one_line(&e))?;
+        TeamDigest::of(scenario).check(&board, index)?;
+    }
     match scenario.transport {
         Transport::Ipc => {
             let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;

@@ -18,6 +18,7 @@ use crate::process::connect::{LauncherSupport, SupportError};
 use crate::process::namespace::RunNamespace;
 use crate::process::private_dir::{create_private_file, sha256_hex, write_private_file};
 use crate::process::scenario::Scenario;
+use crate::process::team_digest::TeamDigest;
 use crate::signals;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
@@ -276,6 +277,8 @@ pub fn launch(
     // Exclusively, mode 0600; agents check owner, mode and this digest before reading it.
     write_private_file(&scenario_path, text.as_bytes()).map_err(LaunchError::RunDirectory)?;
     let scenario_digest = sha256_hex(text.as_bytes());
+    // The team's identity, checked by every agent before it opens a service.
+    TeamDigest::of(&scenario).publish(guard.board.as_ref().expect("the board exists"));
     namespace
         .create_iceoryx_root()
         .map_err(LaunchError::RunDirectory)?;

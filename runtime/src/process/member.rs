@@ -19,6 +19,7 @@ use crate::latency::LatencySummary;
 use crate::process::agent::{AgentReport, run_scenario};
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
+use crate::process::team_digest::TeamDigest;
 use crate::process::team_file::{HostEntry, Team};
 use crate::workload::Workload;
 use crate::workload::plan::prepare;
@@ -134,6 +135,14 @@ impl Membership {
             scenario.payload_len(),
         )
         .map_err(|e| one_line(&e))?;
+        // The first member writes the team's digest; the others must match it.
+        let digest = TeamDigest::of(scenario);
+        if board.digest().is_none() {
+            digest.publish(&board);
+        }
+        if let Some(&first) = slots.first() {
+            digest.check(&board, first)?;
+        }
         for &slot in slots {
             board.set_member_pid(slot, std::process::id());
         }

@@ -7,6 +7,7 @@
 //! * [`scenario`]: the file the launcher writes for its agents;
 //! * [`namespace`]: a run's private iceoryx2 prefix and directory, and their cleanup;
 //! * [`private_dir`]: the user's private base directory, exclusive files, verified reads;
+//! * [`team_digest`]: a team's identity, checked by every agent before round 0;
 //! * [`team_file`]: the team file of independently started agents, and what they derive from it;
 //! * [`member`]: agents started independently from a team file (joining, leaving, collecting);
 //! * `host` and `bridge` (feature `zenoh`): one machine of a multi-host team.
@@ -18,6 +19,7 @@ pub mod member;
 pub mod namespace;
 pub mod private_dir;
 pub mod scenario;
+pub mod team_digest;
 pub mod team_file;
 
 #[cfg(feature = "zenoh")]
