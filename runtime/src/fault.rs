@@ -7,7 +7,9 @@
 //! * `hang`: stops sending and sleeps until killed (neighbours time out);
 //! * `nan`: publishes a payload with a NaN in it;
 //! * `wrong-round`: publishes a header with a round number far ahead;
-//! * `wrong-size`: publishes a payload one value short.
+//! * `wrong-size`: publishes a payload one value short;
+//! * `never-start`: never connects (any process transport; `ROUND` is ignored): its
+//!   process lives, but it never joins the team.
 //!
 //! The launcher passes the environment to its agents, so a test sets it on `admm-ta solve`;
 //! the agent's exchange applies it when it publishes (the transports whose capabilities say
@@ -28,6 +30,7 @@ pub enum FaultKind {
     Nan,
     WrongRound,
     WrongSize,
+    NeverStart,
 }
 
 /// A fault of one agent at one round.
@@ -55,6 +58,7 @@ impl std::str::FromStr for Fault {
             "nan" => FaultKind::Nan,
             "wrong-round" => FaultKind::WrongRound,
             "wrong-size" => FaultKind::WrongSize,
+            "never-start" => FaultKind::NeverStart,
             _ => return Err(bad()),
         };
         Ok(Self {
@@ -91,7 +95,10 @@ impl Fault {
             FaultKind::Hang => loop {
                 std::thread::sleep(Duration::from_secs(3600));
             },
-            FaultKind::Nan | FaultKind::WrongRound | FaultKind::WrongSize => {}
+            FaultKind::Nan
+            | FaultKind::WrongRound
+            | FaultKind::WrongSize
+            | FaultKind::NeverStart => {}
         }
     }
 

@@ -129,8 +129,10 @@ impl UdsExchange {
                         std::thread::sleep(Duration::from_millis(1));
                     }
                     Err(e) => {
+                        let team: Vec<usize> = (0..endpoint.agents).collect();
+                        let missing = board.never_connected(&team);
                         return Err(format!(
-                            "agent {i}: neighbour {j} did not listen on {} before the start-up deadline: {e}",
+                            "agent {i}: neighbour {j} did not listen on {} before the start-up deadline ({e}); missing: agent(s) {missing:?}",
                             path.display()
                         ));
                     }
@@ -189,8 +191,10 @@ impl UdsExchange {
                         .map(|(&j, _)| j)
                         .collect();
                     let _ = std::fs::remove_file(&own);
+                    let team: Vec<usize> = (0..endpoint.agents).collect();
+                    let never = board.never_connected(&team);
                     return Err(format!(
-                        "agent {i}: neighbour(s) {missing:?} did not connect before the start-up deadline ({e})"
+                        "agent {i}: neighbour(s) {missing:?} did not connect before the start-up deadline ({e}); missing: agent(s) {never:?}"
                     ));
                 }
             }
@@ -277,6 +281,15 @@ impl UdsExchange {
                     }
                     Err(e) if e.kind() == ErrorKind::WouldBlock => break,
                     Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                    Err(e) if e.kind() == ErrorKind::ConnectionReset => {
+                        // Evidence: the neighbour's process is gone (its kernel reset it).
+                        return Err(ExchangeError::PeerFailed {
+                            agent: i,
+                            failed: j,
+                            round,
+                            how: "reset its connection (its process died)".into(),
+                        });
+                    }
                     Err(e) => {
                         return Err(transport(
                             i,
@@ -316,6 +329,19 @@ impl UdsExchange {
                 timeout,
             );
         }
+    }
+
+    /// Marks agent `agent` as the one that failed (unless another was marked first).
+    pub fn blame(&self, agent: usize) {
+        let _ = self.board.mark_failed(agent);
+    }
+
+    /// The agent that published the fewest rounds: after a timeout, the one everybody is
+    /// waiting for, directly or through a chain of blocked neighbours (a stopped process).
+    pub fn laggard(&self) -> usize {
+        (0..self.board.agents())
+            .min_by_key(|&a| (self.board.published_round(a), a))
+            .unwrap_or(self.index)
     }
 
     /// Asks the team to stop: this agent got termination signal `signal` (first request wins).
@@ -359,6 +385,20 @@ impl UdsExchange {
                     Ok(n) => link.sent += n,
                     Err(e) if e.kind() == ErrorKind::WouldBlock => break,
                     Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                    Err(e)
+                        if matches!(
+                            e.kind(),
+                            ErrorKind::BrokenPipe | ErrorKind::ConnectionReset
+                        ) =>
+                    {
+                        // Evidence: the neighbour's process is gone.
+                        return Err(ExchangeError::PeerFailed {
+                            agent: self.index,
+                            failed: link.neighbour,
+                            round: 0,
+                            how: "closed its connection (its process died)".into(),
+                        });
+                    }
                     Err(e) => {
                         return Err(transport(
                             self.index,

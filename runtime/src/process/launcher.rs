@@ -13,6 +13,7 @@
 use crate::board::{Board, BoardError};
 use crate::exchange::round_loop::AgentOutcome;
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
+use crate::liveness::process_state;
 use crate::process::agent::{AgentReport, log_path, result_path};
 use crate::process::connect::{LauncherSupport, SupportError};
 use crate::process::namespace::RunNamespace;
@@ -106,6 +107,10 @@ pub struct ProcessRun {
 /// killed (they notice within a 20 ms sleep slice, or after their current step).
 const FAILURE_GRACE: Duration = Duration::from_secs(2);
 
+/// How long the launcher waits for an agent's announcement of whom it blames (Zenoh agents
+/// announce through the router while they exit).
+const ANNOUNCEMENT_WAIT: Duration = Duration::from_millis(300);
+
 /// How long agents have to leave by themselves after a stop request (termination signal)
 /// before they are killed; they notice within a 20 ms wait slice.
 const STOP_GRACE: Duration = Duration::from_millis(500);
@@ -168,6 +173,14 @@ fn describe_exit(status: ExitStatus) -> Option<String> {
         (Some(code), _) => format!("exit code {code}"),
         (None, Some(signal)) => format!("killed by signal {signal}"),
         _ => status.to_string(),
+    })
+}
+
+/// The agent whose process is stopped (SIGSTOP or a debugger: state `T` or `t`), if any.
+fn stopped_agent(children: &[Option<Child>]) -> Option<usize> {
+    children.iter().position(|c| {
+        c.as_ref()
+            .is_some_and(|c| matches!(process_state(c.id()), Some('T' | 't')))
     })
 }
 
@@ -332,6 +345,8 @@ pub fn launch(
     let mut failure_order = Vec::new();
     let mut grace_ends = None;
     let mut killed = 0;
+    let mut stopped_evidence = None;
+    let mut first_failure = None;
     while guard.children.iter().any(Option::is_some) {
         if let Some(stop) = stop_request(&guard) {
             return Err(stop_team(guard, stop));
@@ -362,18 +377,42 @@ pub fn launch(
             if how.is_some() {
                 failure_order.push(index);
             }
-            if how.is_some() && failed.is_none() {
-                let board = guard.board.as_ref().expect("the board exists");
-                // An agent may have found a dead or misbehaving peer first: then that peer
-                // is the one.
-                failed = Some(board.mark_failed(index).unwrap_or(index));
-                // Agents that do not read the board (Zenoh's) learn it another way.
-                if let Some(support) = &guard.support {
-                    support.announce_failure(failed.unwrap_or(index));
-                }
-                grace_ends = Some(std::time::Instant::now() + FAILURE_GRACE);
+            if how.is_some() && failed.is_none() && first_failure.is_none() {
+                first_failure = Some(index);
             }
             failures[index] = how;
+        }
+        if let Some(index) = first_failure.take() {
+            let board = guard.board.as_ref().expect("the board exists");
+            // Evidence first: an agent stopped (SIGSTOP: state T in /proc) is the one its
+            // neighbours timed out on. Else an agent may have found a dead or misbehaving
+            // peer first (the board's mark): then that peer is the one.
+            let culprit = match stopped_agent(&guard.children) {
+                Some(stopped) => {
+                    let _ = board.mark_failed(stopped);
+                    stopped_evidence = Some(stopped);
+                    stopped
+                }
+                None => {
+                    // A killed agent is its own evidence; else what the agents announced.
+                    let killed = failures[index]
+                        .as_deref()
+                        .is_some_and(|h| h.starts_with("killed by signal"));
+                    let announced = guard
+                        .support
+                        .as_ref()
+                        .filter(|_| !killed)
+                        .and_then(|s| s.announced_failure(ANNOUNCEMENT_WAIT));
+                    let marked = board.mark_failed(announced.unwrap_or(index));
+                    marked.or(announced).unwrap_or(index)
+                }
+            };
+            failed = Some(culprit);
+            // Agents that do not read the board (Zenoh's) learn it another way.
+            if let Some(support) = &guard.support {
+                support.announce_failure(culprit);
+            }
+            grace_ends = Some(std::time::Instant::now() + FAILURE_GRACE);
         }
         // The failed agent may still run (hung, or sending garbage): it is not waited for.
         if let Some(culprit) = failed
@@ -408,6 +447,9 @@ pub fn launch(
             .find(|&i| !last_log_line(&run_dir, i).contains("because agent"))
             .unwrap_or(index);
         let status = match failures[index].take() {
+            _ if stopped_evidence == Some(index) => {
+                format!("stopped: state T in /proc, reported by agent {reporter}")
+            }
             Some(how) if index == reporter => how,
             _ => format!("reported by agent {reporter}"),
         };
