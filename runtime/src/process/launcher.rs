@@ -31,6 +31,9 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 pub enum LaunchError {
     #[error("cannot prepare the run directory")]
     RunDirectory(#[source] std::io::Error),
+    /// The open-file or process limits cannot hold the team.
+    #[error("{0}")]
+    Limits(String),
     #[error("cannot create the run's shared board")]
     Board(#[source] BoardError),
     #[error(transparent)]
@@ -263,6 +266,13 @@ pub fn launch(
     fault_injection: bool,
 ) -> Result<ProcessRun, LaunchError> {
     let _signals = signals::install();
+    // Before anything is created or spawned.
+    let max_degree = scenario
+        .graph()
+        .map(|g| (0..g.robots()).map(|i| g.degree(i)).max().unwrap_or(0))
+        .unwrap_or(scenario.robots.saturating_sub(1));
+    crate::process::limits::check(scenario.transport, scenario.robots, max_degree)
+        .map_err(LaunchError::Limits)?;
     let namespace = RunNamespace::create().map_err(LaunchError::RunDirectory)?;
     let mut guard = RunGuard {
         namespace: namespace.clone(),

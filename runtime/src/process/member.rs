@@ -201,6 +201,8 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
         .then(|| team.host_of(id))
         .flatten();
     let (mut scenario, namespace) = member_scenario(&team, host)?;
+    let degree = scenario.graph().map_or(n, |g| g.degree(id));
+    crate::process::limits::check(scenario.transport, 1, degree)?;
     let results = team.results_dir();
     std::fs::create_dir_all(&results)
         .map_err(|e| format!("cannot create {}: {e}", results.display()))?;

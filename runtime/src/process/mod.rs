@@ -2,6 +2,7 @@
 //! exchange carries their messages (`ipc`, `uds`, `zenoh`).
 //!
 //! * [`launcher`]: spawns, supervises and reaps the agent processes of a run;
+//! * [`limits`]: open files and processes a team needs, checked before spawning;
 //! * [`agent`]: the body of `admm-ta agent`;
 //! * [`connect`]: the one place that maps a process transport to its exchange;
 //! * [`scenario`]: the file the launcher writes for its agents;
@@ -15,6 +16,7 @@
 pub mod agent;
 pub mod connect;
 pub mod launcher;
+pub mod limits;
 pub mod member;
 pub mod namespace;
 pub mod private_dir;
