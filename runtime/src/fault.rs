@@ -1,4 +1,6 @@
-//! Fault injection for tests (not in `--help`): the environment variable
+//! Fault injection for tests (not in `--help`; compiled in only with the cargo feature
+//! `fault-injection`, which the workspace's tests enable and release builds do not: without
+//! it [`fault_for`] never reads the environment): the environment variable
 //! `ADMM_TA_FAULT=AGENT:ROUND:KIND` makes agent process `AGENT` misbehave when it is about to
 //! publish round `ROUND + 1` (after gathering round `ROUND`). Kinds:
 //!
@@ -19,6 +21,7 @@ use crate::exchange::header::RoundHeader;
 use std::time::Duration;
 
 /// The environment variable that injects a fault.
+#[cfg(feature = "fault-injection")]
 pub const FAULT_ENV: &str = "ADMM_TA_FAULT";
 
 /// What an agent does wrong.
@@ -44,7 +47,7 @@ pub struct Fault {
 impl std::str::FromStr for Fault {
     type Err = String;
     fn from_str(text: &str) -> Result<Self, String> {
-        let bad = || format!("{FAULT_ENV} must be AGENT:ROUND:KIND, got {text:?}");
+        let bad = || format!("a fault must be AGENT:ROUND:KIND, got {text:?}");
         let mut parts = text.split(':');
         let (Some(agent), Some(round), Some(kind), None) =
             (parts.next(), parts.next(), parts.next(), parts.next())
@@ -69,7 +72,15 @@ impl std::str::FromStr for Fault {
     }
 }
 
+/// The fault the environment injects into agent `index`, if any (never, in a build without
+/// the `fault-injection` feature).
+#[cfg(not(feature = "fault-injection"))]
+pub fn fault_for(_index: usize) -> Result<Option<Fault>, String> {
+    Ok(None)
+}
+
 /// The fault the environment injects into agent `index`, if any.
+#[cfg(feature = "fault-injection")]
 pub fn fault_for(index: usize) -> Result<Option<Fault>, String> {
     match std::env::var(FAULT_ENV) {
         Ok(text) if !text.is_empty() => {

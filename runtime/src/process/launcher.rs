@@ -325,9 +325,12 @@ pub fn launch(
                 Ok(())
             });
         }
+        #[cfg(feature = "fault-injection")]
         if !fault_injection {
             command.env_remove(crate::fault::FAULT_ENV);
         }
+        #[cfg(not(feature = "fault-injection"))]
+        let _ = fault_injection;
         let child = command
             .arg("agent")
             .args(["--run", &namespace.id])
