@@ -13,12 +13,12 @@
 use crate::board::{Board, BoardError};
 use crate::exchange::round_loop::AgentOutcome;
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
-use crate::liveness::process_state;
 use crate::process::agent::{AgentReport, log_path, result_path};
 use crate::process::connect::{LauncherSupport, SupportError};
 use crate::process::namespace::RunNamespace;
 use crate::process::private_dir::{create_private_file, sha256_hex, write_private_file};
 use crate::process::scenario::Scenario;
+use crate::process::stop::{stop_children, stopped_agent, stopped_by_signal};
 use crate::process::team_digest::TeamDigest;
 use crate::signals;
 use std::os::unix::process::CommandExt;
@@ -114,10 +114,6 @@ const FAILURE_GRACE: Duration = Duration::from_secs(2);
 /// announce through the router while they exit).
 const ANNOUNCEMENT_WAIT: Duration = Duration::from_millis(300);
 
-/// How long agents have to leave by themselves after a stop request (termination signal)
-/// before they are killed; they notice within a 20 ms wait slice.
-const STOP_GRACE: Duration = Duration::from_millis(500);
-
 /// Children and namespace of a run; dropping it kills and reaps every child still running,
 /// then removes the run's files.
 struct RunGuard {
@@ -179,21 +175,6 @@ fn describe_exit(status: ExitStatus) -> Option<String> {
     })
 }
 
-/// The agent whose process is stopped (SIGSTOP or a debugger: state `T` or `t`), if any.
-fn stopped_agent(children: &[Option<Child>]) -> Option<usize> {
-    children.iter().position(|c| {
-        c.as_ref()
-            .is_some_and(|c| matches!(process_state(c.id()), Some('T' | 't')))
-    })
-}
-
-/// The termination signal in an agent's exit description (`exit code 143`), if any.
-fn stopped_by_signal(how: &str) -> Option<i32> {
-    how.strip_prefix("exit code ")
-        .and_then(|c| c.parse().ok())
-        .and_then(signals::stopped_by_exit_code)
-}
-
 /// A stop request: a termination signal to the launcher, or one an agent got (on the board);
 /// the signal and the agent it went to.
 fn stop_request(guard: &RunGuard) -> Option<(i32, Option<usize>)> {
@@ -208,44 +189,7 @@ fn stop_request(guard: &RunGuard) -> Option<(i32, Option<usize>)> {
 /// (cut short by a second termination signal), then SIGKILL; every child is reaped and the
 /// run's files removed.
 fn stop_team(mut guard: RunGuard, (signal, by): (i32, Option<usize>)) -> LaunchError {
-    signals::record(signal);
-    if let Some(board) = &guard.board {
-        let _ = board.request_stop(signal, by);
-    }
-    let signals_before = signals::count();
-    for child in guard.children.iter().flatten() {
-        // SAFETY: signalling our own unreaped child (its pid cannot be reused yet).
-        unsafe { libc::kill(child.id() as libc::pid_t, signal) };
-    }
-    let grace_ends = std::time::Instant::now() + STOP_GRACE;
-    let (mut stopped, mut killed) = (0, 0);
-    // Agents that ended before the request count as stopped.
-    stopped += guard.children.iter().filter(|c| c.is_none()).count();
-    loop {
-        for slot in guard.children.iter_mut() {
-            if let Some(child) = slot
-                && !matches!(child.try_wait(), Ok(None))
-            {
-                *slot = None;
-                stopped += 1;
-            }
-        }
-        if guard.children.iter().all(Option::is_none) {
-            break;
-        }
-        let second = signals::count() > signals_before.max(1);
-        if std::time::Instant::now() >= grace_ends || second {
-            for slot in guard.children.iter_mut() {
-                if let Some(mut child) = slot.take() {
-                    let _ = child.kill();
-                    let _ = child.wait();
-                    killed += 1;
-                }
-            }
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(2));
-    }
+    let (stopped, killed) = stop_children(&mut guard.children, guard.board.as_ref(), signal, by);
     let namespace = guard.namespace.clone();
     drop(guard);
     LaunchError::Stopped {

@@ -5,6 +5,7 @@
 //! * [`limits`]: open files and processes a team needs, checked before spawning;
 //! * [`agent`]: the body of `admm-ta agent`;
 //! * [`connect`]: the one place that maps a process transport to its exchange;
+//! * [`stop`]: how a run stops on a termination signal, and what children's states say;
 //! * [`scenario`]: the file the launcher writes for its agents;
 //! * [`namespace`]: a run's private iceoryx2 prefix and directory, and their cleanup;
 //! * [`private_dir`]: the user's private base directory, exclusive files, verified reads;
@@ -21,6 +22,7 @@ pub mod member;
 pub mod namespace;
 pub mod private_dir;
 pub mod scenario;
+pub mod stop;
 pub mod team_digest;
 pub mod team_file;
 
