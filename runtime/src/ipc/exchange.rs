@@ -387,7 +387,11 @@ impl IpcExchange {
                 format!("stopped at round {round}: its launcher (pid {launcher}) is gone"),
             ));
         }
-        if waited >= DEAD_NODE_SCAN_EVERY
+        // Under a launcher, `waitpid` finds a dead agent; the scan is for agents started
+        // without one, and for a subscriber that vanished (`waited` = `MAX`). (It can also mistake a neighbour that is just finishing — its node's
+        // token released before its files are gone — for a dead one.)
+        if (self.launcher.is_none() || waited == Duration::MAX)
+            && waited >= DEAD_NODE_SCAN_EVERY
             && self.last_dead_node_scan.elapsed() >= DEAD_NODE_SCAN_EVERY
         {
             self.last_dead_node_scan = Instant::now();
@@ -519,7 +523,8 @@ impl IpcExchange {
             .map_err(|e| transport(i, format!("send failed: {e:?}")))?;
         if delivered < self.subscribers.len() {
             // A neighbour gone because another agent failed: that failure is the cause.
-            self.check_peers(header.round, DEAD_NODE_SCAN_EVERY)?;
+            // (`MAX`: scan the nodes now, launcher or not: a subscriber vanished.)
+            self.check_peers(header.round, Duration::MAX)?;
             return Err(transport(
                 i,
                 format!(
