@@ -47,6 +47,9 @@ pub enum Command {
     },
     /// Print a generated topology in the topology file format (TOML).
     Topology(TopologyArgs),
+    /// Run many teams of agent processes at once (a stress test): failures, wall time,
+    /// per-run p50/p99 and anything left behind; non-zero exit on any failure or leftover.
+    Stress(crate::commands::stress::StressArgs),
 }
 
 #[derive(Args, Debug)]
@@ -74,8 +77,11 @@ pub struct AgentArgs {
     #[arg(long)]
     pub index: Option<usize>,
     /// The scenario file the launcher wrote.
-    #[arg(long)]
+    #[arg(long, requires = "scenario_digest")]
     pub scenario: Option<PathBuf>,
+    /// SHA-256 of the scenario file (hex): an agent refuses a file that differs.
+    #[arg(long)]
+    pub scenario_digest: Option<String>,
 }
 
 #[derive(Args, Debug)]

@@ -4,7 +4,7 @@
 //! | --- | --- |
 //! | 0 | success: a certified/optimal assignment, or a run that finished as asked |
 //! | 1 | unexpected internal error |
-//! | 2 | bad input or bad options |
+//! | 2 | bad input or bad options, or a system limit the team does not fit (`ulimit -n`) |
 //! | 3 | infeasible problem (no assignment avoids the forbidden pairs) |
 //! | 4 | agent or transport failure (also `--on-failure continue` giving up) |
 //! | 5 | round limit reached without a certified assignment (the best one is printed) |
@@ -12,6 +12,8 @@
 
 use admm_ta::agents::lsap::LsapError;
 use admm_ta::agents::problem::ProblemError;
+use admm_ta::runtime::process::launcher::LaunchError;
+use admm_ta::runtime::runner::RunError;
 use admm_ta::runtime::solve::report::SolveReport;
 use admm_ta::{ConfigError, SolveError, StopRule, TopologyError};
 
@@ -63,6 +65,8 @@ pub fn code_of(error: &anyhow::Error) -> u8 {
         }
         if let Some(e) = cause.downcast_ref::<SolveError>() {
             return match e {
+                // Refused before anything was spawned: the user's limits, not a failure.
+                SolveError::Run(RunError::Launch(LaunchError::Limits(_))) => 2,
                 SolveError::Run(_) | SolveError::CannotContinue { .. } => 4,
                 SolveError::Internal(_) => 1,
                 _ => 2,

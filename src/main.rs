@@ -30,7 +30,11 @@ fn main() -> ExitCode {
         Err(error) => {
             // One line naming the problem, with its causes; never a backtrace.
             eprintln!("error: {error:#}");
-            ExitCode::from(exit::code_of(&error))
+            // A team stopped by SIGINT, SIGTERM or SIGHUP: the conventional 128 + signal.
+            match admm_ta::runtime::signals::received() {
+                Some(signal) => ExitCode::from(admm_ta::runtime::signals::exit_code(signal)),
+                None => ExitCode::from(exit::code_of(&error)),
+            }
         }
     }
 }

@@ -241,7 +241,7 @@ fn an_agent_with_another_team_shape_is_refused_and_the_team_runs_on() {
         }
     }
     let _end_team = EndTeam(pid);
-    let runs = std::env::temp_dir().join("admm-ta-runs");
+    let runs = admm_ta::runtime::process::namespace::runs_dir();
     let started = Instant::now();
     let scenario_path = loop {
         let found = std::fs::read_dir(&runs).ok().and_then(|d| {
@@ -272,19 +272,22 @@ fn an_agent_with_another_team_shape_is_refused_and_the_team_runs_on() {
     scenario["method"] = "dual".into();
     let dir = tempfile::tempdir().unwrap();
     let rogue_path = dir.path().join("scenario.json");
-    std::fs::write(&rogue_path, scenario.to_string()).unwrap();
+    let text = scenario.to_string();
+    admm_ta::runtime::process::private_dir::write_private_file(&rogue_path, text.as_bytes())
+        .unwrap();
+    let digest = admm_ta::runtime::process::private_dir::sha256_hex(text.as_bytes());
     let rogue = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
         .args(["agent", "--run", &run_id, "--index", "2", "--scenario"])
         .arg(&rogue_path)
+        .args(["--scenario-digest", &digest])
         .output()
         .unwrap();
     assert!(!rogue.status.success());
     assert_failure_line(
         &String::from_utf8_lossy(&rogue.stderr),
         &[
-            "agent 2",
-            "(payload 12)",
-            "running team is 6 robots × 6 tasks (payload 36)",
+            "agent 2's team file differs from the running team's (digest",
+            ": method and parameters differ",
         ],
     );
     // The team was not disturbed; end it by killing one of its agents.

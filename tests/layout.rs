@@ -42,6 +42,7 @@ const LAYERS: [&[&str]; 5] = [
         "exchange",
         "board",
         "liveness",
+        "signals",
         "fault",
         "wait",
         "latency",

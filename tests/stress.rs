@@ -113,3 +113,29 @@ fn soak_hundred_agents_ten_thousand_rounds() {
         assert_eq!(report["iterations"], 10_000);
     }
 }
+
+#[test]
+fn the_stress_command_runs_forty_ten_agent_teams_four_at_a_time_without_a_failure() {
+    let output = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
+        .args([
+            "stress",
+            "--runs",
+            "40",
+            "--concurrency",
+            "4",
+            "--robots",
+            "10",
+        ])
+        .args(["--transport", "ipc", "--quiet"])
+        .env_remove("ADMM_TA_FAULT")
+        .output()
+        .expect("the admm-ta binary runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    eprintln!("{stdout}");
+    assert!(output.status.success(), "{stdout}{stderr}");
+    assert!(
+        stdout.contains("40 runs of 10 agents") && stdout.contains(": 0 failed, 0 left behind"),
+        "{stdout}"
+    );
+}

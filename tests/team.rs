@@ -306,3 +306,53 @@ fn host_refuses_what_it_cannot_run() {
     assert!(err.contains(needle), "{err}");
     assert_eq!(err.trim().lines().count(), 1, "{err}");
 }
+
+#[test]
+fn an_agent_of_another_team_is_refused_by_name_before_round_0_and_the_team_runs_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("d{}", std::process::id());
+    let write = |name: &str, extra: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(
+            &path,
+            format!("run = \"{run}\"\nrobots = 4\ncosts = \"random\"\ntasks = 4\ntopology = \"ring\"\nresults = \"results\"\nstartup_timeout = 60.0\nround_timeout = 20.0\n{extra}"),
+        )
+        .unwrap();
+        path
+    };
+    let team = write("team.toml", "seed = 1\n");
+    let other_seed = write("seed.toml", "seed = 2\n");
+    let other_graph = write("graph.toml", "seed = 1\n");
+    let text = std::fs::read_to_string(&other_graph).unwrap();
+    std::fs::write(&other_graph, text.replace("\"ring\"", "\"complete\"")).unwrap();
+    let members: Vec<(usize, Child)> = [0, 1, 2]
+        .into_iter()
+        .map(|id| (id, start(&team, id)))
+        .collect();
+    std::thread::sleep(Duration::from_millis(500));
+    for (file, needle) in [
+        (&other_seed, "costs and parameters differ"),
+        (&other_graph, "): topology"),
+    ] {
+        let out = start(file, 3).wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{needle}: a wrong agent joined");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(
+            err.contains("agent 3's team file differs from the running team's (digest"),
+            "{err}"
+        );
+        assert!(err.contains(needle), "{needle}: {err}");
+    }
+    // The right agent 3 completes the team.
+    let last = start(&team, 3);
+    for (id, child) in members.into_iter().chain([(3, last)]) {
+        let out = child.wait_with_output().unwrap();
+        assert!(
+            out.status.success(),
+            "agent {id}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
+}

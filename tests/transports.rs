@@ -54,7 +54,7 @@ fn assert_clean(report: &SolveReport) {
         })
         .unwrap_or_default();
     assert!(left.is_empty(), "left in /dev/shm: {left:?}");
-    let dir = std::env::temp_dir().join("admm-ta-runs").join(id);
+    let dir = admm_ta::runtime::process::namespace::runs_dir().join(id);
     assert!(!dir.exists(), "run directory {} remains", dir.display());
 }
 

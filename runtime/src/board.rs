@@ -4,11 +4,13 @@
 //!
 //! * the global barrier's counters (line 0);
 //! * per agent (line `1 + i`): its two arrival counters (rounds of each parity, see
-//!   [`arrivals_target`]), the last round it published, and its process id (members of an
-//!   independently started team);
+//!   [`arrivals_target`]), the last round it published, its process id (members of an
+//!   independently started team) and whether it is connected (start-up rendezvous);
 //! * the failure line: the agent marked as failed (the first mark wins), the team's shape
-//!   (tasks and payload length, so an agent of another shape is refused) and the count of
-//!   members that left.
+//!   (tasks and payload length, so an agent of another shape is refused), the count of
+//!   members that left, the stop request (a termination signal, distinct from a
+//!   failure: [`Board::request_stop`]) and whether the team's digest is written;
+//! * the team's digest (two lines: [`DIGEST_WORDS`] words).
 //!
 //! Every process only touches it through atomics. The `ipc` and `uds` transports, the
 //! launcher and the team members all use it, so it sits below all of them.
@@ -24,8 +26,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// Bytes of the board: the global barrier's line, one line per agent (two arrival counters
 /// and the last round it published), then the failure line (failed agent, team shape).
 fn board_size(agents: usize) -> usize {
-    LINE * (agents + 2)
+    LINE * (agents + 4)
 }
+
+/// Words of a team digest on the board (see `process::team_digest`): 256 bits over the
+/// whole team and 64 bits per part.
+pub const DIGEST_WORDS: usize = 8;
 
 const LINE: usize = 64;
 
@@ -69,6 +75,22 @@ pub enum BoardError {
         running_tasks: u64,
         running_payload_len: u64,
     },
+}
+
+fn decode_stop(word: u64) -> (i32, Option<usize>) {
+    let by = word >> 8;
+    ((word & 0xff) as i32, (by != 0).then(|| by as usize - 1))
+}
+
+/// Why a start-up rendezvous ended without the whole team connected.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Rendezvous {
+    /// A termination signal (to this process, or requested on the board).
+    Stopped(i32),
+    /// An agent was marked failed.
+    Failed(usize),
+    /// These agents never started (or, if all did, never connected) before the deadline.
+    NeverConnected(Vec<usize>),
 }
 
 /// `shm` as the name of a shared-memory segment.
@@ -219,6 +241,84 @@ impl Board {
         }
     }
 
+    /// Asks every process of the team to stop because of termination signal `signal`, sent
+    /// to agent `by` (`None`: to the launcher or a host). The first request wins; returns
+    /// the one already there, if another was first.
+    pub fn request_stop(&self, signal: i32, by: Option<usize>) -> Option<(i32, Option<usize>)> {
+        let word = (signal as u64 & 0xff) | (by.map_or(0, |a| a as u64 + 1) << 8);
+        match self.word(LINE * (self.agents + 1) + 32).compare_exchange(
+            0,
+            word,
+            Ordering::AcqRel,
+            Ordering::Acquire,
+        ) {
+            Ok(_) => None,
+            Err(first) => Some(decode_stop(first)),
+        }
+    }
+
+    /// The stop request on the board, if any: the signal and the agent it was sent to
+    /// (`None`: the launcher or a host). Distinct from a failure: nobody is to blame.
+    pub fn stop_requested(&self) -> Option<(i32, Option<usize>)> {
+        let word = self
+            .word(LINE * (self.agents + 1) + 32)
+            .load(Ordering::Acquire);
+        (word != 0).then(|| decode_stop(word))
+    }
+
+    /// Why an agent must stop now, if it must: a termination signal to this process, or a
+    /// stop request on the board (the signal went to the launcher, a host or another
+    /// agent). Two atomic loads: cheap enough for every round.
+    pub fn stop_signal(&self) -> Option<i32> {
+        crate::signals::received().or_else(|| self.stop_requested().map(|(s, _)| s))
+    }
+
+    /// Waits until every agent of `team` announced it is connected ([`Board::set_connected`]),
+    /// a stop request, a failure mark, or `deadline`; at the deadline, the first agent that
+    /// never connected is marked failed (not a neighbour waiting for it).
+    pub fn await_connected(
+        &self,
+        team: &[usize],
+        deadline: std::time::Instant,
+    ) -> Result<(), Rendezvous> {
+        loop {
+            if let Some(signal) = self.stop_signal() {
+                return Err(Rendezvous::Stopped(signal));
+            }
+            if let Some(failed) = self.failed() {
+                return Err(Rendezvous::Failed(failed));
+            }
+            if team.iter().all(|&a| self.connected(a)) {
+                return Ok(());
+            }
+            if std::time::Instant::now() >= deadline {
+                return Err(Rendezvous::NeverConnected(self.never_connected(team)));
+            }
+            std::thread::sleep(std::time::Duration::from_micros(500));
+        }
+    }
+
+    /// The agents of `team` to blame for a start-up that did not complete: those that never
+    /// started (registered), else those that never connected; the first is marked failed.
+    pub fn never_connected(&self, team: &[usize]) -> Vec<usize> {
+        let mut missing: Vec<usize> = team
+            .iter()
+            .copied()
+            .filter(|&a| !self.registered(a))
+            .collect();
+        if missing.is_empty() {
+            missing = team
+                .iter()
+                .copied()
+                .filter(|&a| !self.connected(a))
+                .collect();
+        }
+        if let Some(&first) = missing.first() {
+            let _ = self.mark_failed(first);
+        }
+        missing
+    }
+
     /// The agent marked as failed, if any.
     pub fn failed(&self) -> Option<usize> {
         let marked = self.word(LINE * (self.agents + 1)).load(Ordering::Acquire);
@@ -242,6 +342,62 @@ impl Board {
             });
         }
         Ok(())
+    }
+
+    /// Writes the team's digest (its creator, before any agent reads it): the words, then
+    /// the flag that says they are there.
+    pub fn set_digest(&self, words: &[u64; DIGEST_WORDS]) {
+        let base = LINE * (self.agents + 2);
+        for (k, &w) in words.iter().enumerate() {
+            self.word(base + 8 * k).store(w, Ordering::Relaxed);
+        }
+        self.word(LINE * (self.agents + 1) + 40)
+            .store(1, Ordering::Release);
+    }
+
+    /// The team's digest, once its creator wrote it.
+    pub fn digest(&self) -> Option<[u64; DIGEST_WORDS]> {
+        if self
+            .word(LINE * (self.agents + 1) + 40)
+            .load(Ordering::Acquire)
+            == 0
+        {
+            return None;
+        }
+        let base = LINE * (self.agents + 2);
+        Some(std::array::from_fn(|k| {
+            self.word(base + 8 * k).load(Ordering::Relaxed)
+        }))
+    }
+
+    /// Agent `agent` has its publisher connected to every subscriber and its subscribers
+    /// in place: the start-up rendezvous ([`Board::connected`]).
+    pub fn set_connected(&self, agent: usize) {
+        self.word(LINE * (agent + 1) + 32)
+            .store(2, Ordering::Release);
+    }
+
+    /// Agent `agent`'s process started and opened the board (start-up evidence: an agent
+    /// that never registered is the one to blame, not the neighbours waiting for it).
+    pub fn set_registered(&self, agent: usize) {
+        let _ = self.word(LINE * (agent + 1) + 32).compare_exchange(
+            0,
+            1,
+            Ordering::AcqRel,
+            Ordering::Acquire,
+        );
+    }
+
+    /// Whether agent `agent` registered ([`Board::set_registered`]) or connected.
+    pub fn registered(&self, agent: usize) -> bool {
+        self.word(LINE * (agent + 1) + 32).load(Ordering::Acquire) != 0
+    }
+
+    /// Whether agent `agent` announced it is connected. Nobody publishes round 0 before
+    /// every agent of the team (on this board) did, so that no round deadline starts while
+    /// a member of the team is still starting.
+    pub fn connected(&self, agent: usize) -> bool {
+        self.word(LINE * (agent + 1) + 32).load(Ordering::Acquire) == 2
     }
 
     /// Last round agent `agent` published (0 before its first step).

@@ -1,4 +1,6 @@
-//! Fault injection for tests (not in `--help`): the environment variable
+//! Fault injection for tests (not in `--help`; compiled in only with the cargo feature
+//! `fault-injection`, which the workspace's tests enable and release builds do not: without
+//! it [`fault_for`] never reads the environment): the environment variable
 //! `ADMM_TA_FAULT=AGENT:ROUND:KIND` makes agent process `AGENT` misbehave when it is about to
 //! publish round `ROUND + 1` (after gathering round `ROUND`). Kinds:
 //!
@@ -7,7 +9,9 @@
 //! * `hang`: stops sending and sleeps until killed (neighbours time out);
 //! * `nan`: publishes a payload with a NaN in it;
 //! * `wrong-round`: publishes a header with a round number far ahead;
-//! * `wrong-size`: publishes a payload one value short.
+//! * `wrong-size`: publishes a payload one value short;
+//! * `never-start`: never connects (any process transport; `ROUND` is ignored): its
+//!   process lives, but it never joins the team.
 //!
 //! The launcher passes the environment to its agents, so a test sets it on `admm-ta solve`;
 //! the agent's exchange applies it when it publishes (the transports whose capabilities say
@@ -17,6 +21,7 @@ use crate::exchange::header::RoundHeader;
 use std::time::Duration;
 
 /// The environment variable that injects a fault.
+#[cfg(feature = "fault-injection")]
 pub const FAULT_ENV: &str = "ADMM_TA_FAULT";
 
 /// What an agent does wrong.
@@ -28,6 +33,7 @@ pub enum FaultKind {
     Nan,
     WrongRound,
     WrongSize,
+    NeverStart,
 }
 
 /// A fault of one agent at one round.
@@ -41,7 +47,7 @@ pub struct Fault {
 impl std::str::FromStr for Fault {
     type Err = String;
     fn from_str(text: &str) -> Result<Self, String> {
-        let bad = || format!("{FAULT_ENV} must be AGENT:ROUND:KIND, got {text:?}");
+        let bad = || format!("a fault must be AGENT:ROUND:KIND, got {text:?}");
         let mut parts = text.split(':');
         let (Some(agent), Some(round), Some(kind), None) =
             (parts.next(), parts.next(), parts.next(), parts.next())
@@ -55,6 +61,7 @@ impl std::str::FromStr for Fault {
             "nan" => FaultKind::Nan,
             "wrong-round" => FaultKind::WrongRound,
             "wrong-size" => FaultKind::WrongSize,
+            "never-start" => FaultKind::NeverStart,
             _ => return Err(bad()),
         };
         Ok(Self {
@@ -65,7 +72,15 @@ impl std::str::FromStr for Fault {
     }
 }
 
+/// The fault the environment injects into agent `index`, if any (never, in a build without
+/// the `fault-injection` feature).
+#[cfg(not(feature = "fault-injection"))]
+pub fn fault_for(_index: usize) -> Result<Option<Fault>, String> {
+    Ok(None)
+}
+
 /// The fault the environment injects into agent `index`, if any.
+#[cfg(feature = "fault-injection")]
 pub fn fault_for(index: usize) -> Result<Option<Fault>, String> {
     match std::env::var(FAULT_ENV) {
         Ok(text) if !text.is_empty() => {
@@ -91,7 +106,10 @@ impl Fault {
             FaultKind::Hang => loop {
                 std::thread::sleep(Duration::from_secs(3600));
             },
-            FaultKind::Nan | FaultKind::WrongRound | FaultKind::WrongSize => {}
+            FaultKind::Nan
+            | FaultKind::WrongRound
+            | FaultKind::WrongSize
+            | FaultKind::NeverStart => {}
         }
     }
 

@@ -37,6 +37,7 @@
 //! * [`board`]: a run's shared-memory board (arrival counters, published rounds, failure
 //!   mark, member pids, global barrier);
 //! * [`liveness`]: whether a process lives;
+//! * [`signals`]: SIGINT, SIGTERM and SIGHUP recorded (not fatal) while a team runs;
 //! * [`fault`]: fault injection for tests;
 //! * [`wait`]: how agents wait (spin, then sleep), and the counting barrier;
 //! * [`latency`]: round-latency histograms per component;
@@ -87,6 +88,7 @@ pub mod fault;
 pub mod latency;
 pub mod liveness;
 pub mod options;
+pub mod signals;
 pub mod transport;
 pub mod usage;
 pub mod wait;

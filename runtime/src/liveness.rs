@@ -11,3 +11,13 @@ pub fn process_alive(pid: u32) -> bool {
         state != Some("Z")
     })
 }
+
+/// The state letter of process `pid` in `/proc/PID/stat` (`R`, `S`, `T` stopped, `t`
+/// traced, `Z` zombie, …), if it exists.
+pub fn process_state(pid: u32) -> Option<char> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    stat[stat.rfind(')').map_or(0, |i| i + 1)..]
+        .split_whitespace()
+        .next()
+        .and_then(|s| s.chars().next())
+}

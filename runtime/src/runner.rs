@@ -38,7 +38,7 @@ pub struct TeamRun {
     /// From the first agent process's spawn until all were connected (processes).
     pub startup: Option<Duration>,
     /// The process run's id: its iceoryx2 prefix is `adta<id>_`, its directory
-    /// `<tmp>/admm-ta-runs/<id>`; both are gone when the run returns.
+    /// `<runs>/<id>` (the user's private runs directory); both are gone when the run returns.
     pub run_id: Option<String>,
     /// Per agent, its episodes in order (an episode workload).
     pub episodes: Vec<Vec<EpisodeRecord>>,

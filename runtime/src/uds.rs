@@ -16,7 +16,7 @@
 //! in 20 ms slices, looking at the run's failure mark in between. A neighbour's end of file
 //! is reported as its failure. There is no global barrier.
 
-use crate::board::Board;
+use crate::board::{Board, Rendezvous};
 use crate::error_text::one_line;
 use crate::exchange::header::{
     RoundHeader, words_as_bytes as as_bytes, words_as_bytes_mut as as_bytes_mut,
@@ -84,12 +84,21 @@ fn transport(agent: usize, what: impl Into<String>) -> ExchangeError {
     }
 }
 
+/// A stop request (termination signal) during start-up, as the agent's one-line error.
+fn stop_during_startup(agent: usize, board: &Board) -> Result<(), String> {
+    match board.stop_signal() {
+        Some(signal) => Err(ExchangeError::Stopped { agent, signal }.to_string()),
+        None => Ok(()),
+    }
+}
+
 impl UdsExchange {
     /// Connects agent `endpoint.index` to all its neighbours, waiting for them until
     /// `deadline`.
     pub fn connect(endpoint: &UdsEndpoint, deadline: Instant) -> Result<Self, String> {
         let i = endpoint.index;
         let board = Board::open(&endpoint.board_shm, endpoint.agents).map_err(|e| one_line(&e))?;
+        board.set_registered(i);
         let own = socket_path(&endpoint.socket_dir, i);
         let _ = std::fs::remove_file(&own);
         let listener = UnixListener::bind(&own)
@@ -116,11 +125,14 @@ impl UdsExchange {
                 match UnixStream::connect(&path) {
                     Ok(s) => break s,
                     Err(_) if Instant::now() < deadline => {
+                        stop_during_startup(i, &board)?;
                         std::thread::sleep(Duration::from_millis(1));
                     }
                     Err(e) => {
+                        let team: Vec<usize> = (0..endpoint.agents).collect();
+                        let missing = board.never_connected(&team);
                         return Err(format!(
-                            "agent {i}: neighbour {j} did not listen on {} before the start-up deadline: {e}",
+                            "agent {i}: neighbour {j} did not listen on {} before the start-up deadline ({e}); missing: agent(s) {missing:?}",
                             path.display()
                         ));
                     }
@@ -164,6 +176,10 @@ impl UdsExchange {
                     links[k] = Some(link(j, stream));
                 }
                 Err(e) if e.kind() == ErrorKind::WouldBlock && Instant::now() < deadline => {
+                    if let Err(e) = stop_during_startup(i, &board) {
+                        let _ = std::fs::remove_file(&own);
+                        return Err(e);
+                    }
                     std::thread::sleep(Duration::from_millis(1));
                 }
                 Err(e) => {
@@ -175,13 +191,27 @@ impl UdsExchange {
                         .map(|(&j, _)| j)
                         .collect();
                     let _ = std::fs::remove_file(&own);
+                    let team: Vec<usize> = (0..endpoint.agents).collect();
+                    let never = board.never_connected(&team);
                     return Err(format!(
-                        "agent {i}: neighbour(s) {missing:?} did not connect before the start-up deadline ({e})"
+                        "agent {i}: neighbour(s) {missing:?} did not connect before the start-up deadline ({e}); missing: agent(s) {never:?}"
                     ));
                 }
             }
         }
         let _ = std::fs::remove_file(&own);
+        // Nobody's round deadline starts before the whole team is connected.
+        board.set_connected(i);
+        let team: Vec<usize> = (0..endpoint.agents).collect();
+        board
+            .await_connected(&team, deadline)
+            .map_err(|waited| match waited {
+                Rendezvous::Stopped(signal) => ExchangeError::Stopped { agent: i, signal }.to_string(),
+                Rendezvous::Failed(failed) => format!("agent {i}: stopped at start-up because agent {failed} failed"),
+                Rendezvous::NeverConnected(missing) => format!(
+                    "agent {i}: the team did not connect before the start-up deadline; missing: agent(s) {missing:?} (not started, started too late, or stuck)"
+                ),
+            })?;
         let links: Vec<Link> = links.into_iter().flatten().collect();
         for l in &links {
             l.stream
@@ -251,6 +281,15 @@ impl UdsExchange {
                     }
                     Err(e) if e.kind() == ErrorKind::WouldBlock => break,
                     Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                    Err(e) if e.kind() == ErrorKind::ConnectionReset => {
+                        // Evidence: the neighbour's process is gone (its kernel reset it).
+                        return Err(ExchangeError::PeerFailed {
+                            agent: i,
+                            failed: j,
+                            round,
+                            how: "reset its connection (its process died)".into(),
+                        });
+                    }
                     Err(e) => {
                         return Err(transport(
                             i,
@@ -292,7 +331,31 @@ impl UdsExchange {
         }
     }
 
+    /// Marks agent `agent` as the one that failed (unless another was marked first).
+    pub fn blame(&self, agent: usize) {
+        let _ = self.board.mark_failed(agent);
+    }
+
+    /// The agent that published the fewest rounds: after a timeout, the one everybody is
+    /// waiting for, directly or through a chain of blocked neighbours (a stopped process).
+    pub fn laggard(&self) -> usize {
+        (0..self.board.agents())
+            .min_by_key(|&a| (self.board.published_round(a), a))
+            .unwrap_or(self.index)
+    }
+
+    /// Asks the team to stop: this agent got termination signal `signal` (first request wins).
+    pub fn request_stop(&self, signal: i32) {
+        let _ = self.board.request_stop(signal, Some(self.index));
+    }
+
     fn check_failure(&self, round: u64) -> Result<(), ExchangeError> {
+        if let Some(signal) = self.board.stop_signal() {
+            return Err(ExchangeError::Stopped {
+                agent: self.index,
+                signal,
+            });
+        }
         match self.board.failed() {
             Some(failed) => Err(ExchangeError::PeerFailed {
                 agent: self.index,
@@ -322,6 +385,20 @@ impl UdsExchange {
                     Ok(n) => link.sent += n,
                     Err(e) if e.kind() == ErrorKind::WouldBlock => break,
                     Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                    Err(e)
+                        if matches!(
+                            e.kind(),
+                            ErrorKind::BrokenPipe | ErrorKind::ConnectionReset
+                        ) =>
+                    {
+                        // Evidence: the neighbour's process is gone.
+                        return Err(ExchangeError::PeerFailed {
+                            agent: self.index,
+                            failed: link.neighbour,
+                            round: 0,
+                            how: "closed its connection (its process died)".into(),
+                        });
+                    }
                     Err(e) => {
                         return Err(transport(
                             self.index,

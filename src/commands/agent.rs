@@ -31,12 +31,13 @@ pub fn run(args: AgentArgs) -> Result<()> {
             run: Some(run),
             index: Some(index),
             scenario: Some(scenario),
-        } => (index, agent::run(&run, index, &scenario)),
+            scenario_digest: Some(digest),
+        } => (index, agent::run(&run, index, &scenario, &digest)),
         _ => bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
     };
     result.map_err(|e| {
         // Exchange errors already start with "agent N:".
-        if e.starts_with(&format!("agent {index}:")) {
+        if e.starts_with(&format!("agent {index}:")) || e.starts_with(&format!("agent {index}'s")) {
             anyhow::anyhow!(e)
         } else {
             anyhow::anyhow!("agent {index}: {e}")

@@ -8,6 +8,7 @@ pub mod experiment;
 pub mod host;
 pub mod shared;
 pub mod solve;
+pub mod stress;
 pub mod topology;
 
 use crate::cli::Command;
@@ -24,5 +25,6 @@ pub fn run(command: Command) -> Result<u8> {
         Command::Bench { bench } => bench::run(bench).map(|()| 0),
         Command::Experiment { experiment } => experiment::run(experiment).map(|()| 0),
         Command::Topology(args) => topology::run(args).map(|()| 0),
+        Command::Stress(args) => stress::run(args).map(|()| 0),
     }
 }

@@ -56,13 +56,14 @@ pub fn relative_gap(cost: f64, optimum: f64) -> f64 {
 }
 
 /// Files a multi-process run of launcher `pid` may leave behind: shared memory with its
-/// prefix (`adta<pid in hex>…`) and its run directory (`<tmp>/admm-ta-runs/<pid in hex>…`).
+/// prefix (`adta<pid in hex>…`) and its run directory (`<runs>/<pid in hex>…` in the user's
+/// private runs directory).
 pub fn leftovers_of(pid: u32) -> Vec<PathBuf> {
     let mut found = Vec::new();
     for (dir, start) in [
         (PathBuf::from("/dev/shm"), format!("adta{pid:x}")),
         (
-            std::env::temp_dir().join("admm-ta-runs"),
+            admm_ta::runtime::process::namespace::runs_dir(),
             format!("{pid:x}"),
         ),
     ] {
@@ -76,4 +77,58 @@ pub fn leftovers_of(pid: u32) -> Vec<PathBuf> {
         }
     }
     found
+}
+
+/// Child processes of `parent` and their command lines.
+pub fn children_of(parent: u32) -> Vec<(u32, String)> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = entry.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+            continue;
+        };
+        // The parent pid is the second field after the parenthesised command name.
+        let after = &stat[stat.rfind(')').unwrap_or(0) + 1..];
+        let ppid: u32 = after
+            .split_whitespace()
+            .nth(1)
+            .and_then(|p| p.parse().ok())
+            .unwrap_or(0);
+        if ppid == parent {
+            let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+            found.push((pid, String::from_utf8_lossy(&cmdline).replace('\0', " ")));
+        }
+    }
+    found
+}
+
+/// Whether process `pid` runs (a zombie does not).
+pub fn process_alive(pid: u32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
+        let state = stat[stat.rfind(')').map_or(0, |i| i + 1)..]
+            .split_whitespace()
+            .next();
+        state != Some("Z")
+    })
+}
+
+/// Waits for `child` with a deadline (a test must never hang); kills it and panics after.
+pub fn wait_with_deadline(
+    child: &mut std::process::Child,
+    limit: std::time::Duration,
+) -> std::process::ExitStatus {
+    let started = std::time::Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            return status;
+        }
+        if started.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("the process did not exit within {limit:?}");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
 }

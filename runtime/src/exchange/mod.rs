@@ -88,6 +88,10 @@ pub enum ExchangeError {
         round: u64,
         what: String,
     },
+    /// The team was asked to stop by a termination signal (to this process, to the launcher
+    /// or host, or to another agent of the team): nobody failed.
+    #[error("agent {agent}: stopped by {}", crate::signals::name(*signal))]
+    Stopped { agent: usize, signal: i32 },
     /// Another agent of the run died (its process is gone); this one stopped cleanly.
     #[error("agent {agent}: stopped at round {round} because agent {failed} {how}")]
     PeerFailed {
@@ -109,6 +113,7 @@ impl ExchangeError {
             | Self::WrongSender { agent, .. }
             | Self::Transport { agent, .. }
             | Self::Aborted { agent }
+            | Self::Stopped { agent, .. }
             | Self::BadPayload { agent, .. }
             | Self::PeerFailed { agent, .. } => *agent,
         }
@@ -121,7 +126,9 @@ pub fn root_cause(errors: impl IntoIterator<Item = ExchangeError>) -> Option<Exc
     for e in errors {
         if matches!(
             e,
-            ExchangeError::Aborted { .. } | ExchangeError::PeerFailed { .. }
+            ExchangeError::Aborted { .. }
+                | ExchangeError::PeerFailed { .. }
+                | ExchangeError::Stopped { .. }
         ) {
             fallback.get_or_insert(e);
         } else {

@@ -27,7 +27,7 @@
 //! its `Exchange` implementation all work on the same private ports, samples and board;
 //! split, they would have to expose them to each other.
 
-use crate::board::{Board, BoardError, arrivals_target};
+use crate::board::{Board, BoardError, Rendezvous, arrivals_target};
 use crate::error_text::one_line;
 use crate::exchange::header::{MessageFault, Placement, RoundHeader, check_message};
 use crate::exchange::{Exchange, ExchangeError};
@@ -35,14 +35,16 @@ use crate::fault::Fault;
 use crate::ipc::nodes::{node_name, scan_dead_agents};
 use crate::ipc::services::{
     SUBSCRIBER_BUFFER, ServiceError, Svc, open_barrier_service, open_bridge_wake_service,
-    open_round_service, open_wake_service,
+    open_round_service, open_wake_service, retry_until,
 };
 use crate::wait::{Arrival, WaitPolicy};
 use admm_ta_agents::agent::Inbox;
-use iceoryx2::port::listener::Listener;
+use iceoryx2::port::DegradationAction;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
 use std::sync::atomic::Ordering;
@@ -69,6 +71,8 @@ pub struct IpcEndpoint {
     /// Some neighbours run on other hosts (a mixed team): wake the host's bridge after every
     /// publish. The bridge then stands in for them on this host.
     pub notify_bridge: bool,
+    /// The agents on this host's board (a mixed team), `None`: all of them.
+    pub local_agents: Option<Vec<usize>>,
 }
 
 /// How long a waiting agent sleeps before it looks for failed agents again.
@@ -139,18 +143,30 @@ impl IpcExchange {
         board
             .check_shape(endpoint.tasks, endpoint.payload_len)
             .map_err(board_err)?;
+        board.set_registered(i);
         let name =
             NodeName::new(&node_name(i)).map_err(|e| err(format!("bad node name: {e:?}")))?;
         let node = NodeBuilder::new()
             .name(&name)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
             .config(config)
             .create::<Svc>()
             .map_err(|e| err(format!("cannot create the iceoryx2 node: {e:?}")))?;
         let service_err = |e: ServiceError| err(one_line(&e));
-        let round_of =
-            |j: usize| open_round_service(&node, j, endpoint.degrees[j]).map_err(service_err);
-        let wake_of =
-            |j: usize| open_wake_service(&node, j, endpoint.degrees[j]).map_err(service_err);
+        // Opening races with the neighbours creating the same services: retried until the
+        // start-up deadline.
+        let round_of = |j: usize| {
+            retry_until(deadline, || {
+                open_round_service(&node, j, endpoint.degrees[j])
+            })
+            .map_err(service_err)
+        };
+        let wake_of = |j: usize| {
+            retry_until(deadline, || {
+                open_wake_service(&node, j, endpoint.degrees[j])
+            })
+            .map_err(service_err)
+        };
         // Listener before subscribers: a neighbour that sees our subscriber can wake us.
         let t_node = t0.elapsed();
         let own_wake = wake_of(i)?;
@@ -159,13 +175,19 @@ impl IpcExchange {
             .create()
             .map_err(|e| err(format!("cannot create the listener: {e:?}")))?;
         let own_round = round_of(i)?;
-        let publisher = own_round
-            .publisher_builder()
-            .initial_max_slice_len(endpoint.payload_len)
-            .allocation_strategy(AllocationStrategy::Static)
-            .backpressure_strategy(BackpressureStrategy::DiscardData)
-            .create()
-            .map_err(|e| err(format!("cannot create the publisher: {e:?}")))?;
+        // A connection to a subscriber that cannot be established is an error here (the
+        // default only warns and skips that subscriber for good): the rendezvous retries.
+        let new_publisher = || {
+            own_round
+                .publisher_builder()
+                .initial_max_slice_len(endpoint.payload_len)
+                .allocation_strategy(AllocationStrategy::Static)
+                .backpressure_strategy(BackpressureStrategy::DiscardData)
+                .set_degradation_handler(|_, _| DegradationAction::DegradeAndFail)
+                .create()
+        };
+        let mut publisher =
+            new_publisher().map_err(|e| err(format!("cannot create the publisher: {e:?}")))?;
         let t_own = t0.elapsed();
         let mut subscribers = Vec::with_capacity(endpoint.neighbours.len());
         let mut notifiers = Vec::with_capacity(endpoint.neighbours.len());
@@ -210,6 +232,9 @@ impl IpcExchange {
         let started = Instant::now();
         let mut last_scan = Instant::now();
         while own_round.dynamic_config().number_of_subscribers() < degree {
+            if let Some(signal) = board.stop_signal() {
+                return Err(ExchangeError::Stopped { agent: i, signal });
+            }
             if let Some(failed) = board.failed() {
                 return Err(ExchangeError::PeerFailed {
                     agent: i,
@@ -230,6 +255,12 @@ impl IpcExchange {
                 }
             }
             if Instant::now() >= deadline {
+                let team: Vec<usize> = match &endpoint.local_agents {
+                    Some(local) => local.clone(),
+                    None => (0..endpoint.degrees.len()).collect(),
+                };
+                // Marks the one to blame: an agent that never started, not its neighbours.
+                let _ = board.never_connected(&team);
                 // A neighbour that started has published its service.
                 let missing: Vec<usize> = endpoint
                     .neighbours
@@ -246,6 +277,24 @@ impl IpcExchange {
             }
             std::thread::sleep(Duration::from_micros(500));
         }
+        // Every subscriber is there: connect to all of them now (not lazily in the first
+        // send), recreating the publisher if a connection cannot be established.
+        while let Err(e) = publisher.update_connections() {
+            if Instant::now() >= deadline {
+                return Err(err(format!(
+                    "cannot connect to the neighbours' subscribers before the start-up deadline: {e:?}"
+                )));
+            }
+            drop(publisher);
+            std::thread::sleep(Duration::from_millis(2));
+            publisher =
+                new_publisher().map_err(|e| err(format!("cannot create the publisher: {e:?}")))?;
+        }
+        for subscriber in &subscribers {
+            let _ = subscriber.update_connections();
+        }
+        board.set_connected(i);
+        await_team(endpoint, &board, deadline, started)?;
         if std::env::var_os("ADMM_TA_STARTUP_TRACE").is_some() {
             eprintln!(
                 "startup agent {i}: node {:?} own {:?} ports {:?} rendezvous {:?}",
@@ -285,6 +334,11 @@ impl IpcExchange {
         let _ = self.board.mark_failed(agent);
     }
 
+    /// Asks the team to stop: this agent got termination signal `signal` (first request wins).
+    pub fn request_stop(&self, signal: i32) {
+        let _ = self.board.request_stop(signal, Some(self.index));
+    }
+
     /// The agent that published the fewest rounds: after a timeout, the one everybody is
     /// waiting for, directly or through a chain of blocked neighbours.
     pub fn laggard(&self) -> usize {
@@ -308,6 +362,12 @@ impl IpcExchange {
             round,
             how: how.into(),
         };
+        if let Some(signal) = self.board.stop_signal() {
+            return Err(ExchangeError::Stopped {
+                agent: self.index,
+                signal,
+            });
+        }
         if let Some(agent) = self.board.failed() {
             let how = if agent == self.index {
                 "was reported failed by a neighbour"
@@ -327,7 +387,11 @@ impl IpcExchange {
                 format!("stopped at round {round}: its launcher (pid {launcher}) is gone"),
             ));
         }
-        if waited >= DEAD_NODE_SCAN_EVERY
+        // Under a launcher, `waitpid` finds a dead agent; the scan is for agents started
+        // without one, and for a subscriber that vanished (`waited` = `MAX`). (It can also mistake a neighbour that is just finishing — its node's
+        // token released before its files are gone — for a dead one.)
+        if (self.launcher.is_none() || waited == Duration::MAX)
+            && waited >= DEAD_NODE_SCAN_EVERY
             && self.last_dead_node_scan.elapsed() >= DEAD_NODE_SCAN_EVERY
         {
             self.last_dead_node_scan = Instant::now();
@@ -414,9 +478,16 @@ impl IpcExchange {
     ) -> Result<(), ExchangeError> {
         let left = deadline.saturating_duration_since(Instant::now());
         if !left.is_zero() {
-            listener
-                .timed_wait(|_| {}, left)
-                .map_err(|e| transport(agent, format!("waiting for a wake-up failed: {e:?}")))?;
+            match listener.timed_wait(|_| {}, left) {
+                // A termination signal woke us: the caller looks at it next.
+                Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
+                Err(e) => {
+                    return Err(transport(
+                        agent,
+                        format!("waiting for a wake-up failed: {e:?}"),
+                    ));
+                }
+            }
         }
         Ok(())
     }
@@ -452,7 +523,8 @@ impl IpcExchange {
             .map_err(|e| transport(i, format!("send failed: {e:?}")))?;
         if delivered < self.subscribers.len() {
             // A neighbour gone because another agent failed: that failure is the cause.
-            self.check_peers(header.round, DEAD_NODE_SCAN_EVERY)?;
+            // (`MAX`: scan the nodes now, launcher or not: a subscriber vanished.)
+            self.check_peers(header.round, Duration::MAX)?;
             return Err(transport(
                 i,
                 format!(
@@ -481,6 +553,48 @@ impl IpcExchange {
                 .map_err(|e| transport(i, format!("notifying the bridge failed: {e:?}")))?;
         }
         Ok(())
+    }
+}
+
+/// The second half of the start-up rendezvous ([`Board::await_connected`]) as an
+/// exchange error.
+fn await_team(
+    endpoint: &IpcEndpoint,
+    board: &Board,
+    deadline: Instant,
+    started: Instant,
+) -> Result<(), ExchangeError> {
+    let i = endpoint.index;
+    let team: Vec<usize> = match &endpoint.local_agents {
+        Some(local) => local.clone(),
+        None => (0..endpoint.degrees.len()).collect(),
+    };
+    board
+        .await_connected(&team, deadline)
+        .map_err(|waited| rendezvous_error(i, waited, started))
+}
+
+/// The error of an agent whose start-up rendezvous ended as `waited` says.
+pub(crate) fn rendezvous_error(
+    agent: usize,
+    waited: Rendezvous,
+    started: Instant,
+) -> ExchangeError {
+    match waited {
+        Rendezvous::Stopped(signal) => ExchangeError::Stopped { agent, signal },
+        Rendezvous::Failed(failed) => ExchangeError::PeerFailed {
+            agent,
+            failed,
+            round: 0,
+            how: "failed during start-up".into(),
+        },
+        Rendezvous::NeverConnected(missing) => transport(
+            agent,
+            format!(
+                "the team did not connect within {:.1?}; missing: agent(s) {missing:?} (not started, started too late, or stuck)",
+                started.elapsed()
+            ),
+        ),
     }
 }
 

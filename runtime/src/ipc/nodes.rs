@@ -6,6 +6,9 @@ use crate::ipc::services::Svc;
 use iceoryx2::node::NodeView;
 use iceoryx2::prelude::*;
 
+/// See [`run_config`].
+const CREATION_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
+
 /// The iceoryx2 configuration of a run: its own prefix and root directory, and no dead-node
 /// scans (the launcher owns cleanup; the scans made start-up of a 50-agent complete graph
 /// several times slower).
@@ -17,6 +20,11 @@ pub fn run_config(prefix: &str, root: &std::path::Path) -> Result<Config, String
     config.global.set_root_path(
         &Path::new(root.as_bytes()).map_err(|e| format!("bad iceoryx2 root {root:?}: {e:?}"))?,
     );
+    // How long a process waits for another to finish creating a service or a connection:
+    // iceoryx2's 1 s default was exceeded by teams starting at once on a loaded 2-core
+    // machine, and a connection to a subscriber that times out is skipped for good (the
+    // "round 0 reached 8 of 9 neighbours" false failure).
+    config.global.creation_timeout = CREATION_TIMEOUT;
     config.global.node.cleanup_dead_nodes_on_creation = false;
     config.global.node.cleanup_dead_nodes_on_destruction = false;
     config.global.service.cleanup_dead_nodes_on_open = false;

@@ -53,6 +53,41 @@ pub enum ServiceError {
     },
 }
 
+impl ServiceError {
+    /// A race with another process opening, creating or removing the same service (under
+    /// load, its creation can outlast iceoryx2's creation timeout): worth retrying.
+    pub(crate) fn is_transient(&self) -> bool {
+        let text = format!("{self:?}");
+        [
+            "DoesNotExist",
+            "IsBeingCreatedByAnotherInstance",
+            "HangsInCreation",
+            "IsMarkedForDestruction",
+            "AlreadyExists",
+            "SystemInFlux",
+            "InitializationNotYetFinalized",
+        ]
+        .iter()
+        .any(|race| text.contains(race))
+    }
+}
+
+/// Calls `open` until it succeeds, fails for good, or `deadline` passes (transient races
+/// are retried).
+pub(crate) fn retry_until<T>(
+    deadline: std::time::Instant,
+    mut open: impl FnMut() -> Result<T, ServiceError>,
+) -> Result<T, ServiceError> {
+    loop {
+        match open() {
+            Err(e) if e.is_transient() && std::time::Instant::now() < deadline => {
+                std::thread::sleep(std::time::Duration::from_millis(2));
+            }
+            done => return done,
+        }
+    }
+}
+
 /// Opens (or creates) agent `j`'s round-message service from `node`; `degree` is `j`'s.
 /// Every participant opens it with these limits (iceoryx2 refuses mismatched ones).
 pub(crate) fn open_round_service<S: iceoryx2::service::Service>(

@@ -6,6 +6,7 @@
 //! returns (never `process::exit`), so iceoryx2's `Drop`s release its shared memory.
 
 use crate::error_text::one_line;
+use crate::exchange::ExchangeError;
 use crate::exchange::round_loop::{AgentOutcome, run_agent};
 use crate::process::connect::connect;
 use crate::process::scenario::{Scenario, ScenarioWorkload};
@@ -43,10 +44,29 @@ fn unix_ns() -> u128 {
         .map_or(0, |d| d.as_nanos())
 }
 
-/// Runs agent `index` of run `run_id` (started by the launcher); errors are one line for
-/// the log.
-pub fn run(run_id: &str, index: usize, scenario_path: &Path) -> Result<(), String> {
-    let scenario = Scenario::read(scenario_path, run_id).map_err(|e| one_line(&e))?;
+/// After a failed start-up: a stop request on the team's board (a termination signal to
+/// another process of the team) is this process's too.
+fn record_stop(scenario: &Scenario) {
+    if crate::signals::received().is_none()
+        && let Ok(board) = crate::board::Board::open(&scenario.board_shm, scenario.robots)
+        && let Some((signal, _)) = board.stop_requested()
+    {
+        crate::signals::record(signal);
+    }
+}
+
+/// Runs agent `index` of run `run_id` (started by the launcher) from the scenario file the
+/// launcher wrote, whose SHA-256 is `scenario_digest`; errors are one line for the log.
+pub fn run(
+    run_id: &str,
+    index: usize,
+    scenario_path: &Path,
+    scenario_digest: &str,
+) -> Result<(), String> {
+    let _signals = crate::signals::install();
+    // Not a symlink, ours, mode 0600, and what the launcher wrote (its digest).
+    let bytes = crate::process::private_dir::read_verified(scenario_path, scenario_digest)?;
+    let scenario = Scenario::parse(&bytes, scenario_path, run_id).map_err(|e| one_line(&e))?;
     let run_dir = scenario_path.parent().unwrap_or(Path::new("."));
     run_scenario(
         &scenario,
@@ -73,7 +93,8 @@ pub fn run_scenario(
     let graph = scenario.graph().map_err(|e| e.to_string())?;
     let plan = scenario.plan(index).map_err(|e| e.to_string())?;
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
-    let mut endpoint = connect(scenario, &graph, index, run_dir, supervised, deadline)?;
+    let mut endpoint = connect(scenario, &graph, index, run_dir, supervised, deadline)
+        .inspect_err(|_| record_stop(scenario))?;
     let connected_unix_ns = unix_ns();
     let ran = match &scenario.workload {
         ScenarioWorkload::Episodes(settings) => {
@@ -87,7 +108,16 @@ pub fn run_scenario(
         }
     };
     let (outcome, episodes) = ran.map_err(|e| {
-        endpoint.blame_for(&e);
+        if let ExchangeError::Stopped { signal, .. } = e {
+            if crate::signals::received().is_some() {
+                // Our own signal: the rest of the team stops too (nobody failed).
+                endpoint.request_stop(signal);
+            }
+            // Not a failure: the process ends as if it had got the signal itself.
+            crate::signals::record(signal);
+        } else {
+            endpoint.blame_for(&e);
+        }
         e.to_string()
     })?;
     // Release the ports before reporting: once the launcher sees the result it may clean up.

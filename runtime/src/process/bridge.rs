@@ -40,6 +40,7 @@ use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::{announce_failure, missing_hosts, watch_failures};
 use crossbeam::channel::{Receiver, RecvTimeoutError, unbounded};
+use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
 use std::collections::{HashMap, HashSet, VecDeque};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
@@ -250,6 +251,7 @@ fn node(scenario: &Scenario, name: &str) -> Result<Node<Svc>, String> {
     let name = NodeName::new(name).map_err(|e| format!("bad node name: {e:?}"))?;
     NodeBuilder::new()
         .name(&name)
+        .signal_handling_mode(SignalHandlingMode::Disabled)
         .config(&config)
         .create::<Svc>()
         .map_err(|e| format!("bridge: cannot create an iceoryx2 node: {e:?}"))
@@ -387,9 +389,10 @@ impl Forwarder {
             if stopping {
                 return Ok(());
             }
-            listener
-                .timed_wait(|_| {}, SLICE)
-                .map_err(|e| format!("bridge: waiting failed: {e:?}"))?;
+            match listener.timed_wait(|_| {}, SLICE) {
+                Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
+                Err(e) => return Err(format!("bridge: waiting failed: {e:?}")),
+            }
         }
     }
 

@@ -5,12 +5,15 @@
 //! A new process transport adds one arm to each `match` here; nothing else in the process
 //! orchestration names a transport.
 
+use crate::board::Board;
+use crate::error_text::one_line;
 use crate::exchange::{Exchange, ExchangeError};
-use crate::fault::fault_for;
+use crate::fault::{FaultKind, fault_for};
 use crate::ipc::exchange::{IpcEndpoint, IpcExchange};
 use crate::ipc::nodes::run_config;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
+use crate::process::team_digest::TeamDigest;
 use crate::transport::Transport;
 use crate::uds::{UdsEndpoint, UdsExchange};
 use crate::wait::WaitPolicy;
@@ -38,13 +41,30 @@ pub(crate) fn connect(
     supervised: bool,
     deadline: Instant,
 ) -> Result<Endpoint, String> {
+    let any_fault = fault_for(index)?;
+    if let Some(fault) = any_fault.filter(|f| f.kind == FaultKind::NeverStart) {
+        // Fault injection: this agent never connects (until a signal or its launcher ends).
+        fault.strike();
+        while crate::signals::received().is_none() {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        return Err(stop_or_text(ExchangeError::Stopped {
+            agent: index,
+            signal: crate::signals::received().unwrap_or(libc::SIGTERM),
+        }));
+    }
     let fault = if scenario.transport.capabilities().fault_injection {
-        fault_for(index)?
+        any_fault
     } else {
         None
     };
     let policy = WaitPolicy::new(scenario.wait, scenario.robots);
     let neighbours = graph.neighbours(index).to_vec();
+    if matches!(scenario.transport, Transport::Ipc | Transport::Uds) {
+        // Another team's agent is refused by name before it opens a service.
+        let board = Board::open(&scenario.board_shm, scenario.robots).map_err(|e| one_line(&e))?;
+        TeamDigest::of(scenario).check(&board, index)?;
+    }
     match scenario.transport {
         Transport::Ipc => {
             let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
@@ -61,10 +81,11 @@ pub(crate) fn connect(
                     .local_agents
                     .as_ref()
                     .is_some_and(|local| neighbours.iter().any(|j| !local.contains(j))),
+                local_agents: scenario.local_agents.clone(),
                 neighbours,
             };
             let mut exchange =
-                IpcExchange::connect(&endpoint, &config, deadline).map_err(|e| e.to_string())?;
+                IpcExchange::connect(&endpoint, &config, deadline).map_err(stop_or_text)?;
             exchange.inject(fault);
             Ok(Endpoint::Ipc(Box::new(exchange)))
         }
@@ -97,7 +118,7 @@ pub(crate) fn connect(
             };
             let mut exchange =
                 crate::zenoh_net::exchange::ZenohExchange::connect(&endpoint, deadline)
-                    .map_err(|e| e.to_string())?;
+                    .map_err(stop_or_text)?;
             exchange.inject(fault);
             Ok(Endpoint::Zenoh(Box::new(exchange)))
         }
@@ -108,6 +129,15 @@ pub(crate) fn connect(
             scenario.transport
         )),
     }
+}
+
+/// A start-up error as one line; a stop request (termination signal) is recorded as this
+/// process's, so that it ends as if it had got the signal.
+fn stop_or_text(error: ExchangeError) -> String {
+    if let ExchangeError::Stopped { signal, .. } = error {
+        crate::signals::record(signal);
+    }
+    error.to_string()
 }
 
 /// The neighbour an exchange error is the fault of, if any.
@@ -131,6 +161,16 @@ impl Endpoint {
         }
     }
 
+    /// Asks the rest of the team to stop: this agent got termination signal `signal`.
+    pub(crate) fn request_stop(&self, signal: i32) {
+        match self {
+            Self::Ipc(exchange) => exchange.request_stop(signal),
+            Self::Uds(exchange) => exchange.request_stop(signal),
+            #[cfg(feature = "zenoh")]
+            Self::Zenoh(exchange) => exchange.request_stop(signal),
+        }
+    }
+
     /// Points the launcher and the other agents at the agent that caused `error`.
     pub(crate) fn blame_for(&self, error: &ExchangeError) {
         match self {
@@ -144,7 +184,17 @@ impl Endpoint {
                     exchange.blame(culprit);
                 }
             }
-            Self::Uds(_) => {}
+            Self::Uds(exchange) => {
+                let culprit = match error {
+                    ExchangeError::Timeout { .. } => Some(exchange.laggard()),
+                    // A neighbour that closed or reset its socket is gone.
+                    ExchangeError::PeerFailed { failed, .. } => Some(*failed),
+                    e => culprit(e),
+                };
+                if let Some(culprit) = culprit {
+                    exchange.blame(culprit);
+                }
+            }
             // No launcher sees every host: whoever fails first tells the others.
             #[cfg(feature = "zenoh")]
             Self::Zenoh(exchange) => {
@@ -168,6 +218,13 @@ pub(crate) struct LauncherSupport {
     router: Option<(
         crate::zenoh_net::router::HostRouter,
         crate::zenoh_net::links::ZenohLinks,
+    )>,
+    /// The first agent announced as failed by an agent that does not use the board (Zenoh's
+    /// blame), `usize::MAX` if none; with the subscription that sets it.
+    #[cfg(feature = "zenoh")]
+    announced: Option<(
+        std::sync::Arc<std::sync::atomic::AtomicUsize>,
+        zenoh::pubsub::Subscriber<()>,
     )>,
 }
 
@@ -198,8 +255,22 @@ impl LauncherSupport {
                     hosts: Vec::new(),
                 };
                 scenario.zenoh = Some(links.clone());
+                let first = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(usize::MAX));
+                let subscriber = {
+                    let first = std::sync::Arc::clone(&first);
+                    crate::zenoh_net::session::watch_failures(router.session(), &links, move |a| {
+                        let _ = first.compare_exchange(
+                            usize::MAX,
+                            a,
+                            std::sync::atomic::Ordering::AcqRel,
+                            std::sync::atomic::Ordering::Acquire,
+                        );
+                    })
+                    .map_err(SupportError::ZenohRouter)?
+                };
                 Ok(Self {
                     router: Some((router, links)),
+                    announced: Some((first, subscriber)),
                 })
             }
             #[cfg(not(feature = "zenoh"))]
@@ -210,8 +281,32 @@ impl LauncherSupport {
             Transport::Sim | Transport::Threads | Transport::Ipc | Transport::Uds => Ok(Self {
                 #[cfg(feature = "zenoh")]
                 router: None,
+                #[cfg(feature = "zenoh")]
+                announced: None,
             }),
         }
+    }
+
+    /// The agent that agents which do not read the board (Zenoh's) announced as failed, if
+    /// any: waits up to `within` for the announcement (it travels through the router while
+    /// the announcing agent exits). `None` at once for transports that use the board.
+    pub(crate) fn announced_failure(&self, within: std::time::Duration) -> Option<usize> {
+        #[cfg(feature = "zenoh")]
+        if let Some((first, _)) = &self.announced {
+            let until = std::time::Instant::now() + within;
+            loop {
+                let agent = first.load(std::sync::atomic::Ordering::Acquire);
+                if agent != usize::MAX {
+                    return Some(agent);
+                }
+                if std::time::Instant::now() >= until {
+                    return None;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(2));
+            }
+        }
+        let _ = within;
+        None
     }
 
     /// Tells agents that do not read the run's board (Zenoh agents) that `agent` failed.

@@ -12,7 +12,7 @@
 use crate::process::team_file::Team;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
-use crate::zenoh_net::session::watch_failures;
+use crate::zenoh_net::session::{announce_stop, watch_failures, watch_stops};
 use serde::Serialize;
 use std::path::Path;
 use std::sync::{Arc, Condvar, Mutex};
@@ -37,6 +37,8 @@ struct Presence {
     seen: Vec<bool>,
     alive: Vec<bool>,
     failed: Option<usize>,
+    /// A stop request (termination signal) announced by an agent or another host.
+    stopped: Option<i32>,
 }
 
 struct TeamWatch {
@@ -53,8 +55,12 @@ impl TeamWatch {
     }
 }
 
+/// How long a host stopped by a signal waits for the team's agents to leave.
+const STOP_GRACE: Duration = Duration::from_secs(2);
+
 /// Runs host `name` of the team in `team_path` until the team's run is over.
 pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
+    let _signals = crate::signals::install();
     let started = Instant::now();
     let team = Team::read(team_path)?;
     if !team.file.transport.across_hosts() {
@@ -79,6 +85,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
             seen: vec![false; n],
             alive: vec![false; n],
             failed: None,
+            stopped: None,
         }),
         changed: Condvar::new(),
     });
@@ -106,6 +113,14 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
             .wait()
             .map_err(|e| format!("cannot watch the team's agents: {e}"))?
     };
+    let _stops = {
+        let watch = Arc::clone(&watch);
+        watch_stops(session, &links, move |signal| {
+            watch.update(|p| {
+                p.stopped.get_or_insert(signal);
+            });
+        })?
+    };
     let _failures = {
         let watch = Arc::clone(&watch);
         watch_failures(session, &links, move |failed| {
@@ -132,7 +147,34 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
     let run_deadline = startup_deadline
         + Duration::from_secs_f64(team.file.round_timeout) * (team.file.max_iters as u32 + 2);
     let mut presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
+    let mut stop: Option<(i32, Instant)> = None;
     loop {
+        let signal = crate::signals::received().or(presence.stopped);
+        if let Some(signal) = signal
+            && stop.is_none()
+        {
+            // A termination signal (to this host, or announced): every agent of the team
+            // stops; this host waits for its agents to leave, briefly.
+            if crate::signals::received().is_some() {
+                drop(presence);
+                announce_stop(session, &links, signal);
+                presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
+            }
+            crate::signals::record(signal);
+            stop = Some((signal, Instant::now() + STOP_GRACE));
+        }
+        if let Some((signal, until)) = stop {
+            let running = presence.alive.iter().filter(|&&a| a).count();
+            if running == 0 || Instant::now() >= until {
+                let seen = presence.seen.iter().filter(|&&s| s).count();
+                return Err(format!(
+                    "host {}: stopped by {}: {} agent(s) stopped, {running} still leaving",
+                    host.name,
+                    crate::signals::name(signal),
+                    seen - running,
+                ));
+            }
+        }
         if let Some(bridge) = &bridge {
             bridge.check()?;
         }

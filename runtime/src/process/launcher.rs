@@ -16,7 +16,12 @@ use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::process::agent::{AgentReport, log_path, result_path};
 use crate::process::connect::{LauncherSupport, SupportError};
 use crate::process::namespace::RunNamespace;
+use crate::process::private_dir::{create_private_file, sha256_hex, write_private_file};
 use crate::process::scenario::Scenario;
+use crate::process::stop::{stop_children, stopped_agent, stopped_by_signal};
+use crate::process::team_digest::TeamDigest;
+use crate::signals;
+use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
@@ -26,6 +31,9 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 pub enum LaunchError {
     #[error("cannot prepare the run directory")]
     RunDirectory(#[source] std::io::Error),
+    /// The open-file or process limits cannot hold the team.
+    #[error("{0}")]
+    Limits(String),
     #[error("cannot create the run's shared board")]
     Board(#[source] BoardError),
     #[error(transparent)]
@@ -52,6 +60,23 @@ pub enum LaunchError {
         killed: usize,
         /// Dead iceoryx2 nodes removed by the dead-node cleanup.
         dead_nodes: usize,
+    },
+    /// A termination signal stopped the run (to the launcher, or to agent `by`): nobody
+    /// failed.
+    #[error(
+        "stopped by {}{}: {stopped} agent(s) stopped, {killed} killed, {}",
+        crate::signals::name(*signal),
+        by.map_or(String::new(), |a| format!(" to agent {a}")),
+        if *leftovers == 0 { "run files removed".to_string() } else { format!("{leftovers} run file(s) left") }
+    )]
+    Stopped {
+        signal: i32,
+        by: Option<usize>,
+        /// Agents that exited by themselves within the grace period.
+        stopped: usize,
+        /// Agents killed after it.
+        killed: usize,
+        leftovers: usize,
     },
     #[error("agent {index} exited without a readable result")]
     MissingResult {
@@ -84,6 +109,10 @@ pub struct ProcessRun {
 /// How long the other agents have to stop by themselves after a failure before they are
 /// killed (they notice within a 20 ms sleep slice, or after their current step).
 const FAILURE_GRACE: Duration = Duration::from_secs(2);
+
+/// How long the launcher waits for an agent's announcement of whom it blames (Zenoh agents
+/// announce through the router while they exit).
+const ANNOUNCEMENT_WAIT: Duration = Duration::from_millis(300);
 
 /// Children and namespace of a run; dropping it kills and reaps every child still running,
 /// then removes the run's files.
@@ -146,6 +175,32 @@ fn describe_exit(status: ExitStatus) -> Option<String> {
     })
 }
 
+/// A stop request: a termination signal to the launcher, or one an agent got (on the board);
+/// the signal and the agent it went to.
+fn stop_request(guard: &RunGuard) -> Option<(i32, Option<usize>)> {
+    if let Some(signal) = signals::received() {
+        return Some((signal, None));
+    }
+    guard.board.as_ref()?.stop_requested()
+}
+
+/// Stops every agent after `stop`: the request on the board (and the signal forwarded to
+/// each child, for agents that do not read the board), a grace period to leave cleanly
+/// (cut short by a second termination signal), then SIGKILL; every child is reaped and the
+/// run's files removed.
+fn stop_team(mut guard: RunGuard, (signal, by): (i32, Option<usize>)) -> LaunchError {
+    let (stopped, killed) = stop_children(&mut guard.children, guard.board.as_ref(), signal, by);
+    let namespace = guard.namespace.clone();
+    drop(guard);
+    LaunchError::Stopped {
+        signal,
+        by,
+        stopped,
+        killed,
+        leftovers: namespace.leftovers().len(),
+    }
+}
+
 /// Runs `scenario` (its run id, prefix, root and board are filled in here) with one process
 /// per agent started from `agent_program` (the `admm-ta` binary); `fault_injection`: pass
 /// the `ADMM_TA_FAULT` test switch on to the agents.
@@ -154,6 +209,14 @@ pub fn launch(
     agent_program: &Path,
     fault_injection: bool,
 ) -> Result<ProcessRun, LaunchError> {
+    let _signals = signals::install();
+    // Before anything is created or spawned.
+    let max_degree = scenario
+        .graph()
+        .map(|g| (0..g.robots()).map(|i| g.degree(i)).max().unwrap_or(0))
+        .unwrap_or(scenario.robots.saturating_sub(1));
+    crate::process::limits::check(scenario.transport, scenario.robots, max_degree)
+        .map_err(LaunchError::Limits)?;
     let namespace = RunNamespace::create().map_err(LaunchError::RunDirectory)?;
     let mut guard = RunGuard {
         namespace: namespace.clone(),
@@ -178,23 +241,47 @@ pub fn launch(
     let run_dir = namespace.dir.clone();
     let scenario_path = run_dir.join("scenario.json");
     let text = serde_json::to_string(&scenario).expect("a scenario serialises");
-    std::fs::write(&scenario_path, text).map_err(LaunchError::RunDirectory)?;
-    std::fs::create_dir_all(namespace.iceoryx_root()).map_err(LaunchError::RunDirectory)?;
+    // Exclusively, mode 0600; agents check owner, mode and this digest before reading it.
+    write_private_file(&scenario_path, text.as_bytes()).map_err(LaunchError::RunDirectory)?;
+    let scenario_digest = sha256_hex(text.as_bytes());
+    // The team's identity, checked by every agent before it opens a service.
+    TeamDigest::of(&scenario).publish(guard.board.as_ref().expect("the board exists"));
+    namespace
+        .create_iceoryx_root()
+        .map_err(LaunchError::RunDirectory)?;
 
     let spawned_unix_ns = unix_ns();
     for index in 0..scenario.robots {
         let log =
-            std::fs::File::create(log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
+            create_private_file(&log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
         let mut command = Command::new(agent_program);
+        let launcher_pid = std::process::id() as libc::pid_t;
+        // SAFETY: only async-signal-safe calls between fork and exec.
+        unsafe {
+            command.pre_exec(move || {
+                // The agent gets SIGTERM (and stops cleanly) when the launcher dies, even by
+                // SIGKILL; a launcher that died before this line is caught by the pid check.
+                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0
+                    || libc::getppid() != launcher_pid
+                {
+                    return Err(std::io::Error::other("the launcher is gone"));
+                }
+                Ok(())
+            });
+        }
+        #[cfg(feature = "fault-injection")]
         if !fault_injection {
             command.env_remove(crate::fault::FAULT_ENV);
         }
+        #[cfg(not(feature = "fault-injection"))]
+        let _ = fault_injection;
         let child = command
             .arg("agent")
             .args(["--run", &namespace.id])
             .args(["--index", &index.to_string()])
             .arg("--scenario")
             .arg(&scenario_path)
+            .args(["--scenario-digest", &scenario_digest])
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(log)
@@ -215,7 +302,12 @@ pub fn launch(
     let mut failure_order = Vec::new();
     let mut grace_ends = None;
     let mut killed = 0;
+    let mut stopped_evidence = None;
+    let mut first_failure = None;
     while guard.children.iter().any(Option::is_some) {
+        if let Some(stop) = stop_request(&guard) {
+            return Err(stop_team(guard, stop));
+        }
         let mut progressed = false;
         for (index, slot) in guard.children.iter_mut().enumerate() {
             let Some(child) = slot.as_mut() else {
@@ -232,21 +324,52 @@ pub fn launch(
             };
             *slot = None;
             progressed = true;
+            if let Some(signal) = how.as_deref().and_then(stopped_by_signal) {
+                // The agent got a termination signal itself: the team stops, nobody failed.
+                let board = guard.board.as_ref().expect("the board exists");
+                let _ = board.request_stop(signal, Some(index));
+                failures[index] = how;
+                break;
+            }
             if how.is_some() {
                 failure_order.push(index);
             }
-            if how.is_some() && failed.is_none() {
-                let board = guard.board.as_ref().expect("the board exists");
-                // An agent may have found a dead or misbehaving peer first: then that peer
-                // is the one.
-                failed = Some(board.mark_failed(index).unwrap_or(index));
-                // Agents that do not read the board (Zenoh's) learn it another way.
-                if let Some(support) = &guard.support {
-                    support.announce_failure(failed.unwrap_or(index));
-                }
-                grace_ends = Some(std::time::Instant::now() + FAILURE_GRACE);
+            if how.is_some() && failed.is_none() && first_failure.is_none() {
+                first_failure = Some(index);
             }
             failures[index] = how;
+        }
+        if let Some(index) = first_failure.take() {
+            let board = guard.board.as_ref().expect("the board exists");
+            // Evidence first: an agent stopped (SIGSTOP: state T in /proc) is the one its
+            // neighbours timed out on. Else an agent may have found a dead or misbehaving
+            // peer first (the board's mark): then that peer is the one.
+            let culprit = match stopped_agent(&guard.children) {
+                Some(stopped) => {
+                    let _ = board.mark_failed(stopped);
+                    stopped_evidence = Some(stopped);
+                    stopped
+                }
+                None => {
+                    // A killed agent is its own evidence; else what the agents announced.
+                    let killed = failures[index]
+                        .as_deref()
+                        .is_some_and(|h| h.starts_with("killed by signal"));
+                    let announced = guard
+                        .support
+                        .as_ref()
+                        .filter(|_| !killed)
+                        .and_then(|s| s.announced_failure(ANNOUNCEMENT_WAIT));
+                    let marked = board.mark_failed(announced.unwrap_or(index));
+                    marked.or(announced).unwrap_or(index)
+                }
+            };
+            failed = Some(culprit);
+            // Agents that do not read the board (Zenoh's) learn it another way.
+            if let Some(support) = &guard.support {
+                support.announce_failure(culprit);
+            }
+            grace_ends = Some(std::time::Instant::now() + FAILURE_GRACE);
         }
         // The failed agent may still run (hung, or sending garbage): it is not waited for.
         if let Some(culprit) = failed
@@ -281,6 +404,9 @@ pub fn launch(
             .find(|&i| !last_log_line(&run_dir, i).contains("because agent"))
             .unwrap_or(index);
         let status = match failures[index].take() {
+            _ if stopped_evidence == Some(index) => {
+                format!("stopped: state T in /proc, reported by agent {reporter}")
+            }
             Some(how) if index == reporter => how,
             _ => format!("reported by agent {reporter}"),
         };

@@ -19,6 +19,7 @@ use crate::latency::LatencySummary;
 use crate::process::agent::{AgentReport, run_scenario};
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
+use crate::process::team_digest::TeamDigest;
 use crate::process::team_file::{HostEntry, Team};
 use crate::workload::Workload;
 use crate::workload::plan::prepare;
@@ -135,11 +136,19 @@ impl Membership {
             scenario.payload_len(),
         )
         .map_err(|e| one_line(&e))?;
+        // The first member writes the team's digest; the others must match it.
+        let digest = TeamDigest::of(scenario);
+        if board.digest().is_none() {
+            digest.publish(&board);
+        }
+        if let Some(&first) = slots.first() {
+            digest.check(&board, first)?;
+        }
         for &slot in slots {
             board.set_member_pid(slot, std::process::id());
         }
-        std::fs::create_dir_all(&scenario.iceoryx_root)
-            .map_err(|e| format!("cannot create {}: {e}", scenario.iceoryx_root.display()))?;
+        // Mode 0700, ours, not a symlink (its name in /dev/shm is predictable).
+        crate::process::private_dir::ensure_private_dir(&scenario.iceoryx_root)?;
         if fresh {
             // Nodes of a dead team of this name.
             let _ = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)
@@ -177,6 +186,7 @@ impl Membership {
 
 /// Runs agent `id` of the team in `team_path` to the end; errors are one line.
 pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
+    let _signals = crate::signals::install();
     let started = Instant::now();
     let team = Team::read(team_path)?;
     let n = team.file.robots;
@@ -192,6 +202,8 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
         .then(|| team.host_of(id))
         .flatten();
     let (mut scenario, namespace) = member_scenario(&team, host)?;
+    let degree = scenario.graph().map_or(n, |g| g.degree(id));
+    crate::process::limits::check(scenario.transport, 1, degree)?;
     let results = team.results_dir();
     std::fs::create_dir_all(&results)
         .map_err(|e| format!("cannot create {}: {e}", results.display()))?;
@@ -214,7 +226,11 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, String> {
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
     let membership = Membership::join(&scenario, &namespace, &[id], deadline)?;
     let report = run_scenario(&scenario, id, &namespace.dir, &result, false);
-    if report.is_err() {
+    if let Some(signal) = crate::signals::received() {
+        // A termination signal (to us, or to another member: then it is on the board
+        // already): the whole team stops, nobody failed.
+        let _ = membership.board().request_stop(signal, Some(id));
+    } else if report.is_err() {
         // No launcher reports us: tell the others (the first mark wins, so an agent that
         // stopped because of another's failure changes nothing).
         let _ = membership.board().mark_failed(id);

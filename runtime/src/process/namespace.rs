@@ -3,8 +3,8 @@
 //! the run behind — not even when an agent was killed and could not clean up itself.
 
 use crate::liveness::process_alive;
+use crate::process::private_dir::{self, create_unique_dir, write_private_file};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Where POSIX shared memory lives on Linux.
 const SHM_DIR: &str = "/dev/shm";
@@ -17,31 +17,49 @@ pub struct RunNamespace {
     pub prefix: String,
     /// The run directory: scenario, agent logs and results, and the iceoryx2 root.
     pub dir: PathBuf,
+    /// A private base made for this run alone (the user's was hostile): removed with it.
+    pub own_base: Option<PathBuf>,
 }
 
 impl RunNamespace {
-    /// A fresh namespace under the system's temporary directory.
+    /// A fresh namespace in the user's private runs directory
+    /// ([`crate::process::private_dir`]); its name has a random part and is created
+    /// exclusively. If that directory is hostile (another account created it, or a symlink
+    /// stands in its place), the run is not blocked: it gets a fresh private directory of its
+    /// own instead (and says so on stderr).
     pub fn create() -> std::io::Result<Self> {
-        static COUNTER: AtomicU32 = AtomicU32::new(0);
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.subsec_nanos());
-        let id = format!(
-            "{:x}{:05x}{:x}",
-            std::process::id(),
-            nanos >> 12,
-            COUNTER.fetch_add(1, Ordering::Relaxed)
-        );
-        let runs = std::env::temp_dir().join("admm-ta-runs");
-        sweep_abandoned(&runs);
-        let dir = runs.join(&id);
-        std::fs::create_dir_all(&dir)?;
-        std::fs::write(dir.join(LAUNCHER_PID), std::process::id().to_string())?;
+        let (runs, own_base) = match private_runs_dir() {
+            Ok(runs) => {
+                sweep_abandoned(&runs);
+                (runs, None)
+            }
+            Err(why) => {
+                eprintln!("warning: {why}; this run uses a private directory of its own");
+                let (base, _) = create_unique_dir(
+                    &std::env::temp_dir(),
+                    &format!("admm-ta-{}-", private_dir::euid()),
+                )?;
+                (base.clone(), Some(base))
+            }
+        };
+        let (dir, id) = create_unique_dir(&runs, &run_id_prefix(std::process::id()))?;
+        write_private_file(
+            &dir.join(LAUNCHER_PID),
+            std::process::id().to_string().as_bytes(),
+        )?;
         Ok(Self {
             prefix: format!("adta{id}_"),
             id,
             dir,
+            own_base,
         })
+    }
+
+    /// Creates the run's iceoryx2 root ([`RunNamespace::iceoryx_root`]) exclusively, with
+    /// mode 0700.
+    pub fn create_iceoryx_root(&self) -> std::io::Result<()> {
+        std::os::unix::fs::DirBuilderExt::mode(&mut std::fs::DirBuilder::new(), 0o700)
+            .create(self.iceoryx_root())
     }
 
     /// The iceoryx2 root directory of the run: on the shared-memory tmpfs when there is one,
@@ -64,14 +82,16 @@ impl RunNamespace {
     /// dashes): every agent of the team derives the same one from the name.
     pub fn for_team(run: &str) -> Result<Self, String> {
         Self::check_team_name(run)?;
-        let dir = std::env::temp_dir().join("admm-ta-teams").join(run);
-        std::fs::create_dir_all(&dir)
-            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        let teams = private_dir::base_dir()?.join("teams");
+        private_dir::ensure_private_dir(&teams)?;
+        let dir = teams.join(run);
+        private_dir::ensure_private_dir(&dir)?;
         Ok(Self {
             // 't' is not a hex digit: no launcher run's prefix (`adta<hex>_`) starts so.
             prefix: format!("adtat{run}_"),
             id: format!("team-{run}"),
             dir,
+            own_base: None,
         })
     }
 
@@ -94,6 +114,7 @@ impl RunNamespace {
         if self.dir.exists() {
             found.push(self.dir.clone());
         }
+        found.extend(self.own_base.iter().filter(|b| b.exists()).cloned());
         found
     }
 
@@ -102,11 +123,44 @@ impl RunNamespace {
         for path in shm_objects(&self.prefix) {
             remove_if_exists(&path)?;
         }
-        match std::fs::remove_dir_all(&self.dir) {
+        let removed = match std::fs::remove_dir_all(&self.dir) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(e),
             _ => Ok(()),
+        };
+        if let Some(base) = &self.own_base {
+            let _ = std::fs::remove_dir(base);
         }
+        removed
     }
+}
+
+/// The user's directory of launcher runs (one subdirectory per run, named by its id),
+/// created and checked.
+pub fn private_runs_dir() -> Result<PathBuf, String> {
+    let runs = private_dir::base_dir()?.join("runs");
+    private_dir::ensure_private_dir(&runs)?;
+    Ok(runs)
+}
+
+/// Where the user's launcher runs live (for reports of what runs left behind; not checked).
+pub fn runs_dir() -> PathBuf {
+    private_runs_dir().unwrap_or_else(|_| {
+        std::env::temp_dir()
+            .join(format!("admm-ta-{}", private_dir::euid()))
+            .join("runs")
+    })
+}
+
+/// The id prefix of every run a launcher in process `pid` starts (its shared memory is
+/// named `adta<id>_…`, its run directory `<id>`): how a stress test finds what its runs
+/// left behind.
+pub fn run_id_prefix(pid: u32) -> String {
+    format!("{pid:x}")
+}
+
+/// Names in `/dev/shm` starting with `prefix`.
+pub fn shm_named(prefix: &str) -> Vec<PathBuf> {
+    shm_objects(prefix)
 }
 
 /// File of a run directory holding the launcher's pid.
@@ -134,6 +188,7 @@ fn sweep_abandoned(runs: &Path) {
             prefix: format!("adta{}_", entry.file_name().to_string_lossy()),
             id: entry.file_name().to_string_lossy().into_owned(),
             dir,
+            own_base: None,
         };
         let _ = abandoned.cleanup();
     }

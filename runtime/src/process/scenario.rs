@@ -97,11 +97,6 @@ pub struct Scenario {
 /// A scenario that cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
-    #[error("cannot read scenario {path}")]
-    Read {
-        path: PathBuf,
-        source: std::io::Error,
-    },
     #[error("scenario {path} is malformed")]
     Parse {
         path: PathBuf,
@@ -225,13 +220,10 @@ impl Scenario {
         }
     }
 
-    pub fn read(path: &Path, run_id: &str) -> Result<Self, ScenarioError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    /// The scenario of run `run_id` in `bytes` (read from `path`).
+    pub fn parse(bytes: &[u8], path: &Path, run_id: &str) -> Result<Self, ScenarioError> {
         let scenario: Self =
-            serde_json::from_str(&text).map_err(|source| ScenarioError::Parse {
+            serde_json::from_slice(bytes).map_err(|source| ScenarioError::Parse {
                 path: path.to_path_buf(),
                 source,
             })?;

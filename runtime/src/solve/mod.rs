@@ -127,8 +127,21 @@ fn solve_without(
         .fault_injection(false)
         .build()
         .map_err(|e| CannotContinue::ResolveFailed(Box::new(SolveError::Config(e))))?;
-    let report = solve_user(&reduced, &subgraph, &again)
-        .map_err(|second| CannotContinue::ResolveFailed(Box::new(second)))?;
+    let report = solve_user(&reduced, &subgraph, &again).map_err(|mut second| {
+        // The re-solve numbers the survivors 0..n-1: name the robot by its own number.
+        if let SolveError::Run(RunError::Launch(LaunchError::AgentFailed {
+            index, message, ..
+        })) = &mut second
+        {
+            let survivor = *index;
+            *index = survivors[survivor];
+            *message = format!(
+                "{message} (in the survivors' re-solve, where robot {} was agent {survivor})",
+                *index
+            );
+        }
+        CannotContinue::ResolveFailed(Box::new(second))
+    })?;
     Ok((survivors, report))
 }
 

@@ -107,7 +107,7 @@ pub struct SolveReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub startup_ms: Option<f64>,
     /// The ipc run's id: its iceoryx2 prefix is `adta<id>_`, its directory
-    /// `<tmp>/admm-ta-runs/<id>`; both are gone when the solve returns.
+    /// `<runs>/<id>` (the user's private runs directory); both are gone when the solve returns.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub run_id: Option<String>,
     /// Hash of each agent's last published payload (to compare transports).

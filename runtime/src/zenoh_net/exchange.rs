@@ -33,7 +33,7 @@ use crate::fault::Fault;
 use crate::wait::WaitPolicy;
 use crate::zenoh_net::links::{AGENT_LISTEN, ZenohLinks};
 use crate::zenoh_net::session::{
-    self, Role, alive_agents, announce_failure, missing_hosts, watch_failures,
+    self, Role, alive_agents, announce_failure, missing_hosts, watch_failures, watch_stops,
 };
 use admm_ta_agents::agent::Inbox;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
@@ -92,6 +92,8 @@ struct Inbound {
     departed: Vec<Option<Instant>>,
     /// The agent announced as failed on the run's failure key (the first announcement).
     failed: Option<usize>,
+    /// A stop request (termination signal) announced on the run's failure key.
+    stopped: Option<i32>,
     /// A malformed message (wrong length or sender): the first one.
     fault: Option<ExchangeError>,
     /// Bumped on every delivery, so that a waiter never sleeps past one.
@@ -216,6 +218,7 @@ impl ZenohExchange {
                 present: vec![false; degree],
                 departed: vec![None; degree],
                 failed: None,
+                stopped: None,
                 fault: None,
                 generation: 0,
             }),
@@ -233,6 +236,17 @@ impl ZenohExchange {
                     })
                     .wait()
                     .map_err(|e| err(format!("cannot subscribe to agent {j}: {e}")))?,
+            );
+        }
+        {
+            let shared = Arc::clone(&shared);
+            subscribers.push(
+                watch_stops(&session, links, move |signal| {
+                    shared.deliver(|inbound| {
+                        inbound.stopped.get_or_insert(signal);
+                    });
+                })
+                .map_err(err)?,
             );
         }
         {
@@ -287,6 +301,9 @@ impl ZenohExchange {
             if missing.is_empty() {
                 break;
             }
+            if let Some(signal) = crate::signals::received() {
+                return Err(ExchangeError::Stopped { agent: i, signal });
+            }
             if Instant::now() >= deadline {
                 return Err(err(format!(
                     "the team's host(s) {missing:?} did not come up before the start-up deadline (start `admm-ta host --team FILE --name NAME` on each machine)"
@@ -337,6 +354,12 @@ impl ZenohExchange {
             for (k, j) in self.neighbours.iter().enumerate() {
                 inbound.present[k] |= alive.contains(j);
             }
+            if let Some(signal) = inbound.stopped.or_else(crate::signals::received) {
+                return Err(ExchangeError::Stopped {
+                    agent: self.index,
+                    signal,
+                });
+            }
             if let Some(failed) = inbound.failed {
                 return Err(ExchangeError::PeerFailed {
                     agent: self.index,
@@ -376,6 +399,12 @@ impl ZenohExchange {
         }
     }
 
+    /// Asks every agent and host of the run to stop: this agent got termination signal
+    /// `signal`.
+    pub fn request_stop(&self, signal: i32) {
+        session::announce_stop(&self.session, &self.links, signal);
+    }
+
     /// Announces `agent` as the one that failed, so that every agent of the run stops.
     pub fn blame(&self, agent: usize) {
         announce_failure(&self.session, &self.links, agent);
@@ -397,6 +426,12 @@ impl ZenohExchange {
         self.seen = inbound.generation;
         if let Some(fault) = inbound.fault.take() {
             return Err(fault);
+        }
+        if let Some(signal) = inbound.stopped {
+            return Err(ExchangeError::Stopped {
+                agent: self.index,
+                signal,
+            });
         }
         if let Some(failed) = inbound.failed {
             return Err(ExchangeError::PeerFailed {
@@ -468,6 +503,12 @@ impl ZenohExchange {
     }
 
     fn check_launcher(&self, round: u64) -> Result<(), ExchangeError> {
+        if let Some(signal) = crate::signals::received() {
+            return Err(ExchangeError::Stopped {
+                agent: self.index,
+                signal,
+            });
+        }
         match self.launcher {
             Some(launcher) if std::os::unix::process::parent_id() != launcher => Err(transport(
                 self.index,

@@ -118,6 +118,41 @@ pub(crate) fn announce_failure(
         .wait();
 }
 
+/// Asks every agent and host of the run of `links` to stop: termination signal `signal`
+/// (on the failure key, as `stop N`: [`watch_failures`] ignores it, [`watch_stops`] sees it).
+pub(crate) fn announce_stop(
+    session: &Session,
+    links: &crate::zenoh_net::links::ZenohLinks,
+    signal: i32,
+) {
+    let _ = session
+        .put(links.failure_key(), format!("stop {signal}"))
+        .congestion_control(zenoh::qos::CongestionControl::Block)
+        .wait();
+}
+
+/// Calls `on_stop` with the signal of every stop request announced on the run of `links`.
+pub(crate) fn watch_stops(
+    session: &Session,
+    links: &crate::zenoh_net::links::ZenohLinks,
+    on_stop: impl Fn(i32) + Send + Sync + 'static,
+) -> Result<zenoh::pubsub::Subscriber<()>, String> {
+    session
+        .declare_subscriber(links.failure_key())
+        .callback(move |sample| {
+            let text = String::from_utf8_lossy(&sample.payload().to_bytes()).into_owned();
+            if let Some(signal) = text
+                .trim()
+                .strip_prefix("stop ")
+                .and_then(|s| s.parse::<i32>().ok())
+            {
+                on_stop(signal);
+            }
+        })
+        .wait()
+        .map_err(|e| format!("cannot watch the run's stop requests: {e}"))
+}
+
 /// Calls `on_failure` with every agent announced as failed on the run of `links`.
 pub(crate) fn watch_failures(
     session: &Session,
