@@ -7,19 +7,24 @@
 
 pub mod agent;
 pub mod cbaa;
+pub mod cost_model;
 pub mod dist_hungarian;
 pub mod dual;
+pub mod fast_consensus;
 pub mod general;
 pub mod local_stop;
 pub mod lsap;
+pub mod lsap_workspace;
 pub mod market;
 pub mod method;
 pub mod method_agent;
 pub mod oracle;
 pub mod primal;
+pub mod primal_settings;
 pub mod probe;
 pub mod problem;
 pub mod projection;
+pub mod readout;
 pub mod rho;
 pub mod rounding;
 pub mod stopping;

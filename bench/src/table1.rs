@@ -16,6 +16,7 @@
 
 use crate::experiment::Experiment;
 use admm_ta_agents::method::Method;
+use admm_ta_agents::primal_settings::PrimalVariant;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::solve::error::SolveError;
@@ -141,7 +142,8 @@ fn run_trial(
     let graph = TopologySpec::Complete
         .build(n, seed)
         .expect("complete graph");
-    let rho = config.rho_scale * method.default_rho(problem.costs(), graph.mean_degree());
+    let rho = config.rho_scale
+        * method.default_rho(problem.costs(), graph.mean_degree(), PrimalVariant::Paper);
     let run = |stop| {
         let options = SolveOptions::builder()
             .method(method)
@@ -149,6 +151,7 @@ fn run_trial(
             .check(true)
             .max_iters(config.max_iters)
             .adaptive_rho(config.adaptive_rho)
+            .primal_variant(PrimalVariant::Paper)
             .rho(Some(rho))
             .seed(seed)
             .build()?;
