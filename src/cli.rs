@@ -294,6 +294,25 @@ pub enum Experiment {
         #[arg(long)]
         json: bool,
     },
+    /// Where the rounds go: per method (primal in both variants, dual, inexact dual, market,
+    /// distributed Hungarian, CBAA), cost model (uniform, geometric) and graph (complete,
+    /// random:0.1, chain, ring, geometric:0.3), the median rounds to the relaxed objective
+    /// and the decisions within 0.1%, to optimal decisions and to the certified stop.
+    /// Writes rounds_anatomy.json and one SVG per cost model into --out.
+    #[command(name = "rounds-anatomy")]
+    RoundsAnatomy {
+        /// 12 robots × 8 tasks, 2 seeds, 2000 rounds (default: 50 × 30, 5 seeds, 5000).
+        #[arg(long)]
+        quick: bool,
+        /// Seeds per cell (overrides the default of the size).
+        #[arg(long)]
+        seeds: Option<u64>,
+        #[arg(long, default_value = "experiment-results")]
+        out: PathBuf,
+        /// Print the JSON instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Table 1: iterations of primal / dual / inexact dual at 20×20 on the complete graph
     /// (paper: 28 / 159 / 387), for uniform costs in [0,1) and shifted to [1,2).
     Table1 {

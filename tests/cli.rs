@@ -414,11 +414,20 @@ fn experiment(args: &[&str], file: &str) -> (String, serde_json::Value) {
 #[test]
 fn table1_experiment_writes_its_json() {
     let (table, v) = experiment(&["table1", "--trials", "2"], "table1.json");
-    for needle in ["primal", "dual", "inexact-dual", "159", "387", "[1,2)"] {
+    let needles = [
+        "primal paper",
+        "primal fast*",
+        "dual",
+        "inexact-dual",
+        "159",
+        "387",
+        "[1,2)",
+    ];
+    for needle in needles {
         assert!(table.contains(needle), "{needle} not in:\n{table}");
     }
     let rows = v["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 6);
+    assert_eq!(rows.len(), 8);
     for row in rows {
         assert_eq!(row["wrong_stops"], 0);
         assert_eq!(row["trials"].as_array().unwrap().len(), 2);
@@ -684,4 +693,22 @@ fn surveillance_episodes_are_optimal_warm_started_and_the_same_on_threads_and_ip
         ]),
         "cannot cover",
     );
+}
+
+#[test]
+fn rounds_anatomy_quick_writes_its_table_json_and_charts() {
+    let (table, json) = experiment(
+        &["rounds-anatomy", "--quick", "--seeds", "1"],
+        "rounds_anatomy.json",
+    );
+    assert!(
+        table.contains("| primal (fast) | uniform | complete |"),
+        "{table}"
+    );
+    assert!(table.contains("| cbaa | geometric | chain |"), "{table}");
+    let cells = json["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 7 * 2 * 5);
+    for cell in cells.iter().filter(|c| c["contender"]["method"] != "cbaa") {
+        assert_eq!(cell["wrong_stops"], 0, "{}", cell["name"]);
+    }
 }
