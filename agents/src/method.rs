@@ -171,8 +171,8 @@ impl AgentSettings {
     }
 
     /// The fast primal variant's certificate is a by-product of its readout: checked every
-    /// round as soon as a robot agrees with its neighbours (`(1, 0)`; the 5-round cadence
-    /// cost it up to 10 rounds: 50×50 complete, 26 → 16 rounds before the anchor). Every
+    /// round as soon as a robot agrees with its neighbours (`(1, 0)`: a 5-round cadence
+    /// and a 3-round streak would add several rounds to a 6-round solve). Every
     /// other method: every [`CHECK_EVERY`] rounds after [`CHECK_AFTER`] rounds of agreement.
     pub fn stop_cadence(&self) -> (u64, u32) {
         if self.method == AgentMethod::Primal && self.primal_variant == PrimalVariant::Fast {

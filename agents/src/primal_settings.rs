@@ -13,8 +13,8 @@
 //!   linear sum assignment ([`crate::readout`]), ρ is large ([`fast_rho`]), the consensus
 //!   step is over-relaxed and anchored to the polytope's centre with weights from the graph
 //!   diameter ([`FastTuning::for_diameter`]), and the certificate is checked every round.
-//!   On 50×50 complete graphs with uniform costs this takes the median decentralized
-//!   certified stop from 286 rounds to 6 (see the README, "How it works").
+//!   On 50×50 complete graphs with uniform costs (seeds 1–30) this takes the median
+//!   decentralized certified stop from 286 rounds to 6 (see the README, "How it works").
 
 use serde::{Deserialize, Serialize};
 
@@ -93,8 +93,8 @@ impl clap::ValueEnum for PrimalVariant {
 /// With the G readout nothing needs `X_i` at a vertex, so ρ can be large: once
 /// `2ρd ≫ spread` the iteration is linear in `(X, Q)` and no longer depends on ρ (the
 /// `X_i` stay near the centre of the polytope and the `G_i` converge to a consensus whose
-/// assignment is the optimum). Measured insensitive for `K ≥ 30` (3 … 1e5 tried); 100
-/// leaves margin.
+/// assignment is the optimum). 50×50 complete, uniform costs, seeds 1–3: 6 / 5 / 6 rounds
+/// to the certified stop for every `K` of 10, 30, 100, 1000 and 10⁵; 100 leaves margin.
 pub const FAST_RHO_FACTOR: f64 = 100.0;
 
 /// The fast variant's ρ for costs of this shift-free spread on a graph of this mean degree.
@@ -114,9 +114,8 @@ pub const MAX_ANCHOR: f64 = 0.85;
 /// every eigenvalue `s` of the graph's normalised Laplacian is a mode of the iteration;
 /// `c = min(0.85, π / (D + 1))` and `α = 1.9 − 0.5 c / 0.85` critically damp the slowest
 /// mode of a graph of diameter `D` (near nilpotent on complete graphs, `c = 0.85`,
-/// `α = 1.4`; on a 50-robot chain the slowest mode's e-folding time drops from about
-/// 2000 rounds to about 20 in that model). Measured on 50×50 complete, uniform costs, 10
-/// seeds: anchor alone 9 rounds, anchor + `α = 1.8` 15, these values 6.
+/// `α = 1.4`). With these values: 50×50 complete, uniform costs, seeds 1–30, median 6
+/// rounds to the certified stop; 50×30 chain 120.5 (the paper's variant: 286 and 869).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FastTuning {
     /// Over-relaxation `α ∈ [1.4, 1.9]` of the consensus step (1: plain ADMM).
@@ -154,15 +153,15 @@ pub struct FastSettings {
     /// Over-relaxation and anchor.
     pub tuning: FastTuning,
     /// Size `ε` of the tie-break matrix `E` (entries `ε · U[0, 1)`, the same at every
-    /// robot) added to `G_i` by the readout: exact ties (duplicate robots, integer costs)
-    /// never reach agreement without it (0 of 20 duplicate-robot instances certified
-    /// without, 20 of 20 with). The readout then minimises `G_i + E` exactly, so its
+    /// robot) added to `G_i` by the readout: with exact ties (duplicate robots, integer
+    /// costs) robots could read different optima forever without it (every duplicate-robot
+    /// instance of `runtime/tests/fast_primal.rs` certifies with it). The readout then minimises `G_i + E` exactly, so its
     /// certificate slack for `G_i` is at most `n ε`; [`FastSettings::new`] takes
     /// `ε = tolerance / (2 n²)`, half of a robot's share `tolerance / n`. 0: no tie-break
     /// (and no certificate, for runs without a tolerance).
     pub tie_break: f64,
     /// Try the closed-form projection first (exact when no entry is clipped, which is the
-    /// rule in the large-ρ regime): 120×120 complete graph, 8 rounds, 5.6 s → 3.5 s.
+    /// rule in the large-ρ regime): no Newton iterations in most rounds.
     pub interior_projection: bool,
 }
 
