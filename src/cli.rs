@@ -2,7 +2,10 @@
 //! runs in its file of `commands/`). Value lists (methods, transports, stop rules, wait
 //! strategies, …) come from the library's own types.
 
-use admm_ta::{CaseChoice, Method, OnFailure, ProjectionPath, StopRule, Transport, WaitStrategy};
+use admm_ta::{
+    CaseChoice, CostModel, Method, OnFailure, PrimalVariant, ProjectionPath, StopRule, Transport,
+    WaitStrategy,
+};
 use admm_ta_bench::rounds::case::{Barrier, StepKind};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -254,7 +257,14 @@ pub enum Experiment {
         /// complete | chain | ring | star | grid | random:P | geometric:R
         #[arg(long, default_value = "complete")]
         topology: String,
-        /// Run the ADMM methods with --adaptive-rho.
+        /// Random costs: uniform [0,1) or geometric (distances in the unit square).
+        #[arg(long, value_enum, default_value = "uniform")]
+        cost_model: CostModel,
+        /// The primal method's variant: fast or paper.
+        #[arg(long, value_enum, default_value = "fast")]
+        primal_variant: PrimalVariant,
+        /// Run the ADMM methods that have a schedule (dual methods, paper primal) with
+        /// --adaptive-rho.
         #[arg(long)]
         adaptive_rho: bool,
         #[arg(long, default_value_t = 5000)]
@@ -287,6 +297,25 @@ pub enum Experiment {
         out: PathBuf,
         /// Print one JSON object (episodes, optimal_episodes, battery_violations,
         /// mean_iterations_warm, mean_iterations_cold, …) instead of the summary.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Where the rounds go: per method (primal in both variants, dual, inexact dual, market,
+    /// distributed Hungarian, CBAA), cost model (uniform, geometric) and graph (complete,
+    /// random:0.1, chain, ring, geometric:0.3), the median rounds to the relaxed objective
+    /// and the decisions within 0.1%, to optimal decisions and to the certified stop.
+    /// Writes rounds_anatomy.json and one SVG per cost model into --out.
+    #[command(name = "rounds-anatomy")]
+    RoundsAnatomy {
+        /// 12 robots × 8 tasks, 2 seeds, 2000 rounds (default: 50 × 30, 5 seeds, 5000).
+        #[arg(long)]
+        quick: bool,
+        /// Seeds per cell (overrides the default of the size).
+        #[arg(long)]
+        seeds: Option<u64>,
+        #[arg(long, default_value = "experiment-results")]
+        out: PathBuf,
+        /// Print the JSON instead of the table.
         #[arg(long)]
         json: bool,
     },
@@ -325,12 +354,16 @@ pub struct SolveArgs {
     /// The matrix holds profits to maximise (scipy's maximize=True): `-inf` is forbidden.
     #[arg(long)]
     pub maximize: bool,
-    /// Number of robots for random uniform [0,1) costs.
+    /// Number of robots for random costs (see --cost-model).
     #[arg(long, requires = "tasks")]
     pub robots: Option<usize>,
-    /// Number of tasks for random uniform [0,1) costs.
+    /// Number of tasks for random costs (see --cost-model).
     #[arg(long, requires = "robots")]
     pub tasks: Option<usize>,
+    /// Random costs: uniform (entries uniform in [0,1)) or geometric (robots and tasks at
+    /// random points of the unit square, cost = Euclidean distance).
+    #[arg(long, value_enum, default_value = "uniform", conflicts_with = "costs")]
+    pub cost_model: CostModel,
     /// Seed of the random costs, random topologies and tie-breaking.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -351,14 +384,21 @@ pub struct SolveArgs {
     /// loopback: the multi-host transport; needs `--features zenoh`).
     #[arg(long, value_enum, default_value = "sim")]
     pub transport: Transport,
+    /// Primal method: fast (each robot reads the assignment from its certificate matrix by
+    /// a local assignment problem, large ρ, over-relaxed and anchored steps, certificate
+    /// every round) or paper (Algorithm 1 as published).
+    #[arg(long, value_enum, default_value = "fast")]
+    pub primal_variant: PrimalVariant,
     /// ADMM penalty ρ: auto (scale-free rule from the cost spread and the graph's mean
-    /// degree d̄: primal 0.5·spread·√((n−1)/d̄)/(2·d̄·n), dual 5/(spread·d̄), inexact dual
-    /// 10/(spread·d̄)) or a positive number.
+    /// degree d̄: primal fast 100·spread/(2·d̄), primal paper
+    /// 0.5·spread·√((n−1)/d̄)/(2·d̄·n), dual 5/(spread·d̄), inexact dual 10/(spread·d̄)) or a
+    /// positive number.
     #[arg(long, default_value = "auto", allow_negative_numbers = true)]
     pub rho: String,
     /// Vary ρ by the method's schedule, computed by every agent from the round number
-    /// (primal: 3ρ shrinking 2% per round to 0.6ρ; dual methods: ρ, then growing 1% per
-    /// round to 10ρ). Cut the rounds to the certified stop by 10–69% wherever the runs certified.
+    /// (primal paper variant: 3ρ shrinking 2% per round to 0.6ρ; dual methods: ρ, then
+    /// growing 1% per round to 10ρ). Cut the rounds to the certified stop by 10–69% wherever
+    /// the runs certified. Refused with the fast primal variant (ρ drops out of its iteration).
     #[arg(long)]
     pub adaptive_rho: bool,
     /// Inexact dual: g of the proximal weight γ = g·(m+1)/(2·|N(i)|·ρ) (default 0.5).

@@ -58,8 +58,10 @@ pub use admm_ta_agents as agents;
 pub use admm_ta_runtime as runtime;
 pub use admm_ta_topologies as topologies;
 
+pub use admm_ta_agents::cost_model::CostModel;
 pub use admm_ta_agents::method::Method;
 pub use admm_ta_agents::primal::ProjectionPath;
+pub use admm_ta_agents::primal_settings::PrimalVariant;
 pub use admm_ta_agents::problem::{
     AssignmentCase, CaseChoice, CostMatrix, ProblemError, TaskAssignmentProblem,
 };

@@ -379,14 +379,43 @@ fn every_method_solves_from_the_command_line_and_the_oracle_stop_is_the_papers_c
             "solve", "--robots", "12", "--tasks", "12", "--seed", "4", "--method", method,
             "--stop", "oracle", "--check", "--json",
         ]));
+        // The fast primal variant's criterion is on the robots' decisions (its relaxed
+        // columns stay near the polytope's centre).
+        let criterion = if method == "primal" {
+            "rounds_decisions_within_0_1pct"
+        } else {
+            "rounds_within_0_1pct"
+        };
         assert_eq!(
-            oracle["iterations"], oracle["check"]["rounds_within_0_1pct"],
+            oracle["iterations"], oracle["check"][criterion],
             "{method}: the oracle stop ends at the first round within 0.1%"
         );
     }
+    let paper = json(&admm_ta(&[
+        "solve",
+        "--robots",
+        "12",
+        "--tasks",
+        "12",
+        "--seed",
+        "4",
+        "--primal-variant",
+        "paper",
+        "--stop",
+        "oracle",
+        "--check",
+        "--json",
+    ]));
+    assert_eq!(paper["iterations"], paper["check"]["rounds_within_0_1pct"]);
+    // --adaptive-rho is the paper variant's.
+    assert_clear_error(
+        &admm_ta(&["solve", "--robots", "4", "--tasks", "4", "--adaptive-rho"]),
+        "--primal-variant paper",
+    );
     // An explicit ρ is used as given; --adaptive-rho changes the run.
     let run = |extra: &[&str]| {
         let mut args = vec!["solve", "--robots", "8", "--tasks", "8", "--rho", "0.002"];
+        args.extend_from_slice(&["--primal-variant", "paper"]);
         args.extend_from_slice(&["--stop", "oracle", "--json"]);
         args.extend_from_slice(extra);
         json(&admm_ta(&args))
@@ -419,11 +448,20 @@ fn experiment(args: &[&str], file: &str) -> (String, serde_json::Value) {
 #[test]
 fn table1_experiment_writes_its_json() {
     let (table, v) = experiment(&["table1", "--trials", "2"], "table1.json");
-    for needle in ["primal", "dual", "inexact-dual", "159", "387", "[1,2)"] {
+    let needles = [
+        "primal paper",
+        "primal fast*",
+        "dual",
+        "inexact-dual",
+        "159",
+        "387",
+        "[1,2)",
+    ];
+    for needle in needles {
         assert!(table.contains(needle), "{needle} not in:\n{table}");
     }
     let rows = v["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 6);
+    assert_eq!(rows.len(), 8);
     for row in rows {
         assert_eq!(row["wrong_stops"], 0);
         assert_eq!(row["trials"].as_array().unwrap().len(), 2);
@@ -813,5 +851,23 @@ fn forbidden_pairs_maximize_and_idle_robots_from_the_command_line() {
         ]));
         assert_eq!(report["assignment"], serde_json::json!([0, 1]), "{method}");
         assert_eq!(report["unserved_tasks"], serde_json::json!([2]), "{method}");
+    }
+}
+
+#[test]
+fn rounds_anatomy_quick_writes_its_table_json_and_charts() {
+    let (table, json) = experiment(
+        &["rounds-anatomy", "--quick", "--seeds", "1"],
+        "rounds_anatomy.json",
+    );
+    assert!(
+        table.contains("| primal (fast) | uniform | complete |"),
+        "{table}"
+    );
+    assert!(table.contains("| cbaa | geometric | chain |"), "{table}");
+    let cells = json["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 7 * 2 * 5);
+    for cell in cells.iter().filter(|c| c["contender"]["method"] != "cbaa") {
+        assert_eq!(cell["wrong_stops"], 0, "{}", cell["name"]);
     }
 }

@@ -67,6 +67,8 @@ pub enum Verdict {
 pub struct LocalCertifiedStop {
     diameter: usize,
     tolerance: f64,
+    every: u64,
+    after: u32,
     streak: u32,
     /// Own task of rounds `r − D ..= r`, indexed by `r % (D + 1)`.
     own_tasks: Vec<usize>,
@@ -97,10 +99,22 @@ impl LocalCertifiedStop {
         Ok(Self {
             diameter,
             tolerance: tolerance / robots.max(1) as f64,
+            every: CHECK_EVERY,
+            after: CHECK_AFTER,
             streak: 0,
             own_tasks: vec![usize::MAX; diameter + 1],
             next_window: Window::default(),
         })
+    }
+
+    /// Checks the certificate on rounds that are multiples of `every` once the robot has
+    /// agreed with its neighbours for more than `after` rounds (defaults [`CHECK_EVERY`],
+    /// [`CHECK_AFTER`]; a method's cadence is
+    /// [`crate::method::AgentSettings::stop_cadence`]). Every robot must use the same.
+    pub fn with_cadence(mut self, (every, after): (u64, u32)) -> Self {
+        self.every = every.max(1);
+        self.after = after;
+        self
     }
 
     /// The window to send with the next round's message.
@@ -123,8 +137,8 @@ impl LocalCertifiedStop {
         self.streak = if agreed { self.streak + 1 } else { 0 };
         let slot = |r: u64| (r % (self.diameter as u64 + 1)) as usize;
         self.own_tasks[slot(round)] = own_task;
-        let predicate = round.is_multiple_of(CHECK_EVERY)
-            && self.streak > CHECK_AFTER
+        let predicate = round.is_multiple_of(self.every)
+            && self.streak > self.after
             && slack() <= self.tolerance;
         let mut combined = mine.window;
         for t in theirs {

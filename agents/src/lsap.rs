@@ -3,7 +3,10 @@
 //! Shortest augmenting paths with dual potentials (Jonker–Volgenant as restated by Crouse,
 //! "On implementing 2D rectangular assignment algorithms", 2016 — the algorithm behind
 //! scipy's `linear_sum_assignment`). A `rows × cols` matrix with `rows ≤ cols` is solved
-//! directly, a tall one through its transpose; nothing is padded. `O(rows² · cols)`.
+//! directly, a tall one through its transpose; nothing is padded. `O(rows² · cols)`. The
+//! solver itself, with a reusable workspace, is [`crate::lsap_workspace`].
+
+use crate::lsap_workspace::LsapWorkspace;
 
 /// Why an assignment could not be computed.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -34,131 +37,21 @@ pub fn solve(cost: &[f64], rows: usize, cols: usize) -> Result<Vec<Option<usize>
         return Ok(vec![None; rows]);
     }
     if rows <= cols {
-        let col4row = ShortestAugmentingPath::new(rows, cols).run(|r, c| cost[r * cols + c])?;
-        Ok(col4row.into_iter().map(Some).collect())
+        let mut workspace = LsapWorkspace::new(rows, cols);
+        let col4row = workspace
+            .solve(|r, c| cost[r * cols + c])
+            .ok_or(LsapError::Infeasible)?;
+        Ok(col4row.iter().copied().map(Some).collect())
     } else {
-        let row4col = ShortestAugmentingPath::new(cols, rows).run(|r, c| cost[c * cols + r])?;
+        let mut workspace = LsapWorkspace::new(cols, rows);
+        let row4col = workspace
+            .solve(|r, c| cost[c * cols + r])
+            .ok_or(LsapError::Infeasible)?;
         let mut out = vec![None; rows];
-        for (col, row) in row4col.into_iter().enumerate() {
+        for (col, &row) in row4col.iter().enumerate() {
             out[row] = Some(col);
         }
         Ok(out)
-    }
-}
-
-const UNSET: usize = usize::MAX;
-
-/// Working arrays of the augmenting-path solver for `rows ≤ cols`.
-struct ShortestAugmentingPath {
-    rows: usize,
-    cols: usize,
-    u: Vec<f64>,
-    v: Vec<f64>,
-    shortest: Vec<f64>,
-    path: Vec<usize>,
-    col4row: Vec<usize>,
-    row4col: Vec<usize>,
-    visited_rows: Vec<bool>,
-    visited_cols: Vec<bool>,
-    remaining: Vec<usize>,
-}
-
-impl ShortestAugmentingPath {
-    fn new(rows: usize, cols: usize) -> Self {
-        Self {
-            rows,
-            cols,
-            u: vec![0.0; rows],
-            v: vec![0.0; cols],
-            shortest: vec![f64::INFINITY; cols],
-            path: vec![UNSET; cols],
-            col4row: vec![UNSET; rows],
-            row4col: vec![UNSET; cols],
-            visited_rows: vec![false; rows],
-            visited_cols: vec![false; cols],
-            remaining: vec![0; cols],
-        }
-    }
-
-    fn run(mut self, cost: impl Fn(usize, usize) -> f64) -> Result<Vec<usize>, LsapError> {
-        for current in 0..self.rows {
-            let (sink, min_value) = self
-                .augmenting_path(current, &cost)
-                .ok_or(LsapError::Infeasible)?;
-            // Update the dual potentials of the rows and columns on the search tree.
-            self.u[current] += min_value;
-            for r in 0..self.rows {
-                if self.visited_rows[r] && r != current {
-                    self.u[r] += min_value - self.shortest[self.col4row[r]];
-                }
-            }
-            for c in 0..self.cols {
-                if self.visited_cols[c] {
-                    self.v[c] -= min_value - self.shortest[c];
-                }
-            }
-            // Flip the alternating path ending at `sink`.
-            let mut c = sink;
-            loop {
-                let r = self.path[c];
-                self.row4col[c] = r;
-                std::mem::swap(&mut self.col4row[r], &mut c);
-                if r == current {
-                    break;
-                }
-            }
-        }
-        Ok(self.col4row)
-    }
-
-    /// Dijkstra over reduced costs from an unassigned row to the nearest free column.
-    fn augmenting_path(
-        &mut self,
-        start: usize,
-        cost: &impl Fn(usize, usize) -> f64,
-    ) -> Option<(usize, f64)> {
-        let mut min_value = 0.0;
-        let mut remaining = self.cols;
-        for (k, slot) in self.remaining.iter_mut().enumerate() {
-            *slot = self.cols - k - 1;
-        }
-        self.visited_rows.fill(false);
-        self.visited_cols.fill(false);
-        self.shortest.fill(f64::INFINITY);
-        let mut row = start;
-        loop {
-            self.visited_rows[row] = true;
-            let mut best_index = UNSET;
-            let mut lowest = f64::INFINITY;
-            for k in 0..remaining {
-                let c = self.remaining[k];
-                let reduced = min_value + cost(row, c) - self.u[row] - self.v[c];
-                if reduced < self.shortest[c] {
-                    self.path[c] = row;
-                    self.shortest[c] = reduced;
-                }
-                if self.shortest[c] < lowest
-                    || (self.shortest[c] == lowest && self.row4col[c] == UNSET)
-                {
-                    lowest = self.shortest[c];
-                    best_index = k;
-                }
-            }
-            // Finite costs and rows ≤ cols guarantee a free column is always reachable;
-            // forbidden (+∞) pairs may leave none.
-            if best_index == UNSET || lowest == f64::INFINITY {
-                return None;
-            }
-            min_value = lowest;
-            let c = self.remaining[best_index];
-            self.visited_cols[c] = true;
-            remaining -= 1;
-            self.remaining[best_index] = self.remaining[remaining];
-            if self.row4col[c] == UNSET {
-                return Some((c, min_value));
-            }
-            row = self.row4col[c];
-        }
     }
 }
 
@@ -220,6 +113,21 @@ mod tests {
                     assert!((total(&t, rows, &at) - expected).abs() < 1e-9);
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_reused_workspace_gives_the_solver_s_answers() {
+        let mut rng = admm_ta_topologies::rng::SeededRng::new(9);
+        let mut workspace = LsapWorkspace::new(5, 7);
+        for _ in 0..20 {
+            let cost: Vec<f64> = (0..35).map(|_| rng.uniform()).collect();
+            let expected: Vec<usize> = solve(&cost, 5, 7)
+                .unwrap()
+                .into_iter()
+                .map(Option::unwrap)
+                .collect();
+            assert_eq!(workspace.solve(|r, c| cost[r * 7 + c]), Some(&expected[..]));
         }
     }
 

@@ -26,8 +26,10 @@ use crate::agent::AgentAlgorithm;
 use crate::cbaa::CbaaAgent;
 use crate::dist_hungarian::DistHungarianAgent;
 use crate::dual::{DEFAULT_GAMMA_FACTOR, DualAgent, DualSettings, DualUpdate};
+use crate::local_stop::{CHECK_AFTER, CHECK_EVERY};
 use crate::market::MarketAgent;
 use crate::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
+use crate::primal_settings::PrimalVariant;
 use crate::problem::{AssignmentCase, CostMatrix};
 use crate::rho::{DUAL_RHO_FACTOR, INEXACT_DUAL_RHO_FACTOR, RhoRule, RhoSchedule};
 use crate::stopping::StopRule;
@@ -149,9 +151,13 @@ pub struct AgentSettings {
     /// Total cost tolerance of the optimality certificate (the dual methods check their
     /// multipliers' agreement against it).
     pub tolerance: f64,
+    /// Which primal consensus ADMM the primal method runs (ignored by the others).
+    pub primal_variant: PrimalVariant,
 }
 
 impl AgentSettings {
+    /// The settings with the paper's primal variant (solves choose theirs through
+    /// [`AgentSettings::primal_variant`]).
     pub fn new(method: AgentMethod, rho: f64, diameter: usize, tolerance: f64) -> Self {
         Self {
             method,
@@ -160,6 +166,19 @@ impl AgentSettings {
             gamma_factor: DEFAULT_GAMMA_FACTOR,
             diameter,
             tolerance,
+            primal_variant: PrimalVariant::Paper,
+        }
+    }
+
+    /// The fast primal variant's certificate is a by-product of its readout: checked every
+    /// round as soon as a robot agrees with its neighbours (`(1, 0)`: a 5-round cadence
+    /// and a 3-round streak would add several rounds to a 6-round solve). Every
+    /// other method: every [`CHECK_EVERY`] rounds after [`CHECK_AFTER`] rounds of agreement.
+    pub fn stop_cadence(&self) -> (u64, u32) {
+        if self.method == AgentMethod::Primal && self.primal_variant == PrimalVariant::Fast {
+            (1, 0)
+        } else {
+            (CHECK_EVERY, CHECK_AFTER)
         }
     }
 }
@@ -198,9 +217,10 @@ const PRIMAL: MethodInfo = MethodInfo {
     summary: "Algorithm 1, exchanges m×n matrices",
     agents: Some(AgentMethod::Primal),
     stops: ALL_STOPS,
-    // X, Q, Z, the projection's workspace and two round buffers: six m×n matrices.
+    // X, Q, Z, the projection's workspace and two round buffers: six m×n matrices; the fast
+    // variant's integer multipliers, edge sums and tie-break matrix: three more.
     memory: Memory {
-        bytes: |n, m| per_agent(n, 6.0 * (m * n) as f64),
+        bytes: |n, m| per_agent(n, 9.0 * (m * n) as f64),
         of: TEAM_STATE,
         because: "each robot holds an m×n matrix",
     },
@@ -218,7 +238,13 @@ const PRIMAL_AGENTS: AgentMethodInfo = AgentMethodInfo {
             a.degree,
             PrimalSettings {
                 projection: a.settings.projection,
-                ..PrimalSettings::new(a.settings.rho)
+                ..PrimalSettings::for_variant(
+                    a.settings.primal_variant,
+                    a.settings.rho,
+                    a.settings.diameter,
+                    a.robots,
+                    a.settings.tolerance,
+                )
             },
         ))
     },
@@ -410,11 +436,16 @@ impl Method {
         self.agent_method().and_then(AgentMethod::rho_rule)
     }
 
+    /// Whether `--adaptive-rho` applies (see [`AgentMethod::has_schedule`]).
+    pub fn has_schedule(self, variant: PrimalVariant) -> bool {
+        self.agent_method().is_some_and(|a| a.has_schedule(variant))
+    }
+
     /// The default ρ for these costs on a graph with this mean degree (0 for the methods
-    /// without a penalty).
-    pub fn default_rho(self, costs: &CostMatrix, mean_degree: f64) -> f64 {
+    /// without a penalty); the primal method's depends on its variant.
+    pub fn default_rho(self, costs: &CostMatrix, mean_degree: f64, variant: PrimalVariant) -> f64 {
         self.rho_rule()
-            .map_or(0.0, |rule| rule.rho(costs, mean_degree))
+            .map_or(0.0, |rule| rule.rho_for(costs, mean_degree, variant))
     }
 
     /// Length of the payload exchanged every round (0: no messages).
@@ -504,6 +535,13 @@ impl AgentMethod {
     /// The `--adaptive-rho` schedule from `initial`, if the method has a penalty.
     pub fn schedule(self, initial: f64) -> Option<RhoSchedule> {
         self.rho_rule().map(|rule| rule.schedule(initial))
+    }
+
+    /// Whether `--adaptive-rho` applies: a method with a penalty, and for the primal
+    /// method the paper's variant only (the fast variant runs in a regime where ρ drops
+    /// out of the iteration; the schedule was measured for the paper's readout).
+    pub fn has_schedule(self, variant: PrimalVariant) -> bool {
+        self.rho_rule().is_some() && !(self == Self::Primal && variant == PrimalVariant::Fast)
     }
 }
 

@@ -17,66 +17,22 @@
 //! A robot without neighbours (n = 1) uses its own iterate in place of a neighbour's, which
 //! turns the step into a proximal-point iteration on its local LP.
 //!
+//! With [`PrimalSettings::fast`] set, the same agent runs the fast variant of
+//! [`crate::primal_settings`]: the consensus step of [`crate::fast_consensus`] and the
+//! readout of [`crate::readout`] replace the steps above and the per-column rounding.
+//!
 //! The step works in buffers allocated at construction: one fused pass accumulates the
 //! neighbours' sum, updates `Q` and forms the projection input, then the projection writes
 //! the new iterate straight into the outgoing payload.
 
 use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
+use crate::fast_consensus::FastConsensus;
 use crate::general::GeneralProblem;
+pub use crate::primal_settings::{PrimalSettings, ProjectionPath};
 use crate::problem::AssignmentCase;
 use crate::projection::{ProjectionStats, QpProjector, TransportPolytopeProjector};
 use crate::rounding;
 use faer::{MatMut, MatRef};
-
-/// Which solver carries out the x-update (8).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum ProjectionPath {
-    /// Semismooth Newton projection (default).
-    #[default]
-    Fast,
-    /// clarabel QP (cross-check; orders of magnitude slower).
-    Qp,
-}
-
-impl ProjectionPath {
-    /// Both paths, in the order of the command line's help.
-    pub const ALL: [ProjectionPath; 2] = [Self::Fast, Self::Qp];
-
-    /// The name used on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Fast => "fast",
-            Self::Qp => "qp",
-        }
-    }
-}
-
-#[cfg(feature = "clap")]
-impl clap::ValueEnum for ProjectionPath {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
-
-/// Parameters of one primal agent.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PrimalSettings {
-    pub rho: f64,
-    pub projection: ProjectionPath,
-}
-
-impl PrimalSettings {
-    pub fn new(rho: f64) -> Self {
-        Self {
-            rho,
-            projection: ProjectionPath::Fast,
-        }
-    }
-}
 
 enum Projector {
     Fast(Box<TransportPolytopeProjector>),
@@ -99,6 +55,8 @@ pub struct PrimalAgent {
     rounded: Vec<usize>,
     load: Vec<u32>,
     last_projection: ProjectionStats,
+    /// The fast variant's state (`None`: Algorithm 1).
+    fast: Option<Box<FastConsensus>>,
 }
 
 impl PrimalAgent {
@@ -118,9 +76,12 @@ impl PrimalAgent {
             "ρ must be positive"
         );
         let projector = match settings.projection {
-            ProjectionPath::Fast => Projector::Fast(Box::new(TransportPolytopeProjector::new(
-                tasks, robots, case,
-            ))),
+            ProjectionPath::Fast => {
+                let mut projector = TransportPolytopeProjector::new(tasks, robots, case);
+                projector
+                    .set_interior_fast_path(settings.fast.is_some_and(|f| f.interior_projection));
+                Projector::Fast(Box::new(projector))
+            }
             ProjectionPath::Qp => Projector::Qp(QpProjector::new(
                 &GeneralProblem::assignment_constraints(robots, tasks, case),
             )),
@@ -140,6 +101,9 @@ impl PrimalAgent {
             rounded: vec![0; robots],
             load: vec![0; tasks],
             last_projection: ProjectionStats::default(),
+            fast: settings
+                .fast
+                .map(|f| Box::new(FastConsensus::new(tasks, robots, case, degree, &f))),
         }
     }
 
@@ -155,16 +119,24 @@ impl PrimalAgent {
     pub fn set_costs(&mut self, costs: &[f64]) {
         assert_eq!(costs.len(), self.tasks, "one cost per task");
         self.costs.copy_from_slice(costs);
+        if let Some(fast) = &mut self.fast {
+            fast.readout.invalidate();
+        }
     }
 
     /// Forgets the iterate and the multipliers (a cold start of the next steps).
     pub fn reset(&mut self) {
         self.x.fill(0.0);
         self.q.fill(0.0);
+        if let Some(fast) = &mut self.fast {
+            fast.reset();
+        }
     }
 
     /// Changes ρ from the next step on. `Q` is kept unscaled (`Q += ρ Σ (X_i − X_j)`), so it
-    /// needs no rescaling; every robot must change ρ at the same round.
+    /// needs no rescaling; every robot must change ρ at the same round. (The fast variant
+    /// keeps `Q` as integer multiples of `αρ`: a new ρ rescales it, which keeps
+    /// `Σ_i Q_i = 0`; its options refuse schedules, see [`crate::primal_settings`].)
     pub fn set_rho(&mut self, rho: f64) {
         assert!(rho > 0.0 && rho.is_finite(), "ρ must be positive");
         self.settings.rho = rho;
@@ -180,8 +152,31 @@ impl PrimalAgent {
     /// robots agree on `π` and their slacks sum to (almost) zero, `π` is optimal — a bound,
     /// not a heuristic. This returns `s_i` (an `m × n` assignment problem, so call it when the
     /// robots agree, not every round), or `∞` when `π` is not a feasible assignment.
+    ///
+    /// In the fast variant the readout minimises `G_i + E` ([`crate::readout`]): its slack is
+    /// at most `n ε` by construction, and nothing is solved here (before the first step,
+    /// or when `Σ_i Q_i = 0` can no longer be guaranteed, the general rule applies).
     pub fn certificate_slack(&self) -> f64 {
+        if let Some(fast) = &self.fast {
+            if !fast.exact() {
+                return f64::INFINITY;
+            }
+            if let Some(bound) = fast.readout.slack_bound() {
+                return bound;
+            }
+        }
         self.certificate_slack_for(&self.rounded)
+    }
+
+    /// The fast variant's multipliers `K_i` in integer units (`Q_i` is a fixed multiple of
+    /// them; they sum to zero over the team exactly); `None` for Algorithm 1.
+    pub fn exact_multipliers(&self) -> Option<&[i128]> {
+        self.fast.as_ref().map(|f| f.units())
+    }
+
+    /// The consensus multipliers `Q_i` (column-major tasks × robots).
+    pub fn multipliers(&self) -> &[f64] {
+        &self.q
     }
 
     /// `s_i` of [`PrimalAgent::certificate_slack`] for any assignment (task per robot);
@@ -227,6 +222,9 @@ impl PrimalAgent {
         if neighbours == 0 {
             self.z.copy_from_slice(&self.x);
         }
+        if let Some(fast) = &mut self.fast {
+            fast.clear_neighbours();
+        }
         for k in 0..neighbours {
             let theirs = inbox.payload(k);
             assert_eq!(
@@ -235,14 +233,28 @@ impl PrimalAgent {
                 "neighbour payload has the wrong length"
             );
             disagreement = disagreement.max(accumulate_and_compare(&mut self.z, &self.x, theirs));
+            if let Some(fast) = &mut self.fast {
+                fast.add_neighbour(theirs);
+            }
         }
         let degree = neighbours.max(1) as f64;
         let rho = self.settings.rho;
         let (half_mean, half_scaled) = (0.5 / degree, 0.5 / (rho * degree));
-        for ((s, q), mine) in self.z.iter_mut().zip(&mut self.q).zip(&self.x) {
-            let neighbour_sum = *s;
-            *q += rho * (degree * mine - neighbour_sum);
-            *s = (degree * mine + neighbour_sum) * half_mean - *q * half_scaled;
+        if let Some(fast) = &mut self.fast {
+            fast.update(
+                &mut self.z,
+                &mut self.q,
+                &self.x,
+                neighbours,
+                rho,
+                self.tasks,
+            );
+        } else {
+            for ((s, q), mine) in self.z.iter_mut().zip(&mut self.q).zip(&self.x) {
+                let neighbour_sum = *s;
+                *q += rho * (degree * mine - neighbour_sum);
+                *s = (degree * mine + neighbour_sum) * half_mean - *q * half_scaled;
+            }
         }
         let own = &mut self.z[self.index * self.tasks..(self.index + 1) * self.tasks];
         for (s, alpha) in own.iter_mut().zip(&self.costs) {
@@ -251,10 +263,15 @@ impl PrimalAgent {
         disagreement
     }
 
-    /// Rounds the current iterate column by column; returns the distance of the iterate
-    /// (whole, own column) from that rounding and a digest of it.
+    /// Rounds the current iterate column by column (the fast variant: reads `G_i`); returns
+    /// the distance of the iterate (whole, own column) from that rounding and a digest of it.
     fn inspect_rounding(&mut self) -> (f64, f64, u64) {
-        rounding::argmax_assignment(&self.x, self.tasks, &mut self.rounded);
+        match &mut self.fast {
+            Some(fast) => fast
+                .readout
+                .read(&self.q, &self.costs, self.index, &mut self.rounded),
+            None => rounding::argmax_assignment(&self.x, self.tasks, &mut self.rounded),
+        }
         let feasible = rounding::covers(&self.rounded, self.case, &mut self.load);
         let mut digest: u64 = 0xcbf2_9ce4_8422_2325;
         let (mut gap, mut own_gap) = (0.0f64, 0.0f64);
@@ -334,6 +351,9 @@ impl ConsensusAgent for PrimalAgent {
             }
         };
         self.last_projection = stats;
+        if self.fast.is_some() {
+            FastConsensus::snap(out);
+        }
         let change = out
             .iter()
             .zip(&self.x)
@@ -353,6 +373,13 @@ impl ConsensusAgent for PrimalAgent {
     }
 
     fn decide(&self) -> usize {
+        if let Some(fast) = &self.fast
+            && fast.readout.slack_bound().is_some()
+        {
+            // The readout is a feasible assignment, the same at robots that agree (the
+            // iterate stays near the polytope's centre in the fast variant).
+            return self.rounded[self.index];
+        }
         rounding::local_assignment(&self.x, self.tasks, self.robots, self.case)[self.index]
     }
 

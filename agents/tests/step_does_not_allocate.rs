@@ -5,6 +5,7 @@
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::method::{AgentMethod, AgentSettings};
 use admm_ta_agents::method_agent::MethodAgent;
+use admm_ta_agents::primal_settings::PrimalVariant;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -36,25 +37,32 @@ static GLOBAL: CountingAllocator = CountingAllocator;
 
 fn team_rounds(
     method: AgentMethod,
+    variant: PrimalVariant,
     robots: usize,
     tasks: usize,
     case: AssignmentCase,
     rounds: usize,
 ) -> usize {
     let costs = CostMatrix::uniform(robots, tasks, 11).unwrap();
-    team_rounds_on(method, &costs, case, rounds)
+    team_rounds_on(method, variant, &costs, case, rounds)
 }
 
 /// As [`team_rounds`] on given costs (a normalised problem's, say).
 fn team_rounds_on(
     method: AgentMethod,
+    variant: PrimalVariant,
     costs: &CostMatrix,
     case: AssignmentCase,
     rounds: usize,
 ) -> usize {
     let (robots, tasks) = (costs.robots(), costs.tasks());
-    let rho = method.method().default_rho(costs, (robots - 1) as f64);
-    let settings = AgentSettings::new(method, rho, 1, 1e-9);
+    let rho = method
+        .method()
+        .default_rho(costs, (robots - 1) as f64, variant);
+    let settings = AgentSettings {
+        primal_variant: variant,
+        ..AgentSettings::new(method, rho, 1, 1e-9)
+    };
     let mut agents: Vec<MethodAgent> = (0..robots)
         .map(|i| MethodAgent::new(i, costs.row(i).to_vec(), robots, case, robots - 1, settings))
         .collect();
@@ -94,12 +102,19 @@ fn every_method_steps_without_allocating_after_warm_up() {
         AgentMethod::Market,
     ] {
         assert_eq!(
-            team_rounds(method, 12, 12, AssignmentCase::One, 40),
+            team_rounds(
+                method,
+                PrimalVariant::Paper,
+                12,
+                12,
+                AssignmentCase::One,
+                40
+            ),
             0,
             "{method:?}"
         );
         assert_eq!(
-            team_rounds(method, 14, 6, AssignmentCase::Two, 40),
+            team_rounds(method, PrimalVariant::Paper, 14, 6, AssignmentCase::Two, 40),
             0,
             "{method:?}"
         );
@@ -112,11 +127,13 @@ fn every_method_steps_without_allocating_after_warm_up() {
                 TaskAssignmentProblem::new(CostMatrix::from_csv_str(&text).unwrap(), choice)
                     .unwrap();
             let internal = problem.internal();
-            assert_eq!(
-                team_rounds_on(method, internal.costs(), internal.case(), 40),
-                0,
-                "{method:?} on {choice:?}"
-            );
+            for variant in [PrimalVariant::Paper, PrimalVariant::Fast] {
+                assert_eq!(
+                    team_rounds_on(method, variant, internal.costs(), internal.case(), 40),
+                    0,
+                    "{method:?} ({variant:?}) on {choice:?}"
+                );
+            }
         }
     }
 }
@@ -151,4 +168,24 @@ fn idle_text() -> String {
                 + "\n"
         })
         .collect()
+}
+
+#[test]
+fn the_fast_primal_steps_and_reads_its_assignment_without_allocating() {
+    // The readout's local assignment problem runs in its preallocated workspace, the
+    // closed-form projection in its own scratch.
+    for (robots, tasks, case) in [(12, 12, AssignmentCase::One), (14, 6, AssignmentCase::Two)] {
+        assert_eq!(
+            team_rounds(
+                AgentMethod::Primal,
+                PrimalVariant::Fast,
+                robots,
+                tasks,
+                case,
+                40
+            ),
+            0,
+            "{robots}×{tasks}"
+        );
+    }
 }

@@ -14,6 +14,7 @@ use admm_ta_agents::agent::{ConsensusAgent, Inbox};
 use admm_ta_agents::method::{AgentMethod, AgentSettings};
 use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::oracle;
+use admm_ta_agents::primal_settings::PrimalVariant;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::workload::plan::AgentFactory;
@@ -31,9 +32,10 @@ fn agent_in_flight(method: AgentMethod, n: usize) -> (MethodAgent, Vec<Vec<Vec<f
         TaskAssignmentProblem::new(CostMatrix::uniform(n, n, 7).unwrap(), CaseChoice::Auto)
             .unwrap();
     let graph = generate::complete(n).unwrap();
-    let rho = method
-        .method()
-        .default_rho(problem.costs(), graph.mean_degree());
+    let rho =
+        method
+            .method()
+            .default_rho(problem.costs(), graph.mean_degree(), PrimalVariant::Paper);
     let team = AgentFactory {
         problem: &problem,
         graph: &graph,

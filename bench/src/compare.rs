@@ -2,8 +2,10 @@
 //! stop, optimality, messages and bytes per agent, wall time (`admm-ta experiment compare`).
 
 use crate::experiment::Experiment;
+use admm_ta_agents::cost_model::CostModel;
 use admm_ta_agents::method::Method;
-use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_agents::primal_settings::PrimalVariant;
+use admm_ta_agents::problem::{CaseChoice, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::solve;
@@ -20,6 +22,10 @@ pub struct CompareConfig {
     pub methods: Vec<Method>,
     pub transports: Vec<Transport>,
     pub topology: TopologySpec,
+    pub cost_model: CostModel,
+    /// The primal method's variant.
+    pub primal_variant: PrimalVariant,
+    /// `--adaptive-rho` for the methods that have a schedule (not the fast primal variant).
     pub adaptive_rho: bool,
     pub max_iters: usize,
     /// The `admm-ta` binary (ipc transport).
@@ -64,7 +70,7 @@ impl Experiment for Comparison {
     }
 }
 
-/// Runs every (size, method, transport) on `seeds` uniform square problems.
+/// Runs every (size, method, transport) on `seeds` square problems of the cost model.
 pub fn run(
     config: &CompareConfig,
     progress: &dyn Fn(&CompareRow),
@@ -92,7 +98,7 @@ pub fn run(
                 };
                 for seed in 0..config.seeds {
                     let problem = TaskAssignmentProblem::new(
-                        CostMatrix::uniform(n, n, seed).expect("valid size"),
+                        config.cost_model.costs(n, n, seed).expect("valid size"),
                         CaseChoice::Auto,
                     )
                     .expect("square problem");
@@ -105,7 +111,10 @@ pub fn run(
                         .transport(transport)
                         .seed(seed)
                         .check(true)
-                        .adaptive_rho(config.adaptive_rho)
+                        .adaptive_rho(
+                            config.adaptive_rho && method.has_schedule(config.primal_variant),
+                        )
+                        .primal_variant(config.primal_variant)
                         .max_iters(config.max_iters)
                         .agent_program(config.agent_program.clone())
                         .build()?;
@@ -168,6 +177,8 @@ mod tests {
             ],
             transports: vec![Transport::Sim],
             topology: TopologySpec::Complete,
+            cost_model: CostModel::Uniform,
+            primal_variant: PrimalVariant::Fast,
             adaptive_rho: false,
             max_iters: 2000,
             agent_program: None,

@@ -9,6 +9,7 @@ pub mod experiment;
 pub mod figures;
 pub mod plot;
 pub mod rounds;
+pub mod rounds_anatomy;
 pub mod surveillance;
 pub mod table1;
 

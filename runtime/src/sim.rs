@@ -37,11 +37,16 @@ pub struct RoundView<'a> {
 /// Each robot's own relaxed assignment vector `x_i` (whatever its method's payload is).
 pub trait OwnColumns {
     fn own_column(&self, robot: usize) -> &[f64];
+    /// The robot's own task in its rounded view of the team's assignment.
+    fn rounded_task(&self, robot: usize) -> usize;
 }
 
 impl<A: ConsensusAgent> OwnColumns for Vec<A> {
     fn own_column(&self, robot: usize) -> &[f64] {
         self[robot].own_column()
+    }
+    fn rounded_task(&self, robot: usize) -> usize {
+        self[robot].rounded_task()
     }
 }
 

@@ -4,6 +4,7 @@
 use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::oracle;
 use admm_ta_agents::primal::{PrimalSettings, ProjectionPath};
+use admm_ta_agents::primal_settings::PrimalVariant;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::rho::default_rho;
 use admm_ta_agents::stopping::NeverStop;
@@ -91,7 +92,15 @@ fn stop_rule_is_safe(stop: StopRule) {
             let costs = CostMatrix::uniform(robots, tasks, 1000 + seed).unwrap();
             let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
             let graph = spec.build(robots, seed).unwrap();
-            let config = SolveOptions::builder().stop(stop).build().unwrap();
+            // The agreement stop waits for near-integral iterates: the paper's variant.
+            let config = SolveOptions::builder()
+                .stop(stop)
+                .primal_variant(match stop {
+                    StopRule::Agreement => PrimalVariant::Paper,
+                    _ => PrimalVariant::Fast,
+                })
+                .build()
+                .unwrap();
             let report = solve(&problem, &graph, &config).unwrap();
             let optimum = oracle::solve(&problem).unwrap();
             assert!(problem.is_feasible(&report.assignment));
@@ -166,6 +175,8 @@ fn certified_stop_fires_soon_after_the_assignment_is_optimal() {
                 &SolveOptions::builder()
                     .stop(stop)
                     .check(true)
+                    // The agreement rule is the paper variant's.
+                    .primal_variant(PrimalVariant::Paper)
                     .build()
                     .unwrap(),
             )

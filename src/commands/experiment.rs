@@ -11,7 +11,7 @@ use admm_ta::runtime::options::run::RunOptions;
 use admm_ta::runtime::transport::Execution;
 use admm_ta_bench::experiment::{Experiment, write};
 use admm_ta_bench::figures::{FigureConfig, convergence, scaling};
-use admm_ta_bench::{compare, surveillance, table1};
+use admm_ta_bench::{compare, rounds_anatomy, surveillance, table1};
 use anyhow::{Context, Result, bail};
 use std::path::Path;
 use std::time::Duration;
@@ -24,6 +24,8 @@ pub fn run(command: Command) -> Result<()> {
             methods,
             transports,
             topology,
+            cost_model,
+            primal_variant,
             adaptive_rho,
             max_iters,
             out,
@@ -42,6 +44,8 @@ pub fn run(command: Command) -> Result<()> {
                 methods,
                 transports,
                 topology: topology.parse()?,
+                cost_model,
+                primal_variant,
                 adaptive_rho,
                 max_iters,
                 agent_program: Some(agent_program()?),
@@ -157,6 +161,41 @@ pub fn run(command: Command) -> Result<()> {
                 print!("{}", report.render());
             }
             report_written(&written);
+            Ok(())
+        }
+        Command::RoundsAnatomy {
+            quick,
+            seeds,
+            out,
+            json,
+        } => {
+            let mut config = if quick {
+                rounds_anatomy::AnatomyConfig::quick()
+            } else {
+                rounds_anatomy::AnatomyConfig::full()
+            };
+            if let Some(seeds) = seeds {
+                if seeds == 0 {
+                    bail!("--seeds must be at least 1");
+                }
+                config.seeds = seeds;
+            }
+            let progress = |done: usize, total: usize| {
+                if !json {
+                    eprint!("\rrounds-anatomy: {done}/{total} runs");
+                    if done == total {
+                        eprintln!();
+                    }
+                }
+            };
+            let anatomy = rounds_anatomy::run(&config, &progress)?;
+            let written = write(&anatomy, &out)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&anatomy)?);
+            } else {
+                report_written(&written);
+                print!("{}", anatomy.render());
+            }
             Ok(())
         }
         Command::Table1 {

@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 pub fn run(args: SolveArgs) -> Result<Outcome> {
     let costs = match (&args.costs, args.robots, args.tasks) {
         (Some(path), _, _) => CostMatrix::read_csv(path)?,
-        (None, Some(robots), Some(tasks)) => CostMatrix::uniform(robots, tasks, args.seed)?,
+        (None, Some(robots), Some(tasks)) => args.cost_model.costs(robots, tasks, args.seed)?,
         _ => {
             return Err(UsageError(
                 "give the costs with --costs FILE.csv, or --robots N --tasks M for random costs"
@@ -54,6 +54,7 @@ pub fn run(args: SolveArgs) -> Result<Outcome> {
         .transport(args.transport)
         .rho(parse_rho(&args.rho)?)
         .adaptive_rho(args.adaptive_rho)
+        .primal_variant(args.primal_variant)
         .gamma_factor(args.gamma_factor)
         .max_iters(args.max_iters)
         .stop(args.stop)

@@ -13,6 +13,7 @@
 //!   Problem 2 instance, see [`crate::general`]) as a clarabel QP.
 
 mod clipped_root;
+mod interior;
 mod qp;
 mod transport_polytope;
 

@@ -28,6 +28,7 @@
 //! `O(mn)` evaluation plus, when the free set changed, an `O(m³/3)` factorisation.
 
 use super::clipped_root::clipped_sum_root;
+use super::interior::InteriorProjection;
 use crate::problem::AssignmentCase;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt;
@@ -186,6 +187,8 @@ pub struct TransportPolytopeProjector {
     gathered: Vec<f64>,
     simplex_scratch: Vec<f64>,
     cholesky_scratch: MemBuffer,
+    /// The closed-form path tried first, if enabled.
+    interior: Option<InteriorProjection>,
 }
 
 impl TransportPolytopeProjector {
@@ -222,7 +225,14 @@ impl TransportPolytopeProjector {
                 Par::Seq,
                 Default::default(),
             )),
+            interior: None,
         }
+    }
+
+    /// Tries the closed-form projection of [`super::interior`] first (iterates that stay
+    /// inside the polytope, as in the fast primal variant); off by default.
+    pub fn set_interior_fast_path(&mut self, on: bool) {
+        self.interior = on.then(|| InteriorProjection::new(self.tasks, self.robots));
     }
 
     /// Forget the warm start: the next call starts from scratch.
@@ -247,6 +257,19 @@ impl TransportPolytopeProjector {
             (self.tasks, self.robots),
             "out has the wrong shape"
         );
+        if let Some(interior) = &mut self.interior
+            && interior.try_project(z, out.rb_mut(), self.case)
+        {
+            self.current.u.copy_from_slice(&interior.u);
+            self.current.v.copy_from_slice(&interior.v);
+            self.warm = true;
+            return ProjectionStats {
+                newton_steps: 0,
+                evaluations: 1,
+                residual: 0.0,
+                converged: true,
+            };
+        }
         if !self.warm {
             self.cold_start(z);
             self.warm = true;

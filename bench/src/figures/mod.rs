@@ -21,6 +21,7 @@
 pub mod convergence;
 pub mod scaling;
 
+use admm_ta_agents::primal_settings::PrimalVariant;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptionsBuilder;
 use admm_ta_runtime::runner::RunError;
@@ -111,6 +112,10 @@ impl FigureConfig {
             .seed(seed)
             .check(true)
             .adaptive_rho(self.adaptive_rho)
+            // The figures reproduce the paper's: its variant of the primal method (the
+            // fast one's relaxed columns stay near the polytope's centre on purpose; see
+            // `experiment rounds-anatomy` and `compare` for it).
+            .primal_variant(PrimalVariant::Paper)
             .max_iters(self.max_iters)
             .agent_program(self.agent_program.clone())
             .fault_injection(false)

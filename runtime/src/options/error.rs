@@ -2,6 +2,7 @@
 
 use crate::transport::{Execution, Transport, ZenohNotBuilt};
 use admm_ta_agents::method::Method;
+use admm_ta_agents::primal_settings::PrimalVariant;
 use admm_ta_agents::stopping::StopRule;
 use std::time::Duration;
 
@@ -52,6 +53,33 @@ pub enum ConfigError {
     UnsupportedStop { stop: StopRule, method: Method },
     #[error("--trace needs --check: it follows the run against the centralized optimum")]
     TraceNeedsCheck,
+    /// An option of the paper's primal variant with the fast one: `--adaptive-rho` (the
+    /// fast iteration runs where ρ drops out; the schedule was measured for the paper's
+    /// readout) or `--stop agreement` (it waits for near-integral iterates, which the fast
+    /// variant's never are: they stay inside the polytope).
+    #[error(
+        "{0} applies to the paper's primal variant, not the fast one: add --primal-variant paper"
+    )]
+    PaperOnly(&'static str),
+}
+
+/// Refuses the paper variant's options with the fast primal variant: `--adaptive-rho` and
+/// `--stop agreement`.
+pub fn paper_only(
+    method: Method,
+    variant: PrimalVariant,
+    adaptive_rho: bool,
+    stop: StopRule,
+) -> Result<(), ConfigError> {
+    if method != Method::Primal || variant != PrimalVariant::Fast {
+        Ok(())
+    } else if adaptive_rho {
+        Err(ConfigError::PaperOnly("--adaptive-rho"))
+    } else if stop == StopRule::Agreement {
+        Err(ConfigError::PaperOnly("--stop agreement"))
+    } else {
+        Ok(())
+    }
 }
 
 /// `seconds` as a timeout: a positive number of seconds below 10⁶ (`option` names the setting

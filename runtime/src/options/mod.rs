@@ -14,6 +14,7 @@ use crate::transport::{Execution, Transport};
 use crate::wait::WaitStrategy;
 use admm_ta_agents::method::Method;
 use admm_ta_agents::primal::ProjectionPath;
+use admm_ta_agents::primal_settings::PrimalVariant;
 pub use admm_ta_agents::stopping::StopRule;
 use admm_ta_agents::ties::Perturbation;
 use serde::Serialize;
@@ -70,6 +71,7 @@ pub struct SolveOptions {
     seed: u64,
     perturbation: Perturbation,
     projection: ProjectionPath,
+    primal_variant: PrimalVariant,
     check: bool,
     trace: bool,
     on_failure: OnFailure,
@@ -91,6 +93,7 @@ impl Default for SolveOptions {
             seed: 0,
             perturbation: Perturbation::Auto,
             projection: ProjectionPath::Fast,
+            primal_variant: PrimalVariant::Fast,
             check: false,
             trace: false,
             on_failure: OnFailure::Abort,
@@ -118,6 +121,7 @@ impl SolveOptions {
             seed: self.seed,
             perturbation: self.perturbation,
             projection: self.projection,
+            primal_variant: self.primal_variant,
             check: self.check,
             trace: self.trace,
             on_failure: self.on_failure,
@@ -182,6 +186,11 @@ impl SolveOptions {
         self.projection
     }
 
+    /// The primal method's variant ([`admm_ta_agents::primal_settings`]; default: fast).
+    pub fn primal_variant(&self) -> PrimalVariant {
+        self.primal_variant
+    }
+
     /// Compare with the centralized optimum and trace convergence.
     pub fn check(&self) -> bool {
         self.check
@@ -213,6 +222,7 @@ pub struct SolveOptionsBuilder {
     seed: u64,
     perturbation: Perturbation,
     projection: ProjectionPath,
+    primal_variant: PrimalVariant,
     check: bool,
     trace: bool,
     on_failure: OnFailure,
@@ -321,6 +331,11 @@ impl SolveOptionsBuilder {
         self
     }
 
+    pub fn primal_variant(mut self, variant: PrimalVariant) -> Self {
+        self.primal_variant = variant;
+        self
+    }
+
     pub fn check(mut self, on: bool) -> Self {
         self.check = on;
         self
@@ -342,7 +357,7 @@ impl SolveOptionsBuilder {
     /// the lockstep simulation, γ out of range, a global barrier the transport has not, a
     /// transport this build lacks, a central stop rule off the lockstep simulation, a stop
     /// rule the method does not honour (the method registry says which), a trace without a
-    /// check.
+    /// check, `--adaptive-rho` or `--stop agreement` with the fast primal variant.
     pub fn build(self) -> Result<SolveOptions, ConfigError> {
         if let Some(rho) = self.rho.filter(|r| !(*r > 0.0 && r.is_finite())) {
             return Err(ConfigError::Rho(rho));
@@ -379,6 +394,12 @@ impl SolveOptionsBuilder {
         if self.trace && !self.check {
             return Err(ConfigError::TraceNeedsCheck);
         }
+        error::paper_only(
+            self.method,
+            self.primal_variant,
+            self.adaptive_rho,
+            self.stop,
+        )?;
         Ok(SolveOptions {
             run,
             method: self.method,
@@ -391,6 +412,7 @@ impl SolveOptionsBuilder {
             seed: self.seed,
             perturbation: self.perturbation,
             projection: self.projection,
+            primal_variant: self.primal_variant,
             check: self.check,
             trace: self.trace,
             on_failure: self.on_failure,
@@ -457,6 +479,10 @@ mod tests {
             }
         );
         assert_eq!(refused(b().trace(true)), ConfigError::TraceNeedsCheck);
+        assert_eq!(
+            refused(b().adaptive_rho(true)),
+            ConfigError::PaperOnly("--adaptive-rho")
+        );
         assert_eq!(
             b().transport(Transport::Zenoh).build().is_ok(),
             cfg!(feature = "zenoh")

@@ -87,7 +87,8 @@ pub(crate) fn member_scenario(
     // The agents solve the normalised problem, as a solve's do.
     let plan = prepare(problem.internal(), &graph, &options, method).map_err(|e| e.to_string())?;
     let stop = LocalCertifiedStop::new(plan.diameter, problem.robots(), plan.tolerance)
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| e.to_string())?
+        .with_cadence(plan.agents.settings.stop_cadence());
     let mut scenario = Scenario::new(
         Workload::Solve {
             plan: &plan,

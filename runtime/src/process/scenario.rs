@@ -16,6 +16,7 @@ use admm_ta_agents::local_stop::LocalCertifiedStop;
 use admm_ta_agents::method::{AgentMethod, AgentSettings};
 use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::primal::ProjectionPath;
+use admm_ta_agents::primal_settings::PrimalVariant;
 use admm_ta_agents::probe::{ProbeAgent, ProbeStep};
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix, TaskAssignmentProblem};
 use admm_ta_topologies::Graph;
@@ -68,6 +69,9 @@ pub struct Scenario {
     pub epsilon_bits: Option<u64>,
     pub seed: u64,
     pub qp_projection: bool,
+    /// The primal method's variant.
+    #[serde(default)]
+    pub primal_variant: PrimalVariant,
     pub stop: ScenarioStop,
     pub max_rounds: u64,
     pub diameter: usize,
@@ -143,6 +147,7 @@ impl Scenario {
             epsilon_bits: None,
             seed: 0,
             qp_projection: false,
+            primal_variant: PrimalVariant::Paper,
             stop: ScenarioStop::MaxIters,
             max_rounds: 0,
             diameter: graph.diameter().unwrap_or(0),
@@ -180,6 +185,7 @@ impl Scenario {
                     epsilon_bits: plan.agents.epsilon.map(f64::to_bits),
                     seed: plan.agents.seed,
                     qp_projection: settings.projection == ProjectionPath::Qp,
+                    primal_variant: settings.primal_variant,
                     stop: match stop {
                         AgentStop::MaxIters => ScenarioStop::MaxIters,
                         AgentStop::Local(_) => ScenarioStop::Local {
@@ -262,6 +268,7 @@ impl Scenario {
                 ProjectionPath::Fast
             },
             gamma_factor: f64::from_bits(self.gamma_factor_bits),
+            primal_variant: self.primal_variant,
             ..AgentSettings::new(
                 self.method,
                 f64::from_bits(self.rho_bits),
@@ -277,7 +284,8 @@ impl Scenario {
             ScenarioStop::MaxIters => AgentStop::MaxIters,
             ScenarioStop::Local { tolerance_bits } => AgentStop::Local(
                 LocalCertifiedStop::new(self.diameter, self.robots, f64::from_bits(tolerance_bits))
-                    .map_err(|e| ScenarioError::Inconsistent(e.to_string()))?,
+                    .map_err(|e| ScenarioError::Inconsistent(e.to_string()))?
+                    .with_cadence(self.settings().stop_cadence()),
             ),
         };
         Ok(AgentPlan {

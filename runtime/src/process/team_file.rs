@@ -36,6 +36,7 @@ use crate::process::namespace::RunNamespace;
 use crate::transport::Transport;
 use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
 use admm_ta_agents::method::Method;
+use admm_ta_agents::primal_settings::PrimalVariant;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_topologies::{Graph, TopologySpec, file as topology_file};
 use serde::{Deserialize, Serialize};
@@ -67,6 +68,9 @@ pub struct TeamFile {
     pub max_iters: usize,
     #[serde(default)]
     pub adaptive_rho: bool,
+    /// The primal method's variant (`fast` or `paper`; default `fast`).
+    #[serde(default)]
+    pub primal_variant: PrimalVariant,
     /// How the team is deployed and what carries its messages.
     #[serde(default)]
     pub transport: Deployment,
@@ -269,6 +273,7 @@ impl Team {
             .method(f.method)
             .transport(f.transport.agent_transport())
             .adaptive_rho(f.adaptive_rho)
+            .primal_variant(f.primal_variant)
             .max_iters(f.max_iters)
             .stop(StopRule::Local)
             .seed(f.seed)

@@ -5,7 +5,7 @@
 use crate::options::{SolveOptions, StopRule};
 use crate::runner::LockstepWatch;
 use crate::sim::{LockstepSim, RoundView};
-use crate::solve::trace::{Affine, Tracer, relaxed_objective, within_0_1pct};
+use crate::solve::trace::{Affine, Tracer, decides_by_readout, relaxed_objective, within_0_1pct};
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::oracle::OptimalAssignment;
@@ -28,11 +28,14 @@ enum Central<'p> {
         streak: AgreementStreak,
         tolerance: f64,
     },
-    /// The paper's criterion, with the centralized optimum (experiments only).
+    /// The paper's criterion, with the centralized optimum (experiments only); on the
+    /// robots' decisions when they decide by readout (the fast primal variant, whose
+    /// relaxed columns stay near the polytope's centre).
     Oracle {
         problem: &'p TaskAssignmentProblem,
         affine: Affine,
         optimal_cost: f64,
+        decisions: Option<Vec<usize>>,
     },
 }
 
@@ -66,6 +69,7 @@ impl<'p> SolveWatch<'p> {
                     problem,
                     affine,
                     optimal_cost: affine.apply(optimum.cost),
+                    decisions: decides_by_readout(options).then(|| vec![0; problem.robots()]),
                 },
                 None => Central::None,
             },
@@ -101,10 +105,25 @@ impl LockstepWatch for SolveWatch<'_> {
                 problem,
                 affine,
                 optimal_cost,
+                decisions: None,
             } => within_0_1pct(
                 affine.apply(relaxed_objective(problem, &sim.view())),
                 *optimal_cost,
             ),
+            Central::Oracle {
+                problem,
+                affine,
+                optimal_cost,
+                decisions: Some(decisions),
+            } => {
+                for (d, agent) in decisions.iter_mut().zip(sim.agents()) {
+                    *d = agent.rounded_task();
+                }
+                problem.is_feasible(decisions)
+                    && problem
+                        .cost_of(decisions)
+                        .is_ok_and(|c| within_0_1pct(affine.apply(c), *optimal_cost))
+            }
         }
     }
 }

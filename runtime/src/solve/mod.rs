@@ -20,7 +20,7 @@ use crate::runner::{RunError, TeamRun, run_team_watched};
 use crate::solve::error::{CannotContinue, SolveError};
 use crate::solve::lockstep::SolveWatch;
 use crate::solve::report::{Degraded, SolveReport};
-use crate::solve::trace::{Affine, Tracer};
+use crate::solve::trace::{Affine, Tracer, decides_by_readout};
 use crate::transport::Execution;
 use crate::usage::ThreadUsage;
 use crate::workload::Workload;
@@ -247,6 +247,7 @@ fn solve_once(
         .map(|o| Tracer::new(problem, o, affine));
     if let Some(t) = tracer.as_mut() {
         t.record = options.trace();
+        t.readout_decisions = decides_by_readout(options);
     }
     let run = match &plan {
         None => {
@@ -261,9 +262,10 @@ fn solve_once(
             // The central rules (certified, oracle, agreement) are the watch's; the agents
             // run to the round limit under them.
             let stop = match options.stop() {
-                StopRule::Local => {
-                    AgentStop::Local(LocalCertifiedStop::new(plan.diameter, n, plan.tolerance)?)
-                }
+                StopRule::Local => AgentStop::Local(
+                    LocalCertifiedStop::new(plan.diameter, n, plan.tolerance)?
+                        .with_cadence(plan.agents.settings.stop_cadence()),
+                ),
                 _ => AgentStop::MaxIters,
             };
             let mut watch = SolveWatch::new(

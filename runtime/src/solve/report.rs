@@ -32,9 +32,14 @@ pub struct OracleCheck {
     pub rounds_within_0_1pct: Option<usize>,
     /// Round from which the relaxed objective stays within 0.1% until the end.
     pub rounds_settled_0_1pct: Option<usize>,
-    /// Round from which every robot's own argmax is an optimal assignment until the end
-    /// (shift-invariant).
+    /// Round from which every robot's decision is an optimal assignment until the end
+    /// (shift-invariant). A decision is the robot's own argmax, or in the fast primal
+    /// variant its task in its readout.
     pub rounds_to_optimal_assignment: Option<usize>,
+    /// First round whose decisions form a feasible assignment within 0.1% of the optimum:
+    /// the paper's criterion on what the robots would do rather than on their relaxed
+    /// columns (the fast primal variant keeps those near the polytope's centre on purpose).
+    pub rounds_decisions_within_0_1pct: Option<usize>,
     /// Every round's objectives, when [`crate::options::SolveOptions::trace`] asked for them (sim only).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub trace: Vec<TracePoint>,

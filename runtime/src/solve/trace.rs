@@ -1,11 +1,20 @@
 //! The oracle tracer: a checked solve follows the run against the centralized optimum
 //! (the paper's 0.1 % criterion, the round from which the assignment is optimal).
 
+use crate::options::SolveOptions;
 use crate::sim::RoundView;
 use crate::solve::report::{OracleCheck, TracePoint};
+use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle::OptimalAssignment;
+use admm_ta_agents::primal_settings::PrimalVariant;
 use admm_ta_agents::problem::TaskAssignmentProblem;
 use admm_ta_agents::rounding;
+
+/// The robots' decisions are their readouts of `G_i` (the fast primal variant), not the
+/// argmax of their own relaxed columns.
+pub(crate) fn decides_by_readout(options: &SolveOptions) -> bool {
+    options.method() == Method::Primal && options.primal_variant() == PrimalVariant::Fast
+}
 
 /// `Σ_i α_iᵀ x_i` over the robots' own relaxed columns.
 pub(crate) fn relaxed_objective(problem: &TaskAssignmentProblem, view: &RoundView<'_>) -> f64 {
@@ -65,6 +74,10 @@ pub(crate) struct Tracer<'p> {
     settled_within: Option<usize>,
     optimal_since: Option<usize>,
     decisions: Vec<usize>,
+    decisions_within: Option<usize>,
+    /// Decisions are the agents' rounded tasks (the fast primal variant's readout) rather
+    /// than the argmax of their own columns.
+    pub(crate) readout_decisions: bool,
     pub(crate) record: bool,
     trace: Vec<TracePoint>,
 }
@@ -83,6 +96,8 @@ impl<'p> Tracer<'p> {
             settled_within: None,
             optimal_since: None,
             decisions: vec![0; problem.robots()],
+            decisions_within: None,
+            readout_decisions: false,
             record: false,
             trace: Vec::new(),
         }
@@ -94,7 +109,11 @@ impl<'p> Tracer<'p> {
 
     pub(crate) fn observe(&mut self, view: &RoundView<'_>) {
         for i in 0..self.problem.robots() {
-            self.decisions[i] = rounding::argmax(view.columns.own_column(i));
+            self.decisions[i] = if self.readout_decisions {
+                view.columns.rounded_task(i)
+            } else {
+                rounding::argmax(view.columns.own_column(i))
+            };
         }
         let relaxed_cost = self.affine.apply(relaxed_objective(self.problem, view));
         if within_0_1pct(relaxed_cost, self.optimal_cost) {
@@ -116,6 +135,9 @@ impl<'p> Tracer<'p> {
                 assignment_cost,
             });
         }
+        if assignment_cost.is_some_and(|c| within_0_1pct(c, self.optimal_cost)) {
+            self.decisions_within.get_or_insert(view.round);
+        }
         let optimal = self.relative_gap(assignment_cost.unwrap_or(f64::INFINITY)) <= 1e-9;
         if optimal {
             self.optimal_since.get_or_insert(view.round);
@@ -134,6 +156,7 @@ impl<'p> Tracer<'p> {
             rounds_within_0_1pct: self.first_within,
             rounds_settled_0_1pct: self.settled_within,
             rounds_to_optimal_assignment: self.optimal_since,
+            rounds_decisions_within_0_1pct: self.decisions_within,
             trace: self.trace,
         }
     }

@@ -53,6 +53,7 @@ pub struct BadRho(pub f64);
 
 /// What every transport's agents are built from.
 pub struct Plan<'a> {
+    // The stop protocol's cadence is `agents.settings.stop_cadence()`.
     pub rho: f64,
     /// Total cost tolerance of the optimality certificate.
     pub tolerance: f64,
@@ -71,10 +72,11 @@ pub fn prepare<'a>(
 ) -> Result<Plan<'a>, BadRho> {
     let n = problem.robots();
     // Methods without a penalty report ρ = 0 and ignore --rho and --adaptive-rho.
+    let variant = options.primal_variant();
     let rho = match method.rho_rule() {
         Some(rule) => options
             .rho()
-            .unwrap_or_else(|| rule.rho(problem.costs(), graph.mean_degree())),
+            .unwrap_or_else(|| rule.rho_for(problem.costs(), graph.mean_degree(), variant)),
         None => 0.0,
     };
     if method.rho_rule().is_some() && !(rho > 0.0 && rho.is_finite()) {
@@ -90,10 +92,10 @@ pub fn prepare<'a>(
     let settings = AgentSettings {
         projection: options.projection(),
         gamma_factor,
+        primal_variant: variant,
         ..AgentSettings::new(method, rho, diameter, tolerance)
     };
-    let schedule = options
-        .adaptive_rho()
+    let schedule = (options.adaptive_rho() && method.has_schedule(variant))
         .then(|| method.schedule(rho))
         .flatten();
     let agents = AgentFactory {

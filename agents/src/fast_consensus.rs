@@ -1,0 +1,153 @@
+//! The fast primal variant's consensus step: over-relaxed, anchored, with consensus
+//! multipliers that sum to zero *exactly*.
+//!
+//! # Exact antisymmetry
+//! The certificate needs `Σ_i Q_i = 0`. In floating point every robot rounds its own
+//! `Q_i += ρ Σ_j (X_i − X_j)` differently, and with the fast variant's ρ (about 10⁴ times
+//! the paper's) that rounding error grows with the rounds. Here the payloads are snapped to
+//! the grid `2^-52` after the projection (at most the last bit of an entry in `[0.5, 1]`
+//! changes), so every entry is an integer number of grid steps (at most `2^52`). A robot
+//! adds its neighbours' entries in those integer units (`i64`: exact below 2048
+//! neighbours) and accumulates `d_i X_i − Σ_j X_j` in `i128` units `K_i`. Every edge
+//! adds `k` to one robot and `−k` to the other in the same round, so `Σ_i K_i = 0`
+//! exactly, whatever the number of rounds (`i128` cannot overflow before `2^64` rounds).
+//! `Q_i = (αρ / 2^52) · K_i` is rounded once per entry: the team's `|Σ_i Q_i|` stays
+//! below `2u Σ_i |Q_i|` (`u = 2^-53`) per entry, at round 10 as at round 10⁶, instead of
+//! growing with the rounds. The grid is as fine as `f64` on `[0.5, 1]`: a coarser one
+//! (`2^-38`, which would keep the sums exact in `f64`) jitters `Q` by more than the
+//! tie-break matrix and duplicate robots then never agree.
+//!
+//! # The step
+//! With `s_i = Σ_j X_j` (exact), over-relaxation `α` and anchor `c`
+//! ([`crate::primal_settings::FastTuning`]):
+//!
+//! ```text
+//! K_i += 2^52 (d_i X_i − s_i),        Q_i = αρ 2^-52 K_i
+//! Z̄_i = α (d_i X_i + s_i)/2 + (1 − α) Z̄_i          (Σ_j of the edge variables z_ij)
+//! input = (1 − c) Z̄_i / d_i + c/m − G_i / (2ρ d_i)   (G_i = Q_i + α_i e_iᵀ)
+//! ```
+//!
+//! With `α = 1` and `c = 0` this is Algorithm 1's step (up to the grid).
+
+use crate::primal_settings::{FastSettings, FastTuning};
+use crate::problem::AssignmentCase;
+use crate::readout::GReadout;
+
+/// `2^52`: the grid of the payloads and the unit of the integer multipliers.
+const GRID: f64 = (1u64 << 52) as f64;
+/// Neighbour counts whose unit sums stay exact in `i64` (`2^11 · 2^52 = 2^63`).
+const MAX_EXACT_DEGREE: usize = 2047;
+
+/// The fast variant's state besides `X_i` and `Q_i`.
+#[derive(Debug, Clone)]
+pub struct FastConsensus {
+    tuning: FastTuning,
+    /// `Z̄_i`, the sum of the edge consensus variables (column-major tasks × robots).
+    zbar: Vec<f64>,
+    /// `K_i`: `Q_i` in units of `αρ 2^-52`.
+    units: Vec<i128>,
+    /// `Σ_j X_j` of this round in grid units.
+    neighbour_units: Vec<i64>,
+    exact: bool,
+    /// The readout (the team's assignment as this robot reads it).
+    pub readout: GReadout,
+}
+
+impl FastConsensus {
+    /// The state of a robot with `degree` neighbours.
+    pub fn new(
+        tasks: usize,
+        robots: usize,
+        case: AssignmentCase,
+        degree: usize,
+        settings: &FastSettings,
+    ) -> Self {
+        Self {
+            tuning: settings.tuning,
+            zbar: vec![0.0; tasks * robots],
+            units: vec![0; tasks * robots],
+            neighbour_units: vec![0; tasks * robots],
+            exact: degree <= MAX_EXACT_DEGREE,
+            readout: GReadout::new(tasks, robots, case, settings.tie_break),
+        }
+    }
+
+    /// Forgets the multipliers and the edge variables (a cold start).
+    pub fn reset(&mut self) {
+        self.zbar.fill(0.0);
+        self.units.fill(0);
+        self.readout.invalidate();
+    }
+
+    /// `Σ_i Q_i = 0` holds exactly (the robot's neighbour sums are exact).
+    pub fn exact(&self) -> bool {
+        self.exact
+    }
+
+    /// `K_i`, the multipliers in integer units (column-major tasks × robots).
+    pub fn units(&self) -> &[i128] {
+        &self.units
+    }
+
+    /// Starts a round's neighbour sum.
+    pub fn clear_neighbours(&mut self) {
+        self.neighbour_units.fill(0);
+    }
+
+    /// Adds a neighbour's payload (grid values) to the round's sum.
+    pub fn add_neighbour(&mut self, theirs: &[f64]) {
+        for (sum, &v) in self.neighbour_units.iter_mut().zip(theirs) {
+            *sum = sum.wrapping_add((v * GRID) as i64);
+        }
+    }
+
+    /// One consensus update: `z` holds `s_i = Σ_j X_j` on entry (in `f64`; the exact sum
+    /// is the one of [`FastConsensus::add_neighbour`]) and the projection input without the
+    /// own costs on exit; `q` receives `Q_i`. `neighbours` is the number of payloads
+    /// gathered (none: the robot is alone, and `Q_i` stays 0).
+    #[allow(clippy::too_many_arguments)]
+    pub fn update(
+        &mut self,
+        z: &mut [f64],
+        q: &mut [f64],
+        x: &[f64],
+        neighbours: usize,
+        rho: f64,
+        tasks: usize,
+    ) {
+        let degree = neighbours.max(1) as f64;
+        let FastTuning {
+            relaxation: alpha,
+            anchor: c,
+        } = self.tuning;
+        let scale = alpha * rho / GRID;
+        let half_scaled = 0.5 / (rho * degree);
+        let (keep, centre) = ((1.0 - c) / degree, c / tasks as f64);
+        let own_weight = neighbours as i64;
+        for (((((s, q), k), zb), &mine), &theirs) in z
+            .iter_mut()
+            .zip(q.iter_mut())
+            .zip(self.units.iter_mut())
+            .zip(self.zbar.iter_mut())
+            .zip(x)
+            .zip(&self.neighbour_units)
+        {
+            let neighbour_sum = *s;
+            // Exact: grid values in integer units.
+            let difference = own_weight
+                .wrapping_mul((mine * GRID) as i64)
+                .wrapping_sub(theirs);
+            *k += i128::from(difference);
+            *q = scale * *k as f64;
+            *zb = alpha * 0.5 * (degree * mine + neighbour_sum) + (1.0 - alpha) * *zb;
+            *s = keep * *zb + centre - *q * half_scaled;
+        }
+    }
+
+    /// Snaps a new payload to the grid `2^-52` (entries in `[0, 1]` stay in it).
+    pub fn snap(payload: &mut [f64]) {
+        for v in payload {
+            *v = (*v * GRID).round() / GRID;
+        }
+    }
+}
