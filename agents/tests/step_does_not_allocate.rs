@@ -103,10 +103,12 @@ fn every_method_steps_without_allocating_after_warm_up() {
             0,
             "{method:?}"
         );
-        // The normalised problems of forbidden pairs and of idle robots.
+        // The normalised problems of forbidden pairs, of idle robots and of unserved tasks
+        // (transposed: the tasks are the agents).
         for (text, choice) in [
             (forbidden_text(), CaseChoice::Auto),
             (idle_text(), CaseChoice::Forced(AssignmentCase::Idle)),
+            (wide_text(), CaseChoice::Forced(AssignmentCase::Idle)),
         ] {
             let problem =
                 TaskAssignmentProblem::new(CostMatrix::from_csv_str(&text).unwrap(), choice)
@@ -146,6 +148,25 @@ fn idle_text() -> String {
         .map(|i| {
             (0..5)
                 .map(|j| format!("{}", ((i * 5 + j * 7) % 13) as f64 + 0.001 * i as f64))
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"
+        })
+        .collect()
+}
+
+/// 5 robots, 12 tasks (one forbidden pair), scipy's idle meaning: 7 tasks unserved.
+fn wide_text() -> String {
+    (0..5)
+        .map(|i| {
+            (0..12)
+                .map(|j| {
+                    if i == 1 && j == 4 {
+                        "inf".to_string()
+                    } else {
+                        format!("{}", ((i * 7 + j * 5) % 13) as f64 + 0.001 * j as f64)
+                    }
+                })
                 .collect::<Vec<_>>()
                 .join(",")
                 + "\n"
