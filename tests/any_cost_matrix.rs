@@ -95,16 +95,18 @@ fn instances() -> impl Strategy<Value = Instance> {
             maximize: false,
             kind: "single row",
         });
-    let wide_idle =
-        (1usize..5, 1usize..4, prop::collection::vec(0.0..1.0f64, 40)).prop_map(|(n, extra, v)| {
-            Instance {
-                robots: n,
-                tasks: n + extra,
-                values: v[..n * (n + extra)].to_vec(),
-                case: CaseChoice::Auto,
-                maximize: false,
-                kind: "n < m",
-            }
+    let wide_idle = (
+        1usize..5,
+        1usize..4,
+        prop::collection::vec(prop_oneof![4 => 0.0..1.0f64, 1 => Just(f64::INFINITY)], 40),
+    )
+        .prop_map(|(n, extra, v)| Instance {
+            robots: n,
+            tasks: n + extra,
+            values: v[..n * (n + extra)].to_vec(),
+            case: CaseChoice::Auto,
+            maximize: false,
+            kind: "n < m",
         });
     let idle = (
         1usize..5,
@@ -334,6 +336,19 @@ fn generators_by_methods_table() {
             Box::new(|u| u()),
         ),
         ("n < m 6×10", 6, 10, CaseChoice::Auto, Box::new(|u| u())),
+        (
+            "n < m, inf 30%, integers 6×10",
+            6,
+            10,
+            CaseChoice::Auto,
+            Box::new(|u| {
+                if u() < 0.3 {
+                    f64::INFINITY
+                } else {
+                    (u() * 5.0).floor()
+                }
+            }),
+        ),
     ];
     let mut lines = vec![format!(
         "| generator | {} |",

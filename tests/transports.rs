@@ -4,7 +4,7 @@
 //! its own namespace, and must leave nothing behind.
 
 use admm_ta_agents::method::Method;
-use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::error::ConfigError;
 use admm_ta_runtime::options::run::RunOptions;
 use admm_ta_runtime::options::{SolveOptions, SolveOptionsBuilder, StopRule};
@@ -137,7 +137,8 @@ fn all_transports_with(
         assert!(usage.voluntary_switches + usage.involuntary_switches > 0);
         assert_eq!(
             latency.round.count,
-            (problem.robots() * r.iterations) as u64
+            // One per agent and round (the tasks are the agents of n < m idle problems).
+            (problem.internal().robots() * r.iterations) as u64
         );
         assert!(latency.round.p50 > 0.0 && latency.round.p99 >= latency.round.p50);
     }
@@ -198,6 +199,20 @@ fn baselines_agree_across_transports() {
             StopRule::Local,
             5000,
         );
+    }
+}
+
+#[test]
+fn transports_agree_on_more_tasks_than_robots() {
+    // `--case idle` with n < m: the transposed problem, the tasks as agents on the lifted
+    // graph.
+    let wide = TaskAssignmentProblem::new(
+        CostMatrix::uniform(4, 7, 5).unwrap(),
+        CaseChoice::Forced(AssignmentCase::Idle),
+    )
+    .unwrap();
+    for method in [Method::Primal, Method::Market] {
+        all_transports_with(method, &wide, &graph("ring", 4, 0), StopRule::Local, 3000);
     }
 }
 

@@ -7,8 +7,9 @@
 //!   rules (ρ, γ, the certificate tolerance, the tie-breaking perturbation) then see a spread
 //!   of order 1 whatever the user's units: 1-ulp-apart costs become a lattice the
 //!   perturbation separates, costs in metres or in `[0, 1)` give the same run.
-//! * **Forbidden pairs** hold the penalty `2n + 4` and are flagged in the mask: any assignment
-//!   using one costs more than every allowed assignment (each of the at most `n` pairs costs
+//! * **Forbidden pairs** hold the penalty `2·max(n, m) + 4` and are flagged in the mask: any
+//!   assignment using one costs more than every allowed assignment (each of the at most
+//!   `max(n, m)` agents' pairs costs
 //!   at most 2, plus a perturbation below 1 in total), so the LP optimum, and every method
 //!   that reaches it, never puts weight on them; rounding, repair and the oracle treat them
 //!   as `+∞`. The scale rules read the allowed entries only.
@@ -17,6 +18,13 @@
 //!   robot on a real task costs at least 1 more than idling, so the optimum puts exactly one
 //!   robot on every real task and the rest on the idle task — scipy's meaning, solved by
 //!   every method, with a single idle column (no ties between identical idle columns).
+//! * **Unserved tasks** (`idle` with `n < m`): the problem is *transposed*, then reduced as
+//!   above: the `m` tasks are the agents (each hosted by a robot, see the runtime) and the
+//!   `n` robots plus the idle column are their "tasks", Case 2 on `m × (n + 1)`. Every
+//!   robot's column gets exactly one task at the optimum and the other `m − n` tasks idle
+//!   (unserved): scipy's meaning, with the single idle column's non-degenerate optimum that
+//!   every method certifies (phantom robots, one per unserved task, would be `m − n`
+//!   identical zero-cost rows whose ties no certificate resolves on generic costs).
 //!
 //! [`resolution`] decides whether floating-point methods can resolve the normalised costs.
 
@@ -60,10 +68,17 @@ pub fn signed(maximize: bool, value: f64) -> f64 {
 /// whether it has the idle task.
 pub fn internal_shape(n: usize, m: usize, case: AssignmentCase) -> (usize, AssignmentCase, bool) {
     match case {
+        AssignmentCase::Idle if n < m => (n + 1, AssignmentCase::Two, true),
         AssignmentCase::Idle if n > m => (m + 1, AssignmentCase::Two, true),
-        AssignmentCase::Idle if n == m => (m, AssignmentCase::One, false),
+        AssignmentCase::Idle => (m, AssignmentCase::One, false),
         case => (m, case, false),
     }
+}
+
+/// Whether the agents solve the transposed problem (`idle` with fewer robots than tasks:
+/// the tasks are the agents).
+pub fn transposed(n: usize, m: usize, case: AssignmentCase) -> bool {
+    case == AssignmentCase::Idle && n < m
 }
 
 /// The normalised problem's parts, and how its costs relate to the user's.
@@ -105,12 +120,20 @@ pub fn normalise(
     };
     let (columns, internal_case, idle_task) = internal_shape(n, m, case);
     let raise = if idle_task { 1.0 } else { 0.0 };
-    let penalty = 2.0 * n as f64 + 4.0;
-    let mut values = vec![0.0; n * columns];
-    let mut allowed = vec![true; n * columns];
+    let transposed = transposed(n, m, case);
+    // The agents: robots, or the tasks when transposed.
+    let rows = if transposed { m } else { n };
+    let penalty = 2.0 * n.max(m) as f64 + 4.0;
+    // The idle column (the last, when there is one) stays at cost 0.
+    let mut values = vec![0.0; rows * columns];
+    let mut allowed = vec![true; rows * columns];
     for i in 0..n {
         for t in 0..m {
-            let k = i * columns + t;
+            let k = if transposed {
+                t * columns + i
+            } else {
+                i * columns + t
+            };
             if costs.is_allowed(i, t) {
                 values[k] = raise + normalise(signed(maximize, costs.get(i, t)));
             } else {
@@ -119,7 +142,7 @@ pub fn normalise(
             }
         }
     }
-    let matrix = CostMatrix::with_mask(n, columns, values, Some(allowed))?;
+    let matrix = CostMatrix::with_mask(rows, columns, values, Some(allowed))?;
     let unresolved = resolution(&matrix, lo, hi, raise);
     Ok(Parts {
         matrix,

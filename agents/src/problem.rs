@@ -210,9 +210,20 @@ impl TaskAssignmentProblem {
     }
 
     /// An assignment of [`TaskAssignmentProblem::internal`] as this problem's: extra
-    /// (idle) tasks become [`IDLE`].
+    /// (idle) tasks become [`IDLE`]. The transposed problem's (`idle` with `n < m`, one entry
+    /// per task: its robot, or the idle column) is turned back: each robot takes the first
+    /// task that chose it (an optimum has exactly one), the other tasks are unserved.
     pub fn from_internal(&self, assignment: &[usize]) -> Vec<usize> {
-        let m = self.tasks();
+        let (n, m) = (self.robots(), self.tasks());
+        if normalise::transposed(n, m, self.case) && assignment.len() == m {
+            let mut robots = vec![IDLE; n];
+            for (task, &robot) in assignment.iter().enumerate() {
+                if robot < n && robots[robot] == IDLE {
+                    robots[robot] = task;
+                }
+            }
+            return robots;
+        }
         assignment
             .iter()
             .map(|&t| if t >= m { IDLE } else { t })
@@ -313,6 +324,25 @@ fn resolve_case(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fewer_robots_than_tasks_is_solved_transposed() {
+        // 2 robots, 3 tasks, robot 1 may not do task 0.
+        let costs = CostMatrix::from_csv_str("1,5,3\ninf,2,4\n").unwrap();
+        let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
+        let internal = problem.internal();
+        // The tasks are the agents; the robots and the idle column their "tasks".
+        assert_eq!((internal.robots(), internal.tasks()), (3, 3));
+        assert_eq!(internal.case(), AssignmentCase::Two);
+        assert!(!internal.costs().is_allowed(0, 1) && internal.costs().is_allowed(0, 0));
+        assert_eq!(internal.costs().get(1, 2), 0.0);
+        // Task 0 → robot 0, task 1 → robot 1, task 2 idle.
+        assert_eq!(problem.from_internal(&[0, 1, 2]), vec![0, 1]);
+        // Two tasks on robot 0 (a repaired, non-optimal run): robot 1 left without a task
+        // is infeasible; the first task that chose a robot is its task.
+        assert_eq!(problem.from_internal(&[2, 0, 0]), vec![1, IDLE]);
+        assert_eq!(problem.from_internal(&[1, 0, 0]), vec![1, 0]);
+    }
 
     #[test]
     fn csv_errors_name_the_problem() {

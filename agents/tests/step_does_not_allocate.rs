@@ -118,10 +118,12 @@ fn every_method_steps_without_allocating_after_warm_up() {
             0,
             "{method:?}"
         );
-        // The normalised problems of forbidden pairs and of idle robots.
+        // The normalised problems of forbidden pairs, of idle robots and of unserved tasks
+        // (transposed: the tasks are the agents).
         for (text, choice) in [
             (forbidden_text(), CaseChoice::Auto),
             (idle_text(), CaseChoice::Forced(AssignmentCase::Idle)),
+            (wide_text(), CaseChoice::Forced(AssignmentCase::Idle)),
         ] {
             let problem =
                 TaskAssignmentProblem::new(CostMatrix::from_csv_str(&text).unwrap(), choice)
@@ -188,4 +190,23 @@ fn the_fast_primal_steps_and_reads_its_assignment_without_allocating() {
             "{robots}×{tasks}"
         );
     }
+}
+
+/// 5 robots, 12 tasks (one forbidden pair), scipy's idle meaning: 7 tasks unserved.
+fn wide_text() -> String {
+    (0..5)
+        .map(|i| {
+            (0..12)
+                .map(|j| {
+                    if i == 1 && j == 4 {
+                        "inf".to_string()
+                    } else {
+                        format!("{}", ((i * 7 + j * 5) % 13) as f64 + 0.001 * j as f64)
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"
+        })
+        .collect()
 }

@@ -52,7 +52,12 @@ pub fn solve(
             first @ SolveError::Run(RunError::Launch(LaunchError::AgentFailed {
                 index, round, ..
             })),
-        ) if options.on_failure() == OnFailure::Continue => (first, index, round),
+        ) if options.on_failure() == OnFailure::Continue
+            // The transposed problem's agents are tasks: no robot to drop.
+            && problem.internal().robots() == problem.robots() =>
+        {
+            (first, index, round)
+        }
         other => return other,
     };
     match solve_without(problem, graph, options, failed) {
@@ -196,13 +201,14 @@ fn solve_user(
         };
         solve_once(
             problem.internal(),
-            graph,
+            &user::internal_graph(problem, graph)?,
             options,
             internal_optimum,
             user::affine(problem),
         )?
     };
     let mut report = user::to_user(problem, report, exact.as_ref())?;
+    report.topology = graph.name().to_string();
     if report.method == Method::Hungarian {
         // The centralized solver's work is the exact optimum.
         report.wall_time_ms += oracle_ms;

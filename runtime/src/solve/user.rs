@@ -7,24 +7,16 @@ use crate::solve::error::SolveError;
 use crate::solve::report::SolveReport;
 use crate::solve::trace::Affine;
 use admm_ta_agents::method::Method;
+use admm_ta_agents::normalise;
 use admm_ta_agents::oracle::OptimalAssignment;
-use admm_ta_agents::problem::{AssignmentCase, IDLE, TaskAssignmentProblem};
-
-/// The methods that take `--case idle` with fewer robots than tasks.
-const IDLE_WIDE_METHODS: [Method; 2] = [Method::Hungarian, Method::DistHungarian];
+use admm_ta_agents::problem::{IDLE, TaskAssignmentProblem};
+use admm_ta_topologies::Graph;
 
 /// Refuses, with one line, what `method` cannot solve faithfully.
 pub(crate) fn check_supported(
     problem: &TaskAssignmentProblem,
     method: Method,
 ) -> Result<(), SolveError> {
-    let (n, m) = (problem.robots(), problem.tasks());
-    if problem.case() == AssignmentCase::Idle && n < m && !IDLE_WIDE_METHODS.contains(&method) {
-        return Err(SolveError::Unsupported(format!(
-            "--case idle with fewer robots than tasks ({n} robots, {m} tasks) runs with --method hungarian or dist-hungarian, not {}",
-            method.name()
-        )));
-    }
     if !matches!(method, Method::Hungarian | Method::DistHungarian)
         && let Some(why) = problem.normalised().and_then(|n| n.unresolved.as_ref())
     {
@@ -50,13 +42,51 @@ pub(crate) fn affine(problem: &TaskAssignmentProblem) -> Affine {
     }
 }
 
-/// A user assignment on the internal shape: idle robots take the idle task.
+/// A user assignment on the internal shape: idle robots take the idle task; transposed
+/// (`idle` with `n < m`), each task takes its robot or, unserved, the idle column `n`.
 pub(crate) fn to_internal(problem: &TaskAssignmentProblem, assignment: &[usize]) -> Vec<usize> {
-    let idle = problem.tasks();
+    let (n, m) = (problem.robots(), problem.tasks());
+    if normalise::transposed(n, m, problem.case()) {
+        let mut tasks = vec![n; m];
+        for (robot, &task) in assignment.iter().enumerate() {
+            if task < m {
+                tasks[task] = robot;
+            }
+        }
+        return tasks;
+    }
     assignment
         .iter()
-        .map(|&t| if t == IDLE { idle } else { t })
+        .map(|&t| if t == IDLE { m } else { t })
         .collect()
+}
+
+/// The graph the agents run on: the user's, or for the transposed problem (`idle` with
+/// `n < m`, the tasks are the agents, see [`admm_ta_agents::normalise`]) task `t` hosted by
+/// robot `t mod n`, and two tasks neighbours when their robots are the same or neighbours
+/// (the user's graph, lifted: connected as it is, of the same diameter, complete when it is).
+pub(crate) fn internal_graph(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+) -> Result<Graph, SolveError> {
+    let (n, agents) = (graph.robots(), problem.internal().robots());
+    if agents == n || problem.robots() != n {
+        return Ok(graph.clone());
+    }
+    let linked = |a: usize, b: usize| {
+        let (ha, hb) = (a % n, b % n);
+        ha == hb || graph.neighbours(ha).binary_search(&hb).is_ok()
+    };
+    let edges: Vec<(usize, usize)> = (0..agents)
+        .flat_map(|a| (a + 1..agents).map(move |b| (a, b)))
+        .filter(|&(a, b)| linked(a, b))
+        .collect();
+    Graph::from_edges(
+        agents,
+        &edges,
+        format!("{}, with the tasks as agents", graph.name()),
+    )
+    .map_err(|e| SolveError::Internal(format!("the tasks' graph: {e}")))
 }
 
 /// The exact optimum as the internal problem's assignment and cost.
@@ -110,6 +140,7 @@ pub(crate) fn to_user(
         .collect();
     report.unserved_tasks = (0..m).filter(|&t| !served[t]).collect();
     report.assignment = assignment;
+    report.robots = problem.robots();
     report.tasks = m;
     report.case = problem.case();
     report.maximize = problem.maximize();
