@@ -38,6 +38,18 @@ pub enum ProblemError {
         task: usize,
         value: f64,
     },
+    #[error(
+        "line {line}, column {column}: '{text}' is beyond the range of double precision (about ±1.8e308); write inf for a forbidden pair"
+    )]
+    OutOfRange {
+        line: usize,
+        column: usize,
+        text: String,
+    },
+    #[error(
+        "an assignment's total can exceed the range of double precision: the largest |cost| is {largest:e} over {pairs} pairs; scale the costs down"
+    )]
+    TotalOverflow { largest: f64, pairs: usize },
     #[error("infeasible: {0}")]
     Infeasible(String),
     #[error("robot {robot} is assigned task {task}, a forbidden pair")]
@@ -172,6 +184,19 @@ impl CostMatrix {
                     column: column + 1,
                     text: cell.chars().take(40).collect(),
                 })?;
+                let spelled_infinite = matches!(
+                    cell.trim_start_matches(['+', '-'])
+                        .to_ascii_lowercase()
+                        .as_str(),
+                    "inf" | "infinity"
+                );
+                if value.is_infinite() && !spelled_infinite {
+                    return Err(ProblemError::OutOfRange {
+                        line: index + 1,
+                        column: column + 1,
+                        text: cell.chars().take(40).collect(),
+                    });
+                }
                 if value.is_nan() {
                     return Err(ProblemError::NonFinite {
                         robot: robots,

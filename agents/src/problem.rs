@@ -118,6 +118,16 @@ impl TaskAssignmentProblem {
                 value: wrong,
             });
         }
+        // Totals (and the allowed costs' range) must stay finite for every method and report.
+        let largest = costs
+            .values()
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(0.0_f64, |a, v| a.max(v.abs()));
+        let pairs = costs.robots().max(costs.tasks());
+        if !(largest * pairs as f64 * 2.0).is_finite() {
+            return Err(ProblemError::TotalOverflow { largest, pairs });
+        }
         let mut problem = Self {
             costs,
             case,
@@ -224,10 +234,31 @@ impl TaskAssignmentProblem {
             }
             return robots;
         }
-        assignment
+        let mut user: Vec<usize> = assignment
             .iter()
             .map(|&t| if t >= m { IDLE } else { t })
-            .collect()
+            .collect();
+        if self.case == AssignmentCase::Idle {
+            // The reduction (Case 2 with an idle task) lets a non-optimal answer — a run that
+            // ended at its round limit — put two robots on one task; each task keeps its
+            // cheapest robot and the others go idle, which only lowers the cost.
+            let mut keeper = vec![IDLE; m];
+            for (i, &t) in user.iter().enumerate() {
+                if t == IDLE {
+                    continue;
+                }
+                let cost = |r: usize| normalise::signed(self.maximize, self.costs.get(r, t));
+                if keeper[t] == IDLE || cost(i).total_cmp(&cost(keeper[t])).is_lt() {
+                    keeper[t] = i;
+                }
+            }
+            for (i, t) in user.iter_mut().enumerate() {
+                if *t != IDLE && keeper[*t] != i {
+                    *t = IDLE;
+                }
+            }
+        }
+        user
     }
 
     /// Whether `assignment` (task per robot, [`IDLE`] for an idle robot) uses allowed pairs
