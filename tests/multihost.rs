@@ -3,7 +3,8 @@
 //! over 127.0.0.1 only. Two hosts × five agents reach the oracle's optimum with exactly the
 //! iterates of the lockstep simulation, in both multi-host modes (every agent on Zenoh, and
 //! iceoryx2 on each host with a bridge between hosts); an agent that crashes on one host
-//! stops the whole team, on both hosts, with errors naming it.
+//! stops the whole team, on both hosts, with errors naming it; a host or agent whose team
+//! file differs from the running team's is refused by name before round 0.
 
 #![cfg(feature = "zenoh")]
 
@@ -362,4 +363,117 @@ fn bench_rounds_measures_zenoh_next_to_iceoryx2_and_threads() {
         .find(|l| l.starts_with("| 4 | complete |") && l.matches('×').count() >= 3)
         .unwrap_or_else(|| panic!("no ratio row with zenoh / ipc:\n{table}"));
     assert!(!ratios.ends_with("| - | - |"), "{ratios}");
+}
+
+/// The team file at `team` with another seed (same run, hosts and endpoints).
+fn rogue_of(team: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(team).unwrap();
+    let rogue = team.with_file_name("rogue.toml");
+    std::fs::write(&rogue, text.replace("seed = 4", "seed = 5")).unwrap();
+    rogue
+}
+
+/// Waits for `child` (a process that should be refused quickly), killing it after `limit`.
+fn refused(mut child: Child, limit: Duration) -> (Output, Duration) {
+    let started = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().unwrap();
+            panic!("not refused within {limit:?}: {}", text(&out));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    (child.wait_with_output().unwrap(), started.elapsed())
+}
+
+/// The only line of a refused process's error output.
+fn refusal(out: &Output) -> String {
+    assert!(!out.status.success(), "it ran: {}", text(out));
+    let err = String::from_utf8_lossy(&out.stderr).trim().to_string();
+    assert_eq!(err.lines().count(), 1, "{}", text(out));
+    err
+}
+
+fn agent_of(team: &Path, id: usize, group: i32) -> Child {
+    admm_ta()
+        .args([
+            "agent",
+            "--team",
+            team.to_str().unwrap(),
+            "--id",
+            &id.to_string(),
+        ])
+        .process_group(group)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Every host and agent of the team succeeded.
+fn all_succeeded(what: &str, hosts: &[Output], agents: &[(usize, Output)]) {
+    for out in hosts {
+        assert!(out.status.success(), "{what}: host: {}", text(out));
+    }
+    for (id, out) in agents {
+        assert!(out.status.success(), "{what}: agent {id}: {}", text(out));
+    }
+}
+
+#[test]
+fn a_host_or_agent_whose_team_file_differs_is_refused_by_name_and_the_team_runs_on() {
+    for transport in ["zenoh", "mixed"] {
+        let dir = tempfile::tempdir().unwrap();
+        let costs = costs_10x10(dir.path());
+        let run = format!("d{}{}", &transport[..1], std::process::id());
+        let team = team_file(dir.path(), &run, transport, &costs, "ring");
+        let rogue = rogue_of(&team);
+        let alpha = start_host(&team, "alpha", &[0, 1, 2, 3, 4], &[]);
+        // The running team is the host that started first.
+        std::thread::sleep(Duration::from_millis(1500));
+        let HostGroup { host: beta, .. } = start_host(&rogue, "beta", &[], &[]);
+        let (out, took) = refused(beta, Duration::from_secs(25));
+        let err = refusal(&out);
+        assert!(
+            err.contains("host beta's team file differs from the running team's (digest"),
+            "{transport}: {err}"
+        );
+        assert!(err.contains("parameters differ"), "{transport}: {err}");
+        eprintln!(
+            "{transport}: host beta refused in {took:?} (exit {:?})",
+            out.status.code()
+        );
+        // The right beta completes the team, as on an ipc board.
+        let beta = start_host(&team, "beta", &[5, 6, 7, 8, 9], &[]);
+        let (hosts, agents) = wait_all(vec![alpha, beta], Duration::from_secs(90));
+        all_succeeded(transport, &hosts, &agents);
+        for host in ["alpha", "beta"] {
+            let left = shm_left(&format!("adtat{run}-{host}_"));
+            assert!(left.is_empty(), "{transport}: {left:?}");
+        }
+    }
+    // A Zenoh agent of another team: refused once every host is up, before its token.
+    let dir = tempfile::tempdir().unwrap();
+    let costs = costs_10x10(dir.path());
+    let run = format!("da{}", std::process::id());
+    let team = team_file(dir.path(), &run, "zenoh", &costs, "ring");
+    let rogue = rogue_of(&team);
+    let alpha = start_host(&team, "alpha", &[0, 1, 2, 3, 4], &[]);
+    let mut beta = start_host(&team, "beta", &[5, 6, 7, 8], &[]);
+    let group = beta.host.id() as i32;
+    let (out, took) = refused(agent_of(&rogue, 9, group), Duration::from_secs(25));
+    let err = refusal(&out);
+    assert!(
+        err.contains("agent 9's team file differs from the running team's (digest"),
+        "{err}"
+    );
+    assert!(err.contains("parameters differ"), "{err}");
+    eprintln!(
+        "zenoh: agent 9 refused in {took:?} (exit {:?})",
+        out.status.code()
+    );
+    beta.agents.push((9, agent_of(&team, 9, group)));
+    let (hosts, agents) = wait_all(vec![alpha, beta], Duration::from_secs(90));
+    all_succeeded("zenoh agent", &hosts, &agents);
 }

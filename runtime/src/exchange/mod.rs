@@ -100,6 +100,10 @@ pub enum ExchangeError {
         round: u64,
         how: String,
     },
+    /// The running team (its first host, on Zenoh) has another team digest than this
+    /// agent's team file: refused before round 0. The digest is in hex.
+    #[error("agent {agent}'s team file differs from the running team's (digest {running})")]
+    OtherTeam { agent: usize, running: String },
 }
 
 impl ExchangeError {
@@ -115,7 +119,8 @@ impl ExchangeError {
             | Self::Aborted { agent }
             | Self::Stopped { agent, .. }
             | Self::BadPayload { agent, .. }
-            | Self::PeerFailed { agent, .. } => *agent,
+            | Self::PeerFailed { agent, .. }
+            | Self::OtherTeam { agent, .. } => *agent,
         }
     }
 }

@@ -115,10 +115,22 @@ pub(crate) fn connect(
                     .clone()
                     .ok_or("scenario is inconsistent: a Zenoh run without Zenoh endpoints")?,
                 supervised,
+                team_digest: Some(TeamDigest::of(scenario).to_hex()),
             };
-            let mut exchange =
-                crate::zenoh_net::exchange::ZenohExchange::connect(&endpoint, deadline)
-                    .map_err(stop_or_text)?;
+            let mut exchange = crate::zenoh_net::exchange::ZenohExchange::connect(
+                &endpoint, deadline,
+            )
+            .map_err(|e| match &e {
+                // Another team's agent is refused by name, naming the parts.
+                ExchangeError::OtherTeam { running, .. } => TeamDigest::from_hex(running)
+                    .and_then(|running| {
+                        TeamDigest::of(scenario)
+                            .compare(&running, &format!("agent {index}"))
+                            .err()
+                    })
+                    .unwrap_or_else(|| e.to_string()),
+                _ => stop_or_text(e),
+            })?;
             exchange.inject(fault);
             Ok(Endpoint::Zenoh(Box::new(exchange)))
         }

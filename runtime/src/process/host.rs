@@ -6,17 +6,24 @@
 //! their tokens only once every host's token is up, and a host declares its token after its
 //! subscriptions, so no agent can come and go unseen.
 //!
+//! Before its token, a host announces its team file's digest and start time and waits for
+//! the other hosts' announcements: a host whose file differs from that of a host that started
+//! earlier is refused by name (as an `ipc` agent of another team is by the board's digest),
+//! and agents compare theirs with the first host's before they join.
+//!
 //! It waits for the first agents until the team's start-up deadline (naming those that never
 //! came) and for the run no longer than every round's deadline allows.
 
+use crate::process::member::team_scenario;
+use crate::process::team_digest::TeamDigest;
 use crate::process::team_file::Team;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
-use crate::zenoh_net::session::{announce_stop, watch_failures, watch_stops};
+use crate::zenoh_net::session::{alive_keys, announce_stop, watch_failures, watch_stops};
 use serde::Serialize;
 use std::path::Path;
 use std::sync::{Arc, Condvar, Mutex};
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use zenoh::Wait;
 use zenoh::sample::{Sample, SampleKind};
 
@@ -136,6 +143,10 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
     } else {
         None
     };
+    // The team's identity: the later of two hosts whose team files differ is refused by
+    // name before it declares its host token (so no agent of the team starts with it).
+    let startup_deadline = started + Duration::from_secs_f64(team.file.startup_timeout);
+    let _digest = check_team_digest(&team, &host.name, &links, session, startup_deadline)?;
     // After the bridge's subscriptions: the other hosts wait for this token before they let
     // their agents publish to ours.
     let _token = session
@@ -143,7 +154,6 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
         .declare_token(links.host_key(&host.name))
         .wait()
         .map_err(|e| format!("cannot declare the host's liveliness token: {e}"))?;
-    let startup_deadline = started + Duration::from_secs_f64(team.file.startup_timeout);
     let run_deadline = startup_deadline
         + Duration::from_secs_f64(team.file.round_timeout) * (team.file.max_iters as u32 + 2);
     let mut presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
@@ -221,4 +231,55 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
         forwarded_out,
         forwarded_in,
     })
+}
+
+/// How often a host asks for the other hosts' team-digest tokens while it waits for them.
+const DIGEST_POLL: Duration = Duration::from_millis(100);
+
+/// Declares host `name`'s team-digest token and waits (until `deadline`, or a termination
+/// signal) for every other host's; refuses this host if a host that started earlier runs a
+/// team file that differs (the running team is the earlier one's, as on an `ipc` board the
+/// first member's). Returns the token, to hold while the host runs.
+fn check_team_digest(
+    team: &Team,
+    name: &str,
+    links: &ZenohLinks,
+    session: &zenoh::Session,
+    deadline: Instant,
+) -> Result<zenoh::liveliness::LivelinessToken, String> {
+    let digest = TeamDigest::of(&team_scenario(team)?);
+    let started_ms = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_millis() as u64);
+    let token = session
+        .liveliness()
+        .declare_token(links.digest_key(&digest.to_hex(), started_ms, name))
+        .wait()
+        .map_err(|e| format!("cannot declare the host's team-digest token: {e}"))?;
+    let others = team.file.hosts.len().saturating_sub(1);
+    loop {
+        let mut seen: Vec<(String, u64, String)> = alive_keys(session, links.digest_all())?
+            .iter()
+            .filter_map(|k| links.of_digest_key(k))
+            .filter(|(_, _, host)| host != name)
+            .collect();
+        seen.sort_by(|a, b| (a.1, &a.2).cmp(&(b.1, &b.2)));
+        seen.dedup_by(|a, b| a.2 == b.2);
+        let earlier_differing = seen.iter().find(|(hex, ms, host)| {
+            hex != &digest.to_hex() && (*ms, host.as_str()) < (started_ms, name)
+        });
+        if let Some((hex, _, _)) = earlier_differing {
+            let running = TeamDigest::from_hex(hex)
+                .ok_or_else(|| format!("a host announced a malformed team digest {hex}"))?;
+            digest.compare(&running, &format!("host {name}"))?;
+        }
+        if seen.len() >= others || Instant::now() >= deadline {
+            return Ok(token);
+        }
+        if crate::signals::received().is_some() {
+            // The main loop reports the stop.
+            return Ok(token);
+        }
+        std::thread::sleep(DIGEST_POLL);
+    }
 }

@@ -69,12 +69,9 @@ impl Drop for FileLock {
     }
 }
 
-/// The scenario every agent of the team derives from the team file, in the iceoryx2
-/// namespace of its machine (`host`, in a mixed team: each host has its own).
-pub(crate) fn member_scenario(
-    team: &Team,
-    host: Option<&HostEntry>,
-) -> Result<(Scenario, RunNamespace), String> {
+/// The scenario every agent of the team derives from the team file, before the names of
+/// one machine's run (what the team's digest is over).
+pub(crate) fn team_scenario(team: &Team) -> Result<Scenario, String> {
     let (problem, graph) = team.problem_and_graph()?;
     let options = team.solve_options().map_err(|e| e.to_string())?;
     // The options refused a centralized method on the team's process transport.
@@ -89,7 +86,7 @@ pub(crate) fn member_scenario(
     let stop = LocalCertifiedStop::new(plan.diameter, problem.robots(), plan.tolerance)
         .map_err(|e| e.to_string())?
         .with_cadence(plan.agents.settings.stop_cadence());
-    let mut scenario = Scenario::new(
+    let scenario = Scenario::new(
         Workload::Solve {
             plan: &plan,
             stop: &AgentStop::Local(stop),
@@ -98,6 +95,16 @@ pub(crate) fn member_scenario(
         &graph,
         options.run(),
     );
+    Ok(scenario)
+}
+
+/// The scenario every agent of the team derives from the team file, in the iceoryx2
+/// namespace of its machine (`host`, in a mixed team: each host has its own).
+pub(crate) fn member_scenario(
+    team: &Team,
+    host: Option<&HostEntry>,
+) -> Result<(Scenario, RunNamespace), String> {
+    let mut scenario = team_scenario(team)?;
     let namespace = match host {
         Some(host) => RunNamespace::for_team(&format!("{}-{}", team.file.run, host.name))?,
         None => RunNamespace::for_team(&team.file.run)?,

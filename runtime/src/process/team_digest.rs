@@ -100,14 +100,27 @@ impl TeamDigest {
         board.set_digest(&self.words);
     }
 
-    /// Refuses agent `agent` if `board`'s team is another: names the first part that
-    /// differs. A board without a digest yet (a team being created) is no team to compare.
-    pub fn check(&self, board: &Board, agent: usize) -> Result<(), String> {
-        let Some(running) = board.digest() else {
-            return Ok(());
-        };
-        let running = Self { words: running };
-        if running == *self {
+    /// The whole digest as hex (for a Zenoh key expression).
+    pub fn to_hex(&self) -> String {
+        self.words.iter().map(|w| format!("{w:016x}")).collect()
+    }
+
+    /// The digest written by [`Self::to_hex`].
+    pub fn from_hex(hex: &str) -> Option<Self> {
+        if hex.len() != 16 * DIGEST_WORDS || !hex.is_ascii() {
+            return None;
+        }
+        let mut words = [0u64; DIGEST_WORDS];
+        for (k, w) in words.iter_mut().enumerate() {
+            *w = u64::from_str_radix(&hex[16 * k..16 * (k + 1)], 16).ok()?;
+        }
+        Some(Self { words })
+    }
+
+    /// Refuses `who` (e.g. "host b") if the running team's digest `running` is another:
+    /// names the parts that differ.
+    pub fn compare(&self, running: &Self, who: &str) -> Result<(), String> {
+        if running == self {
             return Ok(());
         }
         let differs: Vec<&str> = PART_NAMES
@@ -117,11 +130,20 @@ impl TeamDigest {
             .map(|(_, name)| *name)
             .collect();
         Err(format!(
-            "agent {agent}'s team file differs from the running team's (digest {}… vs {}…): {} differ{}",
+            "{who}'s team file differs from the running team's (digest {}… vs {}…): {} differ{}",
             self.short(),
             running.short(),
             differs.join(" and "),
             if differs.len() == 1 { "s" } else { "" }
         ))
+    }
+
+    /// Refuses agent `agent` if `board`'s team is another: names the first part that
+    /// differs. A board without a digest yet (a team being created) is no team to compare.
+    pub fn check(&self, board: &Board, agent: usize) -> Result<(), String> {
+        let Some(running) = board.digest() else {
+            return Ok(());
+        };
+        self.compare(&Self { words: running }, &format!("agent {agent}"))
     }
 }

@@ -33,7 +33,8 @@ use crate::fault::Fault;
 use crate::wait::WaitPolicy;
 use crate::zenoh_net::links::{AGENT_LISTEN, ZenohLinks};
 use crate::zenoh_net::session::{
-    self, Role, alive_agents, announce_failure, missing_hosts, watch_failures, watch_stops,
+    self, Role, alive_agents, alive_keys, announce_failure, missing_hosts, watch_failures,
+    watch_stops,
 };
 use admm_ta_agents::agent::Inbox;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
@@ -75,6 +76,9 @@ pub struct ZenohEndpoint {
     pub links: ZenohLinks,
     /// Started by a launcher: stop when it is gone.
     pub supervised: bool,
+    /// The team's digest in hex (a member of a multi-host team): refused before round 0
+    /// if the running team's, that of the host that started first, is another.
+    pub team_digest: Option<String>,
 }
 
 /// A received message in its parity slot.
@@ -189,6 +193,16 @@ fn receive(
     let slot = &mut inbound.slots[k][(header.round % 2) as usize];
     words_as_bytes_mut(&mut slot.words).copy_from_slice(bytes);
     slot.round = Some(header.round);
+}
+
+/// The running team's digest (hex): that of the host that started first, if any host
+/// announced one.
+fn running_digest(session: &Session, links: &ZenohLinks) -> Result<Option<String>, String> {
+    Ok(alive_keys(session, links.digest_all())?
+        .iter()
+        .filter_map(|k| links.of_digest_key(k))
+        .min_by(|a, b| (a.1, &a.2).cmp(&(b.1, &b.2)))
+        .map(|(hex, _, _)| hex))
 }
 
 impl ZenohExchange {
@@ -310,6 +324,12 @@ impl ZenohExchange {
                 )));
             }
             std::thread::sleep(PRESENCE_POLL);
+        }
+        if let Some(ours) = &endpoint.team_digest
+            && let Some(running) = running_digest(&session, links).map_err(err)?
+            && &running != ours
+        {
+            return Err(ExchangeError::OtherTeam { agent: i, running });
         }
         // Subscriptions first: a neighbour that sees our token can send to us.
         let token = session

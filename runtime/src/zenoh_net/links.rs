@@ -50,6 +50,29 @@ impl ZenohLinks {
         format!("{}/host/*", self.key_prefix)
     }
 
+    /// Key of host `name`'s team-digest token: the hex digest of its team file and when it
+    /// started (milliseconds since the epoch), so that the later of two differing hosts is
+    /// the one refused.
+    pub fn digest_key(&self, digest: &str, started_ms: u64, name: &str) -> String {
+        format!("{}/digest/{digest}/{started_ms}/{name}", self.key_prefix)
+    }
+
+    /// Every host's team-digest token.
+    pub fn digest_all(&self) -> String {
+        format!("{}/digest/*/*/*", self.key_prefix)
+    }
+
+    /// The digest, start time and host of team-digest token `key`.
+    pub fn of_digest_key(&self, key: &str) -> Option<(String, u64, String)> {
+        let rest = key
+            .strip_prefix(&self.key_prefix)?
+            .strip_prefix("/digest/")?;
+        let mut parts = rest.splitn(3, '/');
+        let digest = parts.next()?.to_string();
+        let started = parts.next()?.parse().ok()?;
+        Some((digest, started, parts.next()?.to_string()))
+    }
+
     /// Key of host `name`'s liveliness token (its router or bridge is up).
     pub fn host_key(&self, name: &str) -> String {
         format!("{}/host/{name}", self.key_prefix)
@@ -88,6 +111,10 @@ mod tests {
         assert_eq!(links.agent_of_alive_key(&links.alive_key(12)), Some(12));
         assert_eq!(links.agent_of_alive_key("admm-ta/team/other/alive/1"), None);
         assert_eq!(links.agent_of_alive_key("admm-ta/team/demo/alive/x"), None);
+        assert_eq!(
+            links.of_digest_key(&links.digest_key("ab12", 7, "b")),
+            Some(("ab12".into(), 7, "b".into()))
+        );
     }
 
     #[test]

@@ -61,7 +61,7 @@ pub(crate) fn open(role: &Role, listen: &[String], connect: &[String]) -> Result
 }
 
 /// The keys below `key` with a liveliness token on the network now.
-fn alive_keys(session: &Session, key: String) -> Result<Vec<String>, String> {
+pub(crate) fn alive_keys(session: &Session, key: String) -> Result<Vec<String>, String> {
     let replies = session
         .liveliness()
         .get(&key)
