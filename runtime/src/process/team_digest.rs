@@ -134,7 +134,11 @@ impl TeamDigest {
             self.short(),
             running.short(),
             differs.join(" and "),
-            if differs.len() == 1 { "s" } else { "" }
+            if differs.len() == 1 && !differs[0].ends_with('s') {
+                "s"
+            } else {
+                ""
+            }
         ))
     }
 
