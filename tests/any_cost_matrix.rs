@@ -136,16 +136,6 @@ fn instances() -> impl Strategy<Value = Instance> {
     })
 }
 
-const METHODS: [Method; 7] = [
-    Method::Primal,
-    Method::Dual,
-    Method::InexactDual,
-    Method::Market,
-    Method::DistHungarian,
-    Method::Hungarian,
-    Method::Cbaa,
-];
-
 fn build(instance: &Instance) -> Result<TaskAssignmentProblem, ProblemError> {
     let costs = CostMatrix::new(instance.robots, instance.tasks, instance.values.clone())?;
     if instance.maximize {
@@ -245,7 +235,7 @@ proptest! {
             }
         };
         let optimum = admm_ta::agents::oracle::solve(&problem).unwrap().cost;
-        for method in METHODS {
+        for method in Method::ALL {
             check(&instance, &problem, optimum, method, Transport::Sim)?;
         }
     }
@@ -352,11 +342,11 @@ fn generators_by_methods_table() {
     ];
     let mut lines = vec![format!(
         "| generator | {} |",
-        METHODS.map(|m| m.name()).join(" | ")
+        Method::ALL.map(|m| m.name()).join(" | ")
     )];
-    lines.push(format!("| --- |{}", " --- |".repeat(METHODS.len())));
+    lines.push(format!("| --- |{}", " --- |".repeat(Method::ALL.len())));
     for (name, n, m, case, mut cell) in generators {
-        let mut row = vec![0usize; METHODS.len() * 4];
+        let mut row = vec![0usize; Method::ALL.len() * 4];
         let mut infeasible = 0;
         for _ in 0..3 {
             let values: Vec<f64> = (0..n * m).map(|_| cell(&mut uniform)).collect();
@@ -377,7 +367,7 @@ fn generators_by_methods_table() {
                 Err(e) => panic!("{name}: {e}"),
             };
             let optimum = admm_ta::agents::oracle::solve(&problem).unwrap().cost;
-            for (k, method) in METHODS.iter().enumerate() {
+            for (k, method) in Method::ALL.iter().enumerate() {
                 check(&instance, &problem, optimum, *method, Transport::Sim).unwrap();
                 match run(&problem, *method, Transport::Sim) {
                     Ok(r) if r.certified || (*method == Method::Cbaa && r.check.is_none()) => {
@@ -389,7 +379,7 @@ fn generators_by_methods_table() {
                 }
             }
         }
-        let cells: Vec<String> = (0..METHODS.len())
+        let cells: Vec<String> = (0..Method::ALL.len())
             .map(|k| {
                 let ok = row[4 * k];
                 let rounds = row[4 * k + 3].checked_div(ok).unwrap_or(0);

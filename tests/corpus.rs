@@ -5,19 +5,10 @@
 mod common;
 
 use admm_ta::agents::problem::{IDLE, ProblemError};
-use admm_ta::{CaseChoice, CostMatrix, Method, SolveError, SolveOptions, TaskAssignmentProblem};
+use admm_ta::{CaseChoice, CostMatrix, Method, SolveError, TaskAssignmentProblem};
+use common::solve_checked as solve;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-const METHODS: [Method; 7] = [
-    Method::Primal,
-    Method::Dual,
-    Method::InexactDual,
-    Method::Market,
-    Method::DistHungarian,
-    Method::Hungarian,
-    Method::Cbaa,
-];
 
 fn corpus() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/corpus")
@@ -30,16 +21,6 @@ fn load(name: &str) -> Result<TaskAssignmentProblem, ProblemError> {
     } else {
         TaskAssignmentProblem::new(costs, CaseChoice::Auto)
     }
-}
-
-fn solve(p: &TaskAssignmentProblem, method: Method) -> Result<admm_ta::SolveReport, SolveError> {
-    let graph = admm_ta::generate::complete(p.robots()).unwrap();
-    let options = SolveOptions::builder()
-        .method(method)
-        .check(true)
-        .build()
-        .unwrap();
-    admm_ta::solve(p, &graph, &options)
 }
 
 #[test]
@@ -73,7 +54,7 @@ fn every_method_on_every_corpus_file() {
         let methods: &[Method] = if name.starts_with("distance") {
             &[Method::Market, Method::DistHungarian, Method::Hungarian]
         } else {
-            &METHODS
+            &Method::ALL
         };
         for &method in methods {
             let what = format!("{name} {}", method.name());

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::leftovers_of;
+use common::{children_of, leftovers_of};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -23,31 +23,6 @@ fn solve(args: &str, fault: Option<&str>) -> Child {
         None => command.env_remove("ADMM_TA_FAULT"),
     };
     command.spawn().expect("the admm-ta binary runs")
-}
-
-/// Child processes of `parent` and their command lines.
-fn children_of(parent: u32) -> Vec<(u32, String)> {
-    let mut found = Vec::new();
-    for entry in std::fs::read_dir("/proc").unwrap().flatten() {
-        let Ok(pid) = entry.file_name().to_string_lossy().parse::<u32>() else {
-            continue;
-        };
-        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
-            continue;
-        };
-        // The parent pid is the second field after the parenthesised command name.
-        let after = &stat[stat.rfind(')').unwrap_or(0) + 1..];
-        let ppid: u32 = after
-            .split_whitespace()
-            .nth(1)
-            .and_then(|p| p.parse().ok())
-            .unwrap_or(0);
-        if ppid == parent {
-            let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
-            found.push((pid, String::from_utf8_lossy(&cmdline).replace('\0', " ")));
-        }
-    }
-    found
 }
 
 /// Waits for `child` with a deadline (the test itself must never hang).

@@ -10,7 +10,10 @@
 //! problem has zero robots/tasks").
 
 use admm_ta::agents::problem::{AssignmentCase, IDLE, ProblemError};
-use admm_ta::{CaseChoice, CostMatrix, Method, SolveError, SolveOptions, TaskAssignmentProblem};
+mod common;
+
+use admm_ta::{CaseChoice, CostMatrix, Method, TaskAssignmentProblem};
+use common::solve_checked as solve;
 
 const INF: f64 = f64::INFINITY;
 
@@ -85,31 +88,6 @@ fn problem(rows: &[Vec<f64>], maximize: bool) -> TaskAssignmentProblem {
     }
 }
 
-/// Every method but CBAA (a heuristic that does not claim optimality; it is run too, and
-/// must stay feasible).
-const METHODS: [Method; 7] = [
-    Method::Primal,
-    Method::Dual,
-    Method::InexactDual,
-    Method::Market,
-    Method::DistHungarian,
-    Method::Hungarian,
-    Method::Cbaa,
-];
-
-fn solve(
-    problem: &TaskAssignmentProblem,
-    method: Method,
-) -> Result<admm_ta::SolveReport, SolveError> {
-    let graph = admm_ta::generate::complete(problem.robots()).unwrap();
-    let options = SolveOptions::builder()
-        .method(method)
-        .check(true)
-        .build()
-        .unwrap();
-    admm_ta::solve(problem, &graph, &options)
-}
-
 #[test]
 fn scipys_matrices_give_scipys_optimal_cost_with_every_method() {
     let mut solved = 0;
@@ -124,7 +102,7 @@ fn scipys_matrices_give_scipys_optimal_cost_with_every_method() {
                 let p = problem(&rows, maximize);
                 let sign = if maximize { -1.0 } else { 1.0 };
                 let want: f64 = sign * expected.iter().sum::<f64>();
-                for method in METHODS {
+                for method in Method::ALL {
                     let what = format!("{rows:?} maximize {maximize} {}", method.name());
                     match solve(&p, method) {
                         Ok(report) => {
@@ -151,7 +129,7 @@ fn scipys_matrices_give_scipys_optimal_cost_with_every_method() {
 #[test]
 fn scipys_constant_matrix_and_input_validation() {
     let ones = vec![vec![1.0; 8]; 8];
-    for method in METHODS {
+    for method in Method::ALL {
         let report = solve(&problem(&ones, false), method).unwrap();
         assert_eq!(report.cost, 8.0, "{}", method.name());
     }

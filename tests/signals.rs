@@ -185,7 +185,10 @@ fn agents_do_not_outlive_a_launcher_killed_with_sigkill() {
     let _ = launcher.wait();
     let killed = Instant::now();
     // The agents are re-parented (to init or a subreaper, which reaps them): gone or zombie.
-    while agents.iter().any(|&a| common::process_alive(a)) {
+    while agents
+        .iter()
+        .any(|&a| admm_ta::runtime::liveness::process_alive(a))
+    {
         assert!(
             killed.elapsed() < Duration::from_secs(10),
             "agents outlived their launcher"

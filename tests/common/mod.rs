@@ -104,16 +104,6 @@ pub fn children_of(parent: u32) -> Vec<(u32, String)> {
     found
 }
 
-/// Whether process `pid` runs (a zombie does not).
-pub fn process_alive(pid: u32) -> bool {
-    std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
-        let state = stat[stat.rfind(')').map_or(0, |i| i + 1)..]
-            .split_whitespace()
-            .next();
-        state != Some("Z")
-    })
-}
-
 /// Waits for `child` with a deadline (a test must never hang); kills it and panics after.
 pub fn wait_with_deadline(
     child: &mut std::process::Child,
@@ -131,4 +121,18 @@ pub fn wait_with_deadline(
         }
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
+}
+
+/// `admm_ta::solve` of `problem` by `method` on a complete graph, with the centralized check.
+pub fn solve_checked(
+    problem: &admm_ta::TaskAssignmentProblem,
+    method: admm_ta::Method,
+) -> Result<admm_ta::SolveReport, admm_ta::SolveError> {
+    let graph = admm_ta::generate::complete(problem.robots()).unwrap();
+    let options = admm_ta::SolveOptions::builder()
+        .method(method)
+        .check(true)
+        .build()
+        .unwrap();
+    admm_ta::solve(problem, &graph, &options)
 }
