@@ -42,15 +42,7 @@ impl CostModel {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for CostModel {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+crate::clap_value_enum!(CostModel);
 
 /// Distance costs: robots, then tasks, uniform in the unit square (drawn from `seed`);
 /// cost = Euclidean distance from a robot to a task.

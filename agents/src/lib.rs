@@ -35,3 +35,4 @@ pub mod stopping;
 pub mod surveillance;
 pub mod ties;
 pub mod two_block;
+mod value_enum;

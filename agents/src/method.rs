@@ -546,15 +546,7 @@ impl AgentMethod {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for Method {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+crate::clap_value_enum!(Method);
 
 #[cfg(test)]
 mod tests {

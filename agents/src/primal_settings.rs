@@ -42,15 +42,7 @@ impl ProjectionPath {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for ProjectionPath {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+crate::clap_value_enum!(ProjectionPath);
 
 /// Which primal consensus ADMM runs (`--primal-variant`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
@@ -78,15 +70,7 @@ impl PrimalVariant {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for PrimalVariant {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+crate::clap_value_enum!(PrimalVariant);
 
 /// `K` of the fast variant's `ρ = K · spread / (2 d̄)`.
 ///

@@ -50,15 +50,7 @@ impl CaseChoice {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for CaseChoice {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+crate::clap_value_enum!(CaseChoice);
 
 /// The task index of an idle robot in an assignment (case `idle` with `n > m`).
 pub const IDLE: usize = usize::MAX;

@@ -65,15 +65,7 @@ impl StopRule {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for StopRule {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+crate::clap_value_enum!(StopRule);
 
 /// Something that decides, round by round, whether the team is done.
 pub trait TeamStopRule {

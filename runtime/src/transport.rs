@@ -133,15 +133,7 @@ impl std::fmt::Display for Transport {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for Transport {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+admm_ta_agents::clap_value_enum!(Transport);
 
 /// A name that is no transport.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

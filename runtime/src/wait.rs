@@ -42,15 +42,7 @@ impl WaitStrategy {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for WaitStrategy {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+admm_ta_agents::clap_value_enum!(WaitStrategy);
 
 /// How long [`WaitStrategy::SpinThenBlock`] spins.
 pub const SPIN_BEFORE_BLOCKING: Duration = Duration::from_micros(20);

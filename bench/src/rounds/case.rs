@@ -33,15 +33,7 @@ impl StepKind {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for StepKind {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+admm_ta_agents::clap_value_enum!(StepKind);
 
 /// Which barrier ends a round.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -79,15 +71,7 @@ impl Barrier {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for Barrier {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+admm_ta_agents::clap_value_enum!(Barrier);
 
 /// Payload of `rows × cols` f64 values.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

@@ -47,15 +47,7 @@ impl OnFailure {
 }
 
 #[cfg(feature = "clap")]
-impl clap::ValueEnum for OnFailure {
-    fn value_variants<'a>() -> &'a [Self] {
-        &Self::ALL
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.name()))
-    }
-}
+admm_ta_agents::clap_value_enum!(OnFailure);
 
 /// Everything a solve needs besides the problem and the graph.
 #[derive(Debug, Clone, PartialEq)]
