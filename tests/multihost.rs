@@ -14,7 +14,6 @@ use admm_ta_runtime::process::team_file::Team;
 use admm_ta_runtime::solve::report::SolveReport;
 use admm_ta_runtime::solve::solve;
 use admm_ta_runtime::transport::Transport;
-use std::net::TcpListener;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -22,14 +21,6 @@ use std::time::{Duration, Instant};
 
 fn admm_ta() -> Command {
     Command::new(env!("CARGO_BIN_EXE_admm-ta"))
-}
-
-fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
 }
 
 /// Writes a team of the 10×10 oracle-style instance over two hosts of five robots.
@@ -42,7 +33,7 @@ fn team_file(dir: &Path, run: &str, transport: &str, costs: &Path, topology: &st
     for (name, agents) in [("alpha", "[0, 1, 2, 3, 4]"), ("beta", "[5, 6, 7, 8, 9]")] {
         text += &format!(
             "\n[[hosts]]\nname = \"{name}\"\nagents = {agents}\nendpoint = \"tcp/127.0.0.1:{}\"\n",
-            free_port()
+            common::loopback_port()
         );
     }
     std::fs::write(&path, text).unwrap();

@@ -289,19 +289,12 @@ fn a_signal_to_a_zenoh_launcher_or_host_stops_the_team() {
     let dir = tempfile::tempdir().unwrap();
     let run = format!("sigz{}", std::process::id());
     let team = dir.path().join("team.toml");
-    let port = |_| {
-        std::net::TcpListener::bind("127.0.0.1:0")
-            .unwrap()
-            .local_addr()
-            .unwrap()
-            .port()
-    };
     std::fs::write(
         &team,
         format!(
             "run = \"{run}\"\nrobots = 4\ncosts = \"random\"\ntasks = 4\ntopology = \"ring\"\nstartup_timeout = 60.0\ntransport = \"zenoh\"\n\n[[hosts]]\nname = \"alpha\"\nagents = [0, 1]\nendpoint = \"tcp/127.0.0.1:{}\"\n\n[[hosts]]\nname = \"beta\"\nagents = [2, 3]\nendpoint = \"tcp/127.0.0.1:{}\"\n",
-            port(0),
-            port(1)
+            common::loopback_port(),
+            common::loopback_port()
         ),
     )
     .unwrap();

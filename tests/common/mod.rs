@@ -136,3 +136,28 @@ pub fn solve_checked(
         .unwrap();
     admm_ta::solve(problem, &graph, &options)
 }
+
+/// A loopback TCP port for a team file's host endpoint that nothing else will take before
+/// the host binds it. Ports from `bind(":0")` come from the kernel's ephemeral range, which
+/// the agents' own outgoing connections (and every other test's listeners) draw from too,
+/// so such a port can be taken again between the test releasing it and the host binding it.
+/// These ports lie below the ephemeral range, advance by a per-process counter (no two tests
+/// of one binary share one) from a base that differs between processes, and are checked free.
+pub fn loopback_port() -> u16 {
+    use std::sync::atomic::{AtomicU32, Ordering};
+    static NEXT: AtomicU32 = AtomicU32::new(0);
+    let ephemeral_low = std::fs::read_to_string("/proc/sys/net/ipv4/ip_local_port_range")
+        .ok()
+        .and_then(|t| t.split_whitespace().next()?.parse::<u32>().ok())
+        .unwrap_or(32768)
+        .clamp(2048, 65535);
+    let (low, span) = (1024u32, ephemeral_low - 1024);
+    let base = std::process::id().wrapping_mul(7919);
+    for _ in 0..span {
+        let port = (low + (base.wrapping_add(NEXT.fetch_add(1, Ordering::Relaxed))) % span) as u16;
+        if std::net::TcpListener::bind(("127.0.0.1", port)).is_ok() {
+            return port;
+        }
+    }
+    panic!("no free loopback port below the ephemeral range {ephemeral_low}");
+}
