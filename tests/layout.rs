@@ -45,6 +45,7 @@ const LAYERS: [&[&str]; 5] = [
         "signals",
         "fault",
         "wait",
+        "futex",
         "latency",
         "usage",
         "transport",

@@ -39,6 +39,7 @@
 //! * [`liveness`]: whether a process lives;
 //! * [`signals`]: SIGINT, SIGTERM and SIGHUP recorded (not fatal) while a team runs;
 //! * [`fault`]: fault injection for tests;
+//! * [`futex`]: process-shared futex waits and wake-ups on words of shared memory;
 //! * [`wait`]: how agents wait (spin, then sleep), and the counting barrier;
 //! * [`latency`]: round-latency histograms per component;
 //! * [`usage`]: CPU time and context switches of an agent;
@@ -85,6 +86,7 @@ pub mod board;
 pub mod error_text;
 pub mod exchange;
 pub mod fault;
+pub mod futex;
 pub mod latency;
 pub mod liveness;
 pub mod options;

@@ -1,0 +1,125 @@
+//! Process-shared futex waits on 32-bit words of shared memory.
+//!
+//! A waiter reads a word, checks its condition and, if it must wait, calls [`wait`] with the
+//! value it read: the kernel puts it to sleep only if the word still holds that value, so a
+//! wake-up between the check and the sleep is never lost. A waker changes the word, then
+//! calls [`wake`]. The words live in memory mapped by several processes (the run's board),
+//! so these calls never use `FUTEX_PRIVATE_FLAG`: the kernel keys the wait queue on the
+//! physical page, not on one process's address space.
+//!
+//! One wait or wake is one system call, where an iceoryx2 event (a unix-datagram socket on
+//! Linux) costs several.
+//!
+//! ```
+//! use admm_ta_runtime::futex::{self, Wait};
+//! use std::sync::atomic::{AtomicU32, Ordering};
+//! use std::time::Duration;
+//! let word = AtomicU32::new(0);
+//! // Nobody changes the word: the wait ends at its timeout.
+//! assert_eq!(futex::wait(&word, 0, Duration::from_millis(1)), Wait::TimedOut);
+//! // The word no longer holds the value the waiter read: no sleep at all.
+//! word.fetch_add(1, Ordering::Release);
+//! assert_eq!(futex::wait(&word, 0, Duration::from_secs(60)), Wait::Changed);
+//! assert_eq!(futex::wake(&word, u32::MAX), 0);
+//! ```
+
+use std::sync::atomic::AtomicU32;
+use std::time::Duration;
+
+/// How a [`wait`] ended. Every outcome but [`Wait::TimedOut`] may be spurious: the caller
+/// re-checks its condition in any case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wait {
+    /// Woken by [`wake`] (or spuriously).
+    Woken,
+    /// The word did not hold the expected value: the condition may already hold.
+    Changed,
+    /// Interrupted by a signal handler (the caller checks for a stop request).
+    Interrupted,
+    /// The timeout passed.
+    TimedOut,
+}
+
+/// Sleeps while `word` holds `expected`, for at most `timeout`.
+#[cfg(target_os = "linux")]
+pub fn wait(word: &AtomicU32, expected: u32, timeout: Duration) -> Wait {
+    let timeout = libc::timespec {
+        tv_sec: timeout.as_secs().min(i32::MAX as u64) as libc::time_t,
+        tv_nsec: timeout.subsec_nanos() as libc::c_long,
+    };
+    // SAFETY: `word` is a valid, aligned 32-bit word for the duration of the call (the
+    // kernel only reads it); FUTEX_WAIT takes a relative timeout; the unused arguments are 0.
+    let r = unsafe {
+        libc::syscall(
+            libc::SYS_futex,
+            word.as_ptr(),
+            libc::FUTEX_WAIT,
+            expected,
+            &timeout as *const libc::timespec,
+            std::ptr::null::<u32>(),
+            0u32,
+        )
+    };
+    if r == 0 {
+        return Wait::Woken;
+    }
+    match std::io::Error::last_os_error().raw_os_error() {
+        Some(libc::EAGAIN) => Wait::Changed,
+        Some(libc::ETIMEDOUT) => Wait::TimedOut,
+        Some(libc::EINTR) => Wait::Interrupted,
+        // EFAULT/EINVAL cannot happen for a valid reference; treat as spurious.
+        _ => Wait::Woken,
+    }
+}
+
+/// Wakes up to `waiters` processes or threads sleeping on `word`; returns how many woke.
+#[cfg(target_os = "linux")]
+pub fn wake(word: &AtomicU32, waiters: u32) -> usize {
+    // SAFETY: as in `wait`; FUTEX_WAKE only uses the address as a key.
+    let r = unsafe {
+        libc::syscall(
+            libc::SYS_futex,
+            word.as_ptr(),
+            libc::FUTEX_WAKE,
+            waiters.min(i32::MAX as u32),
+            std::ptr::null::<libc::timespec>(),
+            std::ptr::null::<u32>(),
+            0u32,
+        )
+    };
+    r.max(0) as usize
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Arc;
+    use std::sync::atomic::Ordering;
+    use std::time::Instant;
+
+    #[test]
+    fn a_waker_ends_a_long_wait_at_once() {
+        let word = Arc::new(AtomicU32::new(0));
+        let waiter = {
+            let word = word.clone();
+            std::thread::spawn(move || {
+                let started = Instant::now();
+                while word.load(Ordering::Acquire) == 0 {
+                    let _ = wait(&word, 0, Duration::from_secs(20));
+                }
+                started.elapsed()
+            })
+        };
+        std::thread::sleep(Duration::from_millis(50));
+        word.store(1, Ordering::Release);
+        wake(&word, u32::MAX);
+        let waited = waiter.join().unwrap();
+        assert!(waited < Duration::from_secs(10), "{waited:?}");
+    }
+
+    #[test]
+    fn a_wait_on_a_changed_word_returns_at_once() {
+        let word = AtomicU32::new(7);
+        assert_eq!(wait(&word, 6, Duration::from_secs(60)), Wait::Changed);
+    }
+}
