@@ -2,10 +2,11 @@
 //! the launcher, the members of an independently started team, a mixed host's bridge). It
 //! holds, in cache lines of 64 bytes:
 //!
-//! * the global barrier's counters (line 0);
+//! * the global barrier's counters and its 32-bit futex wake-up word (line 0, byte 16);
 //! * per agent (line `1 + i`): its two arrival counters (rounds of each parity, see
 //!   [`arrivals_target`]), the last round it published, its process id (members of an
-//!   independently started team) and whether it is connected (start-up rendezvous);
+//!   independently started team), whether it is connected (start-up rendezvous) and its
+//!   32-bit futex wake-up word (byte 40);
 //! * the failure line: the agent marked as failed (the first mark wins), the team's shape
 //!   (tasks and payload length, so an agent of another shape is refused), the count of
 //!   members that left, the stop request (a termination signal, distinct from a
@@ -21,7 +22,7 @@ use iceoryx2::prelude::*;
 use iceoryx2_bb_posix::shared_memory::{
     SharedMemory, SharedMemoryBuilder, SharedMemoryCreationError,
 };
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 /// Bytes of the board: the global barrier's line, one line per agent (two arrival counters
 /// and the last round it published), then the failure line (failed agent, team shape).
@@ -34,6 +35,9 @@ fn board_size(agents: usize) -> usize {
 pub const DIGEST_WORDS: usize = 8;
 
 const LINE: usize = 64;
+
+// The barrier's wake-up word sits right after its counters.
+const _: () = assert!(std::mem::size_of::<CountingBarrier>() <= 16);
 
 /// Cumulative arrival count, for the parity of `round`, once all round-`round` messages of
 /// an agent with `degree` neighbours are counted.
@@ -415,6 +419,24 @@ impl Board {
         // open); the mapping is page-aligned, and every process only touches it through
         // atomics.
         unsafe { &*(self.memory.base_address().as_ptr() as *const CountingBarrier) }
+    }
+
+    /// Agent `agent`'s wake-up word (a 32-bit word of its line, for [`crate::futex`]): a
+    /// process that makes agent `agent`'s wait end bumps it, then wakes its sleepers.
+    pub fn wake_word(&self, agent: usize) -> &AtomicU32 {
+        debug_assert!(agent < self.agents);
+        self.word32(LINE * (agent + 1) + 40)
+    }
+
+    /// The global barrier's wake-up word (for [`crate::futex`]), next to its counters.
+    pub fn barrier_wake_word(&self) -> &AtomicU32 {
+        self.word32(16)
+    }
+
+    fn word32(&self, offset: usize) -> &AtomicU32 {
+        debug_assert!(offset.is_multiple_of(4) && offset + 4 <= board_size(self.agents));
+        // SAFETY: as in `word`, for a 4-aligned offset.
+        unsafe { &*(self.memory.base_address().as_ptr().add(offset) as *const AtomicU32) }
     }
 
     /// Agent `agent`'s arrival counter for rounds of parity `round % 2`.
