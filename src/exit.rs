@@ -17,10 +17,28 @@ use admm_ta::runtime::runner::RunError;
 use admm_ta::runtime::solve::report::SolveReport;
 use admm_ta::{ConfigError, SolveError, StopRule, TopologyError};
 
-/// A bad command line or input found by the command itself.
+/// A bad command line or input found by the command itself (exit 2).
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 pub struct UsageError(pub String);
+
+/// Runs of a command that ran many (bench cases, stress runs) failed (exit 4).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct RunsFailed(pub String);
+
+/// A collected team result that the centralized check found not optimal (exit 6).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct NotOptimal(pub String);
+
+/// Returns early with a [`UsageError`] formatted as by `format!`.
+macro_rules! usage_bail {
+    ($($arg:tt)*) => {
+        return Err(anyhow::Error::from($crate::exit::UsageError(format!($($arg)*))))
+    };
+}
+pub(crate) use usage_bail;
 
 /// How a solve that printed its report ends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -77,6 +95,12 @@ pub fn code_of(error: &anyhow::Error) -> u8 {
         }
         if cause.is::<ConfigError>() || cause.is::<TopologyError>() || cause.is::<UsageError>() {
             return 2;
+        }
+        if cause.is::<RunsFailed>() {
+            return 4;
+        }
+        if cause.is::<NotOptimal>() {
+            return 6;
         }
     }
     1

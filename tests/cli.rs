@@ -341,6 +341,26 @@ fn bad_input_gives_one_clear_line() {
 }
 
 #[test]
+fn bad_options_of_every_other_command_exit_2_with_one_line() {
+    let cases: [(&[&str], &str); 9] = [
+        (&["bench", "rounds", "--agents", "0"], "--agents"),
+        (&["bench", "rounds", "--repeat", "0"], "--repeat"),
+        (&["bench", "rounds", "--rounds", "0"], "--rounds"),
+        (&["experiment", "compare", "--robots", "0"], "--robots"),
+        (&["experiment", "rounds-anatomy", "--seeds", "0"], "--seeds"),
+        (&["experiment", "ipc-scaling", "--sizes", "1"], "--sizes"),
+        (&["stress", "--runs", "0"], "--runs"),
+        (&["stress", "--transport", "threads"], "agent processes"),
+        (&["agent", "--id", "0"], "--team"),
+    ];
+    for (args, needle) in cases {
+        let output = admm_ta(args);
+        assert_clear_error(&output, needle);
+        assert_eq!(output.status.code(), Some(2), "bad input exits 2: {args:?}");
+    }
+}
+
+#[test]
 fn a_one_by_one_problem_solves_on_every_transport() {
     let dir = tempfile::tempdir().unwrap();
     let one = write(dir.path(), "one.csv", "0.5\n");

@@ -1,8 +1,9 @@
 //! `admm-ta agent`: one agent process, of an independently started team or of a launcher's run.
 
 use crate::cli::AgentArgs;
+use crate::exit::usage_bail;
 use admm_ta::runtime::process::{agent, member};
-use anyhow::{Result, bail};
+use anyhow::Result;
 
 pub fn run(args: AgentArgs) -> Result<()> {
     let (index, result) = match args {
@@ -33,7 +34,7 @@ pub fn run(args: AgentArgs) -> Result<()> {
             scenario: Some(scenario),
             scenario_digest: Some(digest),
         } => (index, agent::run(&run, index, &scenario, &digest)),
-        _ => bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
+        _ => usage_bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
     };
     result.map_err(|e| {
         // Exchange errors already start with "agent N:".

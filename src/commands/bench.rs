@@ -4,13 +4,14 @@
 use crate::cli::{Bench, RoundsArgs};
 use crate::commands::experiment::report_written;
 use crate::commands::shared::{agent_program, progress_bar};
+use crate::exit::{RunsFailed, usage_bail};
 use admm_ta::TopologySpec;
 use admm_ta::runtime::transport::{Capabilities, Execution, Transport};
 use admm_ta_bench::experiment::{Experiment, write};
 use admm_ta_bench::rounds;
 use admm_ta_bench::rounds::case::{RoundsConfig, SweepSpec, cases};
 use admm_ta_bench::rounds::report::{TABLE_HEADER, render_row};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 
 pub fn run(bench: Bench) -> Result<()> {
     let Bench::Rounds(RoundsArgs {
@@ -29,7 +30,7 @@ pub fn run(bench: Bench) -> Result<()> {
         json,
     }) = bench;
     if agents.as_ref().is_some_and(|a| a.contains(&0)) {
-        bail!("--agents: every team needs at least 1 agent");
+        usage_bail!("--agents: every team needs at least 1 agent");
     }
     if let Some(t) = &topologies {
         for topology in t {
@@ -50,7 +51,7 @@ pub fn run(bench: Bench) -> Result<()> {
         .as_ref()
         .is_some_and(|t| t.iter().any(|t| !concurrent(t.capabilities())))
     {
-        bail!(
+        usage_bail!(
             "--transports: round latency needs agents that run concurrently: {}",
             Transport::names_where(concurrent, "or")
         );
@@ -68,16 +69,16 @@ pub fn run(bench: Bench) -> Result<()> {
     config.rounds = recorded.unwrap_or(config.rounds);
     config.warmup = warmup.unwrap_or(config.warmup);
     if !(1..=100).contains(&repeat) {
-        bail!("--repeat must be 1…100, got {repeat}");
+        usage_bail!("--repeat must be 1…100, got {repeat}");
     }
     config.repeat = repeat;
     if config.rounds == 0 {
-        bail!("--rounds must be at least 1");
+        usage_bail!("--rounds must be at least 1");
     }
     config.agent_program = Some(agent_program()?);
     let cases = cases(&config);
     if cases.is_empty() {
-        bail!("no case to measure (a global barrier needs threads or ipc)");
+        usage_bail!("no case to measure (a global barrier needs threads or ipc)");
     }
     let bar = progress_bar(
         cases.len() as u64,
@@ -119,11 +120,12 @@ pub fn run(bench: Bench) -> Result<()> {
     }
     report_written(&written);
     if !report.failures.is_empty() {
-        bail!(
+        return Err(RunsFailed(format!(
             "{} of {} cases failed (see above and rounds.json)",
             report.failures.len(),
             report.failures.len() + report.results.len()
-        );
+        ))
+        .into());
     }
     Ok(())
 }

@@ -1,8 +1,9 @@
 //! `admm-ta collect`: the assignment of an independently started team, from its agents' results.
 
 use crate::cli::CollectArgs;
+use crate::exit::NotOptimal;
 use admm_ta::runtime::process::member;
-use anyhow::{Result, bail};
+use anyhow::Result;
 
 pub fn run(args: CollectArgs) -> Result<()> {
     let result = member::collect(&args.team, args.check).map_err(anyhow::Error::msg)?;
@@ -33,7 +34,7 @@ pub fn run(args: CollectArgs) -> Result<()> {
         );
     }
     if result.optimal == Some(false) {
-        bail!("the team's assignment is not optimal");
+        return Err(NotOptimal("the team's assignment is not optimal".into()).into());
     }
     Ok(())
 }

@@ -4,6 +4,7 @@
 
 use crate::cli::{Experiment as Command, FigureArgs};
 use crate::commands::shared::{agent_program, progress_bar};
+use crate::exit::usage_bail;
 use admm_ta::Method;
 use admm_ta::agents::surveillance::SurveillanceScenario;
 use admm_ta::runtime::episodes::EpisodeRunConfig;
@@ -12,7 +13,7 @@ use admm_ta::runtime::transport::Execution;
 use admm_ta_bench::experiment::{Experiment, write};
 use admm_ta_bench::figures::{FigureConfig, convergence, scaling};
 use admm_ta_bench::{compare, rounds_anatomy, surveillance, table1};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use std::path::Path;
 use std::time::Duration;
 
@@ -31,7 +32,7 @@ pub fn run(command: Command) -> Result<()> {
             out,
         } => {
             if seeds == 0 || max_iters == 0 || robots.contains(&0) {
-                bail!("--seeds, --max-iters and every --robots size must be at least 1");
+                usage_bail!("--seeds, --max-iters and every --robots size must be at least 1");
             }
             let methods = if methods.is_empty() {
                 Method::ALL.to_vec()
@@ -118,7 +119,7 @@ pub fn run(command: Command) -> Result<()> {
             json,
         } => {
             if episodes == 0 || max_iters == 0 {
-                bail!("--episodes and --max-iters must be at least 1");
+                usage_bail!("--episodes and --max-iters must be at least 1");
             }
             let model = match &scenario {
                 Some(path) => {
@@ -130,7 +131,7 @@ pub fn run(command: Command) -> Result<()> {
                 None => SurveillanceScenario::default(),
             };
             if transport.capabilities().execution == Execution::Lockstep {
-                bail!("--transport: the team runs on threads, ipc or uds");
+                usage_bail!("--transport: the team runs on threads, ipc or uds");
             }
             let config = EpisodeRunConfig {
                 max_rounds: max_iters,
@@ -176,7 +177,7 @@ pub fn run(command: Command) -> Result<()> {
             };
             if let Some(seeds) = seeds {
                 if seeds == 0 {
-                    bail!("--seeds must be at least 1");
+                    usage_bail!("--seeds must be at least 1");
                 }
                 config.seeds = seeds;
             }
@@ -207,10 +208,10 @@ pub fn run(command: Command) -> Result<()> {
             json,
         } => {
             if trials == 0 || max_iters == 0 {
-                bail!("--trials and --max-iters must be at least 1");
+                usage_bail!("--trials and --max-iters must be at least 1");
             }
             if !(rho_scale > 0.0 && rho_scale.is_finite()) {
-                bail!("--rho-scale must be a positive number, got {rho_scale}");
+                usage_bail!("--rho-scale must be a positive number, got {rho_scale}");
             }
             let config = table1::Table1Config {
                 trials,
@@ -246,7 +247,7 @@ pub fn run(command: Command) -> Result<()> {
 
 fn check_sizes(sizes: &[usize]) -> Result<()> {
     if sizes.is_empty() || sizes.iter().any(|n| !(2..=500).contains(n)) {
-        bail!("--sizes: every team size must be 2…500");
+        usage_bail!("--sizes: every team size must be 2…500");
     }
     Ok(())
 }
@@ -261,7 +262,7 @@ fn run_figure<R: Experiment, E: std::error::Error + Send + Sync + 'static>(
     body: impl FnOnce(&FigureConfig, &indicatif::ProgressBar) -> Result<R, E>,
 ) -> Result<()> {
     if args.trials == 0 || args.max_iters == 0 {
-        bail!("--trials and --max-iters must be at least 1");
+        usage_bail!("--trials and --max-iters must be at least 1");
     }
     let mut config = FigureConfig {
         trials: args.trials,

@@ -6,6 +6,7 @@
 //! still alive or unreaped. It exits non-zero on any failure or leftover.
 
 use crate::commands::shared::{agent_program, progress_bar};
+use crate::exit::{RunsFailed, usage_bail};
 use admm_ta::runtime::process::namespace::{run_id_prefix, runs_dir, shm_named};
 use admm_ta::{CaseChoice, CostMatrix, Method, SolveOptions, TaskAssignmentProblem, Transport};
 use anyhow::{Context, Result, bail};
@@ -56,13 +57,13 @@ type Outcome = (Duration, Option<String>);
 pub fn run(args: StressArgs) -> Result<()> {
     if args.transport.capabilities().execution != admm_ta::runtime::transport::Execution::Processes
     {
-        bail!(
+        usage_bail!(
             "stress runs teams of agent processes: use --transport ipc, uds or zenoh (not {})",
             args.transport
         );
     }
     if args.runs == 0 || args.concurrency == 0 {
-        bail!("--runs and --concurrency must be at least 1");
+        usage_bail!("--runs and --concurrency must be at least 1");
     }
     // For the whole test, not only while a run's launcher lives: a signal between two runs
     // stops it too.
@@ -146,12 +147,13 @@ pub fn run(args: StressArgs) -> Result<()> {
         );
     }
     if !failures.is_empty() || !leftovers.is_empty() {
-        bail!(
+        return Err(RunsFailed(format!(
             "{} of {} runs failed, {} thing(s) left behind",
             failures.len(),
             outcomes.len(),
             leftovers.len()
-        );
+        ))
+        .into());
     }
     Ok(())
 }
