@@ -620,7 +620,10 @@ fn bench_rounds_measures_every_transport_and_writes_json_csv_and_plots() {
     // The wrong settings are refused with one line.
     for (args, needle) in [
         (vec!["--payloads", "0x3"], "1…2000"),
-        (vec!["--transports", "sim"], "threads, ipc, uds or zenoh"),
+        (
+            vec!["--transports", "sim"],
+            "threads, shm, ipc, uds or zenoh",
+        ),
         (
             vec!["--transports", "uds", "--barriers", "global"],
             "no case",

@@ -130,7 +130,7 @@ pub fn run(command: Command) -> Result<()> {
                 None => SurveillanceScenario::default(),
             };
             if transport.capabilities().execution == Execution::Lockstep {
-                bail!("--transport: the team runs on threads, ipc or uds");
+                bail!("--transport: the team runs on threads, shm, ipc or uds");
             }
             let config = EpisodeRunConfig {
                 max_rounds: max_iters,
