@@ -4,12 +4,16 @@
 //! the agent's step; then `i` stores `k + 2` into its published-round word (release), counts
 //! the message at each neighbour `j` (the board's arrival counter of `j` for the parity of
 //! `k + 1`) and, if it was the last of `j`'s round-`k + 1` messages
-//! ([`arrivals_target`]), bumps `j`'s wake-up word on the board and futex-wakes it: one
-//! system call per neighbour per round at most, and one wake-up per waiting agent per round.
-//! A waiting agent reads its wake-up word, checks its neighbours' published-round words
-//! (acquire) and sleeps on the value it read, in slices of [`FAILURE_CHECK_SLICE`], looking
-//! at the board's failure mark and stop request in between (see [`crate::futex`] for why no
-//! wake-up is lost). The global barrier is the board's counting barrier with its futex word.
+//! ([`arrivals_target`]), bumps `j`'s wake-up word on the board and, if `j` sleeps,
+//! futex-wakes it: one wake-up per waiting agent per round, and no system call at all for an
+//! agent that is not asleep. A waiting agent reads its wake-up word, checks its neighbours'
+//! published-round words (acquire), marks the word as slept on (its lowest bit, by a
+//! compare-and-swap from the value read: a bump in between fails it, and the agent checks
+//! again) and sleeps on the marked value, in slices of [`FAILURE_CHECK_SLICE`], looking at
+//! the board's failure mark and stop request in between (see [`crate::futex`] for why no
+//! wake-up is lost). Wakers bump the word by 2, keeping the mark; the agent clears it once
+//! its round is complete. The global barrier is the board's counting barrier with its futex
+//! word (several sleepers: every release wakes them all).
 //!
 //! A neighbour is at most one round ahead (the neighbour barrier), so the slot of parity
 //! `k % 2` still holds round `k` while anybody gathers it, and the own slot of parity
@@ -30,6 +34,10 @@ use std::time::{Duration, Instant};
 
 /// Longest sleep between two looks at the run's failure mark and stop request.
 const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
+
+/// The mark of an agent's wake-up word that says it sleeps (or is about to) on it; wakers
+/// bump the word by 2 so that the mark stays.
+const SLEEPING: u32 = 1;
 
 /// What one agent process needs to join an `shm` run.
 #[derive(Debug, Clone)]
@@ -161,8 +169,8 @@ impl ShmExchange {
     }
 
     /// Stops this agent on a stop request, a failure mark, or (looked at every 64 rounds
-    /// and while `waiting`) a launcher that is gone.
-    fn check_peers(&self, round: u64, waiting: bool) -> Result<(), ExchangeError> {
+    /// and after a whole sleep slice, `slept`) a launcher that is gone.
+    fn check_peers(&self, round: u64, slept: bool) -> Result<(), ExchangeError> {
         if let Some(signal) = self.board.stop_signal() {
             return Err(ExchangeError::Stopped {
                 agent: self.index,
@@ -183,7 +191,7 @@ impl ShmExchange {
             });
         }
         if let Some(launcher) = self.launcher
-            && (waiting || round.is_multiple_of(64))
+            && (slept || round.is_multiple_of(64))
             && std::os::unix::process::parent_id() != launcher
         {
             return Err(transport(
@@ -194,14 +202,31 @@ impl ShmExchange {
         Ok(())
     }
 
-    /// Sleeps on `word` while it holds `seen`, until `deadline` or the next failure check.
-    fn sleep(word: &AtomicU32, seen: u32, deadline: Instant) {
+    /// Sleeps on `word` while it holds `seen`, until `deadline` or the next failure check;
+    /// `true` if the whole slice passed. Every outcome (woken, changed, a signal, the
+    /// timeout) leads to a new check.
+    fn sleep(word: &AtomicU32, seen: u32, deadline: Instant) -> bool {
         let now = Instant::now();
         let slice = deadline.min(now + FAILURE_CHECK_SLICE) - now;
-        if !slice.is_zero() {
-            // Every outcome (woken, changed, a signal, the timeout) leads to a new check.
-            let _ = futex::wait(word, seen, slice);
+        slice.is_zero() || futex::wait(word, seen, slice) == futex::Wait::TimedOut
+    }
+
+    /// Sleeps on the own wake-up word, read as `seen` before the last check: marks it as
+    /// slept on first (see the module docs); `true` if a whole slice passed.
+    fn sleep_marked(word: &AtomicU32, seen: &mut u32, deadline: Instant) -> bool {
+        if *seen & SLEEPING == 0 {
+            match word.compare_exchange(
+                *seen,
+                *seen | SLEEPING,
+                Ordering::AcqRel,
+                Ordering::Acquire,
+            ) {
+                Ok(_) => *seen |= SLEEPING,
+                // Bumped since the check: check again.
+                Err(_) => return false,
+            }
         }
+        Self::sleep(word, *seen, deadline)
     }
 
     /// Whether every neighbour published round `round`, from neighbour `waiting.next` on
@@ -268,8 +293,9 @@ impl ShmExchange {
             let arrived = self.board.arrivals(j, round).fetch_add(1, Ordering::AcqRel) + 1;
             if arrived == arrivals_target(degree, round) {
                 let word = self.board.wake_word(j);
-                word.fetch_add(1, Ordering::Release);
-                futex::wake(word, 1);
+                if word.fetch_add(2, Ordering::AcqRel) & SLEEPING != 0 {
+                    futex::wake(word, 1);
+                }
             }
         }
     }
@@ -320,11 +346,16 @@ impl Exchange for ShmExchange {
             |waiting| {
                 // The word before the check: a wake-up after it changes the word.
                 waiting.seen = word.load(Ordering::Acquire);
-                Ok(self.all_published(round, waiting))
+                let ready = self.all_published(round, waiting);
+                if ready && waiting.seen & SLEEPING != 0 {
+                    // Nobody needs to wake us until the next sleep.
+                    word.fetch_and(!SLEEPING, Ordering::Relaxed);
+                }
+                Ok(ready)
             },
             |waiting, deadline| {
-                Self::sleep(word, waiting.seen, deadline);
-                self.check_peers(round, true)
+                let slept = Self::sleep_marked(word, &mut waiting.seen, deadline);
+                self.check_peers(round, slept)
             },
         )?;
         if !held {
@@ -409,8 +440,8 @@ impl Exchange for ShmExchange {
                         Ok(state.released(ticket))
                     },
                     |seen, deadline| {
-                        Self::sleep(word, *seen, deadline);
-                        self.check_peers(round, true)
+                        let slept = Self::sleep(word, *seen, deadline);
+                        self.check_peers(round, slept)
                     },
                 )?;
                 if released {
