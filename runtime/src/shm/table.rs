@@ -2,9 +2,14 @@
 //! of 64 bytes:
 //!
 //! * line 0: the table's shape (agents, payload length), written by its creator;
-//! * per agent `i`, from byte `64 + i · stride`: a line with its published-round word (the
-//!   latest round + 1, 0 before round 0), then two slots (round parity), each a line with
-//!   the round header and the payload length, then the payload, padded to whole lines.
+//! * the control region, three lines per agent `i` from line `1 + 3i`: its published-round
+//!   word (the latest round + 1, 0 before round 0), then the head of each of its two slots
+//!   (round parity): the round header and the payload length;
+//! * the payload region: the payloads of agent `i`'s two slots, each padded to whole lines.
+//!
+//! What a gather reads of every neighbour (its published-round word and its slot's head)
+//! sits in the dense control region: a few pages for a hundred agents, so that a process
+//! that was just switched in takes few TLB misses to look at all its neighbours.
 //!
 //! A slot is written only by its owner, for a round no neighbour reads any more, and read
 //! only after the owner's release store of its published-round word (see
@@ -68,36 +73,43 @@ pub enum TableError {
     },
 }
 
-/// Byte offsets of the table of a run with a given payload length.
+/// Byte offsets of the table of a run.
 #[derive(Debug, Clone, Copy)]
 struct Layout {
+    agents: usize,
     payload_len: usize,
-    /// Bytes of one slot: its head line and the payload in whole lines.
-    slot: usize,
-    /// Bytes of one agent: its published-round line and two slots.
-    stride: usize,
+    /// Bytes of one payload, in whole lines.
+    payload: usize,
 }
 
 impl Layout {
-    fn new(payload_len: usize) -> Self {
-        let slot = LINE + (payload_len * 8).next_multiple_of(LINE);
+    fn new(agents: usize, payload_len: usize) -> Self {
         Self {
+            agents,
             payload_len,
-            slot,
-            stride: LINE + 2 * slot,
+            payload: (payload_len * 8).next_multiple_of(LINE),
         }
     }
 
-    fn size(self, agents: usize) -> usize {
-        LINE + agents * self.stride
+    fn size(self) -> usize {
+        self.payloads() + 2 * self.agents * self.payload
     }
 
     fn published(self, agent: usize) -> usize {
-        LINE + agent * self.stride
+        LINE + 3 * LINE * agent
     }
 
-    fn slot(self, agent: usize, parity: usize) -> usize {
-        self.published(agent) + LINE + parity * self.slot
+    fn head(self, agent: usize, parity: usize) -> usize {
+        self.published(agent) + LINE + parity * LINE
+    }
+
+    /// Where the payload region starts.
+    fn payloads(self) -> usize {
+        LINE + 3 * LINE * self.agents
+    }
+
+    fn payload(self, agent: usize, parity: usize) -> usize {
+        self.payloads() + (2 * agent + parity) * self.payload
     }
 }
 
@@ -106,7 +118,6 @@ pub struct SlotTable {
     memory: SharedMemory,
     base: NonNull<u8>,
     layout: Layout,
-    agents: usize,
 }
 
 fn file_name(name: &str) -> Result<FileName, TableError> {
@@ -121,11 +132,11 @@ impl SlotTable {
     /// (the launcher, which owns it: it is removed when dropped): owner-only, zeroed, every
     /// page touched so that no agent takes a page fault in a round.
     pub fn create(name: &str, agents: usize, payload_len: usize) -> Result<Self, TableError> {
-        let layout = Layout::new(payload_len);
+        let layout = Layout::new(agents, payload_len);
         let memory = SharedMemoryBuilder::new(&file_name(name)?)
             .is_memory_locked(false)
             .creation_mode(iceoryx2_bb_posix::creation_mode::CreationMode::PurgeAndCreate)
-            .size(layout.size(agents))
+            .size(layout.size())
             .permission(iceoryx2_bb_posix::permission::Permission::OWNER_READ_WRITE)
             .zero_memory(true)
             .has_ownership(true)
@@ -134,7 +145,7 @@ impl SlotTable {
                 name: name.to_string(),
                 source,
             })?;
-        let table = Self::over(memory, layout, agents);
+        let table = Self::over(memory, layout);
         table.touch_pages(true);
         table.shape_word(0).store(agents as u64, Ordering::Relaxed);
         table
@@ -146,7 +157,7 @@ impl SlotTable {
     /// Opens the table `name` (created by the launcher) of a run of `agents` with payloads
     /// of `payload_len` values, and maps every page of it.
     pub fn open(name: &str, agents: usize, payload_len: usize) -> Result<Self, TableError> {
-        let layout = Layout::new(payload_len);
+        let layout = Layout::new(agents, payload_len);
         let memory = SharedMemoryBuilder::new(&file_name(name)?)
             .is_memory_locked(false)
             .open_existing(iceoryx2_bb_posix::access_mode::AccessMode::ReadWrite)
@@ -161,10 +172,10 @@ impl SlotTable {
             running_agents: running.0,
             running_payload_len: running.1,
         };
-        if memory.size() < layout.size(agents) {
+        if memory.size() < layout.size() {
             return Err(shape_error((0, 0)));
         }
-        let table = Self::over(memory, layout, agents);
+        let table = Self::over(memory, layout);
         // The payload length is written last (release): read it first.
         let running_payload_len = table.shape_word(8).load(Ordering::Acquire);
         let running = (
@@ -178,19 +189,18 @@ impl SlotTable {
         Ok(table)
     }
 
-    fn over(memory: SharedMemory, layout: Layout, agents: usize) -> Self {
+    fn over(memory: SharedMemory, layout: Layout) -> Self {
         let base = memory.base_address();
         Self {
             memory,
             base,
             layout,
-            agents,
         }
     }
 
     /// Faults every page of the mapping in (writing when `write`: the creator).
     fn touch_pages(&self, write: bool) {
-        let size = self.layout.size(self.agents).min(self.memory.size());
+        let size = self.layout.size().min(self.memory.size());
         for offset in (0..size).step_by(PAGE) {
             // SAFETY: inside the mapping; a volatile access of one byte, before any agent
             // uses the table (the creator writes the zero the page already holds).
@@ -213,7 +223,7 @@ impl SlotTable {
 
     /// Agents of the run.
     pub fn agents(&self) -> usize {
-        self.agents
+        self.layout.agents
     }
 
     /// Values of a payload.
@@ -223,25 +233,40 @@ impl SlotTable {
 
     /// Agent `agent`'s published-round word: its latest round + 1 (0: nothing yet).
     pub fn published(&self, agent: usize) -> &AtomicU64 {
-        assert!(agent < self.agents, "agent {agent} is not in the table");
+        assert!(
+            agent < self.layout.agents,
+            "agent {agent} is not in the table"
+        );
         // SAFETY: as in `shape_word`, for the agent's first line.
         unsafe { &*(self.base.as_ptr().add(self.layout.published(agent)) as *const AtomicU64) }
     }
 
     fn head(&self, agent: usize, parity: usize) -> *mut SlotHead {
-        assert!(agent < self.agents, "agent {agent} is not in the table");
-        // SAFETY: the slot is inside the mapping (its size was checked), line-aligned.
+        assert!(
+            agent < self.layout.agents,
+            "agent {agent} is not in the table"
+        );
+        // SAFETY: the head is inside the mapping (its size was checked), line-aligned.
         unsafe {
             self.base
                 .as_ptr()
-                .add(self.layout.slot(agent, parity % 2))
+                .add(self.layout.head(agent, parity % 2))
                 .cast()
         }
     }
 
     fn payload_ptr(&self, agent: usize, parity: usize) -> *mut f64 {
-        // SAFETY: the payload follows the slot's head line, inside the mapping.
-        unsafe { self.head(agent, parity).add(1).cast() }
+        assert!(
+            agent < self.layout.agents,
+            "agent {agent} is not in the table"
+        );
+        // SAFETY: the payload is inside the mapping, line-aligned.
+        unsafe {
+            self.base
+                .as_ptr()
+                .add(self.layout.payload(agent, parity % 2))
+                .cast()
+        }
     }
 
     /// The round header in agent `agent`'s slot of parity `parity`.
