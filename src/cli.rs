@@ -123,8 +123,8 @@ pub struct TopologyArgs {
 
 #[derive(Subcommand, Debug)]
 pub enum Bench {
-    /// Round latency of teams exchanging payloads on threads, ipc (iceoryx2 zero-copy) and
-    /// uds (Unix-domain sockets, copying) in one run: p50/p90/p99/p99.9/max of the round
+    /// Round latency of teams exchanging payloads on threads, shm (processes sharing a slot
+    /// table), ipc (iceoryx2 zero-copy) and uds (Unix-domain sockets, copying) in one run: p50/p90/p99/p99.9/max of the round
     /// time and of the exchange overhead (round − compute), CPU time and context switches
     /// per agent-round. Without axis options it sweeps one axis at a time around 10 agents,
     /// complete graph, 10×10 payload; with any axis option, the cross product of the lists
@@ -146,8 +146,8 @@ pub struct RoundsArgs {
     /// Payload shapes ROWSxCOLS of f64, comma-separated (e.g. 1x1,10x10,200x200).
     #[arg(long, value_delimiter = ',')]
     pub payloads: Option<Vec<String>>,
-    /// Transports, comma-separated: threads, ipc, uds, zenoh (default: threads, ipc, uds;
-    /// zenoh needs a build with `--features zenoh`).
+    /// Transports, comma-separated: threads, shm, ipc, uds, zenoh (default: threads, shm,
+    /// ipc, uds; zenoh needs a build with `--features zenoh`).
     #[arg(long, value_enum, value_delimiter = ',')]
     pub transports: Option<Vec<Transport>>,
     /// Wait strategies, comma-separated: auto, block, spin-then-block, spin.
@@ -378,8 +378,9 @@ pub struct SolveArgs {
     // The help lists every method with its summary, from the method registry.
     #[arg(long, value_enum, default_value = "primal", help = Method::help())]
     pub method: Method,
-    /// sim (one thread, lockstep), threads (a thread per agent), ipc (a process per agent,
-    /// iceoryx2 zero-copy), uds (a process per agent, payloads copied through Unix-domain
+    /// sim (one thread, lockstep), threads (a thread per agent), shm (a process per agent,
+    /// one shared table of slots read in place, futex wake-ups: a reference for the cost of
+    /// a round between processes), ipc (a process per agent, iceoryx2 zero-copy), uds (a process per agent, payloads copied through Unix-domain
     /// sockets: a baseline) or zenoh (a process per agent, Zenoh through a router on
     /// loopback: the multi-host transport; needs `--features zenoh`).
     #[arg(long, value_enum, default_value = "sim")]
@@ -449,7 +450,7 @@ pub struct SolveArgs {
     /// names the failed robot and maps the assignment to the survivors' original numbers).
     #[arg(long, value_enum, default_value = "abort")]
     pub on_failure: OnFailure,
-    /// How agents wait for their neighbours (threads, ipc, uds): auto (spin 20 µs then
+    /// How agents wait for their neighbours (threads, shm, ipc, uds): auto (spin 20 µs then
     /// sleep when every agent has a core, else sleep at once), block, spin-then-block, or
     /// spin (poll and yield, never sleep).
     #[arg(long, value_enum, default_value = "auto")]

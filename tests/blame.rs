@@ -140,6 +140,12 @@ fn ipc_names_the_agent_that_failed() {
 }
 
 #[test]
+fn shm_names_the_agent_that_failed() {
+    use Fault::*;
+    table("shm", &[Kill, Stop, NeverStarts, ExitsEarly, Garbage]);
+}
+
+#[test]
 fn uds_names_the_agent_that_failed() {
     // uds carries no payload faults (its capabilities say so): the process faults only.
     use Fault::*;

@@ -594,6 +594,7 @@ fn bench_rounds_measures_every_transport_and_writes_json_csv_and_plots() {
     let table = String::from_utf8_lossy(&out.stdout);
     for needle in [
         "| threads |",
+        "| shm |",
         "| ipc |",
         "| uds |",
         "ipc / threads p50",
@@ -605,7 +606,7 @@ fn bench_rounds_measures_every_transport_and_writes_json_csv_and_plots() {
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("rounds.json")).unwrap())
             .unwrap();
     let results = v["results"].as_array().unwrap();
-    assert_eq!(results.len(), 2 * 3 * 3, "agents × payloads × transports");
+    assert_eq!(results.len(), 2 * 3 * 4, "agents × payloads × transports");
     assert!(v["failures"].as_array().unwrap().is_empty());
     for r in results {
         let agents = r["agents"].as_u64().unwrap();
@@ -640,7 +641,10 @@ fn bench_rounds_measures_every_transport_and_writes_json_csv_and_plots() {
     // The wrong settings are refused with one line.
     for (args, needle) in [
         (vec!["--payloads", "0x3"], "1…2000"),
-        (vec!["--transports", "sim"], "threads, ipc, uds or zenoh"),
+        (
+            vec!["--transports", "sim"],
+            "threads, shm, ipc, uds or zenoh",
+        ),
         (
             vec!["--transports", "uds", "--barriers", "global"],
             "no case",

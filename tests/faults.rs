@@ -1,6 +1,6 @@
-//! Agent failures with real processes: `kill -9` of an agent from outside, and every fault the
-//! hidden `ADMM_TA_FAULT` switch injects (exit, abort, hang, NaN payload, wrong round, wrong
-//! size). Each run must end with a non-zero exit and one line naming the failed agent, every
+//! Agent failures with real processes (ipc, and shm where both are listed): `kill -9` of an
+//! agent from outside, and every fault the hidden `ADMM_TA_FAULT` switch injects (exit,
+//! abort, hang, NaN payload, wrong round, wrong size). Each run must end with a non-zero exit and one line naming the failed agent, every
 //! other agent stopped, every child reaped and nothing of the run left in `/dev/shm` or the
 //! run directory.
 
@@ -12,9 +12,14 @@ use std::time::{Duration, Instant};
 
 /// `admm-ta solve --transport ipc ARGS` (whitespace-separated) with an optional fault.
 fn solve(args: &str, fault: Option<&str>) -> Child {
+    solve_on("ipc", args, fault)
+}
+
+/// `admm-ta solve --transport TRANSPORT ARGS` with an optional fault.
+fn solve_on(transport: &str, args: &str, fault: Option<&str>) -> Child {
     let mut command = Command::new(env!("CARGO_BIN_EXE_admm-ta"));
     command
-        .args(["solve", "--transport", "ipc"])
+        .args(["solve", "--transport", transport])
         .args(args.split_whitespace())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
@@ -71,7 +76,13 @@ const LONG_RUN: &str =
 
 #[test]
 fn kill_9_of_an_agent_ends_the_run_within_a_second_and_leaves_nothing() {
-    let mut launcher = solve(LONG_RUN, None);
+    for transport in ["ipc", "shm"] {
+        kill_9_of_agent_7(transport);
+    }
+}
+
+fn kill_9_of_agent_7(transport: &str) {
+    let mut launcher = solve_on(transport, LONG_RUN, None);
     let pid = launcher.id();
     // Wait until all 20 agents run and have done some rounds.
     let started = Instant::now();
@@ -97,7 +108,7 @@ fn kill_9_of_an_agent_ends_the_run_within_a_second_and_leaves_nothing() {
     assert!(status.success());
     let exit = wait_with_deadline(&mut launcher, Duration::from_secs(30));
     let detection = killed.elapsed();
-    eprintln!("kill -9 of agent 7 of 20 → launcher exit in {detection:?}");
+    eprintln!("{transport}: kill -9 of agent 7 of 20 → launcher exit in {detection:?}");
     assert!(!exit.success());
     let stderr = stderr_of(&mut launcher);
     assert_failure_line(
@@ -137,15 +148,22 @@ fn every_injected_fault_is_reported_with_the_failed_agent() {
             ],
         ),
     ];
-    for (kind, needles) in cases {
+    for ((kind, needles), transport) in cases
+        .iter()
+        .flat_map(|case| ["ipc", "shm"].map(|t| (case, t)))
+    {
         let args = "--robots 8 --tasks 8 --topology ring --stop max-iters --max-iters 1000 --round-timeout 1";
-        let mut launcher = solve(args, Some(&format!("3:10:{kind}")));
+        let mut launcher = solve_on(transport, args, Some(&format!("3:10:{kind}")));
         let pid = launcher.id();
         let exit = wait_with_deadline(&mut launcher, Duration::from_secs(60));
-        assert!(!exit.success(), "{kind}: the run succeeded");
-        assert_eq!(exit.code(), Some(4), "{kind}: an agent failure exits 4");
+        assert!(!exit.success(), "{transport} {kind}: the run succeeded");
+        assert_eq!(
+            exit.code(),
+            Some(4),
+            "{transport} {kind}: an agent failure exits 4"
+        );
         let stderr = stderr_of(&mut launcher);
-        assert_failure_line(&stderr, &needles);
+        assert_failure_line(&stderr, needles);
         assert!(
             leftovers_of(pid).is_empty(),
             "{kind}: {:?}",

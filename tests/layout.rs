@@ -14,7 +14,7 @@
 //!     `ipc::exchange`);
 //! (c) no file above 500 lines unless its module doc has a line starting with `//! Size:`
 //!     that says why;
-//! (d) in the runtime, no transport module (`sim`, `threads`, `ipc`, `uds`, `zenoh_net`,
+//! (d) in the runtime, no transport module (`sim`, `threads`, `shm`, `ipc`, `uds`, `zenoh_net`,
 //!     each with its submodules) names another transport: what several of them share sits
 //!     below them;
 //! (e) in the runtime, data flows one way: a module names modules of its own layer or of
@@ -25,7 +25,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The transports: none may name another.
-const TRANSPORTS: [&str; 5] = ["sim", "threads", "ipc", "uds", "zenoh_net"];
+const TRANSPORTS: [&str; 6] = ["sim", "threads", "shm", "ipc", "uds", "zenoh_net"];
 
 /// The runtime's layers, top to bottom, by top-level module (with their submodules).
 const LAYERS: [&[&str]; 5] = [

@@ -154,7 +154,7 @@ fn twenty_agents_stop_on_a_signal_to_the_launcher_or_to_the_whole_group() {
 
 #[test]
 fn a_signal_during_start_up_stops_the_team() {
-    for transport in ["ipc", "uds"] {
+    for transport in ["shm", "ipc", "uds"] {
         stop_with(12, transport, libc::SIGTERM, false, Duration::ZERO, None);
         stop_with(12, transport, libc::SIGINT, true, Duration::ZERO, None);
     }
@@ -162,7 +162,7 @@ fn a_signal_during_start_up_stops_the_team() {
 
 #[test]
 fn a_signal_to_one_agent_stops_the_team_naming_it() {
-    for transport in ["ipc", "uds"] {
+    for transport in ["shm", "ipc", "uds"] {
         let (_, line) = stop_with(
             8,
             transport,

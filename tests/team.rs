@@ -280,6 +280,11 @@ fn bad_host_tables() -> Vec<(String, &'static str)> {
             format!("{base}transport = \"carrier-pigeon\"\n"),
             "unknown variant",
         ),
+        // The shared-slot reference transport runs under a launcher only (`solve`).
+        (
+            format!("{base}transport = \"shm\"\n"),
+            "unknown variant `shm`, expected one of `iceoryx2`, `ipc`, `zenoh`, `mixed`",
+        ),
     ]
 }
 

@@ -1,5 +1,5 @@
-//! The four transports drive the same agent step: for the same seed they must produce the
-//! same iterates (bit for bit), stop at the same round and assign the same tasks. The ipc
+//! Every transport drives the same agent step: for the same seed they must produce the same
+//! iterates (bit for bit), stop at the same round and assign the same tasks. The shm, ipc
 //! and uds runs use real agent processes (and real shared memory, or real sockets), each in
 //! its own namespace, and must leave nothing behind.
 
@@ -93,19 +93,22 @@ fn all_transports_with(
             .unwrap();
         solve(problem, graph, &config).unwrap()
     };
-    let (sim, threads, ipc, uds) = (
+    let (sim, threads, shm, ipc, uds) = (
         run(Transport::Sim),
         run(Transport::Threads),
+        run(Transport::Shm),
         run(Transport::Ipc),
         run(Transport::Uds),
     );
     assert_same(&sim, &threads);
+    assert_same(&sim, &shm);
     assert_same(&sim, &ipc);
     assert_same(&sim, &uds);
+    assert_clean(&shm);
     assert_clean(&ipc);
     assert_clean(&uds);
     #[allow(unused_mut)]
-    let mut distributed = vec![&threads, &ipc, &uds];
+    let mut distributed = vec![&threads, &shm, &ipc, &uds];
     // The multi-host transport, through a router on loopback.
     #[cfg(feature = "zenoh")]
     let zenoh = run(Transport::Zenoh);
@@ -142,6 +145,7 @@ fn all_transports_with(
         );
         assert!(latency.round.p50 > 0.0 && latency.round.p99 >= latency.round.p50);
     }
+    assert!(shm.startup_ms.unwrap() > 0.0);
     assert!(ipc.startup_ms.unwrap() > 0.0);
     assert!(uds.startup_ms.unwrap() > 0.0);
 }
@@ -237,7 +241,7 @@ fn a_global_barrier_changes_timing_not_iterates() {
             .unwrap(),
     )
     .unwrap();
-    for transport in [Transport::Threads, Transport::Ipc] {
+    for transport in [Transport::Threads, Transport::Shm, Transport::Ipc] {
         let barrier = solve(
             &p,
             &g,
@@ -250,7 +254,7 @@ fn a_global_barrier_changes_timing_not_iterates() {
         assert_same(&plain, &barrier);
         let latency = barrier.round_latency_us.unwrap();
         assert_eq!(latency.barrier.count, latency.round.count);
-        if transport == Transport::Ipc {
+        if transport != Transport::Threads {
             assert_clean(&barrier);
         }
     }
@@ -352,7 +356,7 @@ fn central_stop_rules_are_refused_on_distributed_transports() {
         .global_barrier(true)
         .build()
         .unwrap_err();
-    assert!(err.to_string().contains("threads or ipc"), "{err}");
+    assert!(err.to_string().contains("threads, shm or ipc"), "{err}");
     // A solve with options built on the way reports the same.
     let solved = config(Transport::Threads, StopRule::Certified, 100)
         .build()
@@ -378,7 +382,12 @@ fn every_wait_strategy_gives_the_same_iterates_on_every_distributed_transport() 
         WaitStrategy::SpinThenBlock,
         WaitStrategy::Spin,
     ] {
-        for transport in [Transport::Threads, Transport::Ipc, Transport::Uds] {
+        for transport in [
+            Transport::Threads,
+            Transport::Shm,
+            Transport::Ipc,
+            Transport::Uds,
+        ] {
             let report = solve(
                 &p,
                 &g,
@@ -409,7 +418,12 @@ fn the_socket_baseline_moves_payloads_larger_than_the_socket_buffers() {
     use admm_ta_agents::probe::ProbeStep;
     use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
     let g = graph("complete", 6, 0);
-    for transport in [Transport::Threads, Transport::Ipc, Transport::Uds] {
+    for transport in [
+        Transport::Threads,
+        Transport::Shm,
+        Transport::Ipc,
+        Transport::Uds,
+    ] {
         let options = RunOptions::builder()
             .transport(transport)
             .warmup_rounds(5)

@@ -27,6 +27,8 @@
 //!   reading only its neighbours' previous-round payloads; the deterministic reference the
 //!   others must reproduce bit for bit;
 //! * [`threads`]: one OS thread per agent, lock-free double-buffered slots;
+//! * [`shm`]: agent processes sharing one table of double-buffered slots, futex wake-ups (the
+//!   `threads` protocol across processes: a reference for what a process round costs);
 //! * [`ipc`]: the iceoryx2 exchange of agent processes (services, nodes, zero-copy samples);
 //! * [`uds`]: agent processes copying payloads through Unix-domain sockets (a baseline);
 //! * [`zenoh_net`]: agent processes over Zenoh (feature `zenoh`), the multi-host transport.
@@ -76,6 +78,7 @@ pub mod process;
 
 // Transports.
 pub mod ipc;
+pub mod shm;
 pub mod sim;
 pub mod threads;
 pub mod uds;

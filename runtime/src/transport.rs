@@ -18,6 +18,10 @@ pub enum Transport {
     Sim,
     /// One OS thread per agent, lock-free slots, crossbeam parkers ([`crate::threads`]).
     Threads,
+    /// One OS process per agent, payloads in one shared-memory table of slots read in place,
+    /// futex wake-ups: the `threads` protocol across processes, a reference for what a
+    /// round between processes costs ([`crate::shm`]).
+    Shm,
     /// One OS process per agent, iceoryx2 zero-copy publish-subscribe ([`crate::ipc`]).
     Ipc,
     /// One OS process per agent, every payload copied through Unix-domain sockets: the
@@ -61,13 +65,21 @@ pub struct Capabilities {
 
 impl Transport {
     /// Every transport, in the order of the command line's help.
-    pub const ALL: [Transport; 5] = [Self::Sim, Self::Threads, Self::Ipc, Self::Uds, Self::Zenoh];
+    pub const ALL: [Transport; 6] = [
+        Self::Sim,
+        Self::Threads,
+        Self::Shm,
+        Self::Ipc,
+        Self::Uds,
+        Self::Zenoh,
+    ];
 
     /// The name used on the command line and in JSON.
     pub fn name(self) -> &'static str {
         match self {
             Self::Sim => "sim",
             Self::Threads => "threads",
+            Self::Shm => "shm",
             Self::Ipc => "ipc",
             Self::Uds => "uds",
             Self::Zenoh => "zenoh",
@@ -94,6 +106,11 @@ impl Transport {
                 global_barrier: true,
                 ..none
             },
+            Self::Shm => Capabilities {
+                global_barrier: true,
+                fault_injection: true,
+                ..none
+            },
             Self::Ipc => Capabilities {
                 global_barrier: true,
                 fault_injection: true,
@@ -110,8 +127,8 @@ impl Transport {
         }
     }
 
-    /// The transports that have `capability`, for messages: `threads or ipc`, `ipc, uds and
-    /// zenoh` (`conjunction` joins the last two).
+    /// The transports that have `capability`, for messages: `threads, shm or ipc`, `shm, ipc,
+    /// uds and zenoh` (`conjunction` joins the last two).
     pub fn names_where(capability: impl Fn(Capabilities) -> bool, conjunction: &str) -> String {
         let names: Vec<&str> = Self::ALL
             .into_iter()
@@ -178,11 +195,11 @@ mod tests {
         assert!("pigeon".parse::<Transport>().is_err());
         assert_eq!(
             Transport::names_where(|c| c.global_barrier, "or"),
-            "threads or ipc"
+            "threads, shm or ipc"
         );
         assert_eq!(
             Transport::names_where(|c| c.execution == Execution::Processes, "and"),
-            "ipc, uds and zenoh"
+            "shm, ipc, uds and zenoh"
         );
         assert_eq!(Transport::names_where(|c| c.failure_recovery, "or"), "ipc");
     }

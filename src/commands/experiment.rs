@@ -131,7 +131,7 @@ pub fn run(command: Command) -> Result<()> {
                 None => SurveillanceScenario::default(),
             };
             if transport.capabilities().execution == Execution::Lockstep {
-                usage_bail!("--transport: the team runs on threads, ipc or uds");
+                usage_bail!("--transport: the team runs on threads, shm, ipc or uds");
             }
             let config = EpisodeRunConfig {
                 max_rounds: max_iters,

@@ -58,7 +58,7 @@ pub fn run(args: StressArgs) -> Result<()> {
     if args.transport.capabilities().execution != admm_ta::runtime::transport::Execution::Processes
     {
         usage_bail!(
-            "stress runs teams of agent processes: use --transport ipc, uds or zenoh (not {})",
+            "stress runs teams of agent processes: use --transport shm, ipc, uds or zenoh (not {})",
             args.transport
         );
     }

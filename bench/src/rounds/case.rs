@@ -188,7 +188,12 @@ impl RoundsConfig {
 }
 
 /// The transports a sweep measures unless told otherwise.
-pub const DEFAULT_TRANSPORTS: [Transport; 3] = [Transport::Threads, Transport::Ipc, Transport::Uds];
+pub const DEFAULT_TRANSPORTS: [Transport; 4] = [
+    Transport::Threads,
+    Transport::Shm,
+    Transport::Ipc,
+    Transport::Uds,
+];
 
 /// The cases of `config`, in run order, without duplicates. Invalid combinations (a global
 /// barrier on uds or zenoh) are left out.

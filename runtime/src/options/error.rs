@@ -100,7 +100,7 @@ mod tests {
     fn messages_name_the_flags_and_the_transports_that_can() {
         assert_eq!(
             ConfigError::BarrierNeedsAgents.to_string(),
-            "--global-barrier needs the threads or ipc transport (sim, uds and zenoh have none)"
+            "--global-barrier needs the threads, shm or ipc transport (sim, uds and zenoh have none)"
         );
         assert_eq!(
             ConfigError::NoFailureRecovery.to_string(),

@@ -14,6 +14,8 @@ use crate::ipc::nodes::run_config;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::process::team_digest::TeamDigest;
+use crate::shm::exchange::{ShmEndpoint, ShmExchange};
+use crate::shm::table::{SlotTable, TableError, table_name};
 use crate::transport::Transport;
 use crate::uds::{UdsEndpoint, UdsExchange};
 use crate::wait::WaitPolicy;
@@ -25,6 +27,7 @@ use std::time::Instant;
 pub(crate) enum Endpoint {
     // Boxed: they are large, and the enum is built once.
     Ipc(Box<IpcExchange>),
+    Shm(Box<ShmExchange>),
     Uds(Box<UdsExchange>),
     #[cfg(feature = "zenoh")]
     Zenoh(Box<crate::zenoh_net::exchange::ZenohExchange>),
@@ -60,7 +63,10 @@ pub(crate) fn connect(
     };
     let policy = WaitPolicy::new(scenario.wait, scenario.robots);
     let neighbours = graph.neighbours(index).to_vec();
-    if matches!(scenario.transport, Transport::Ipc | Transport::Uds) {
+    if matches!(
+        scenario.transport,
+        Transport::Ipc | Transport::Shm | Transport::Uds
+    ) {
         // Another team's agent is refused by name before it opens a service.
         let board = Board::open(&scenario.board_shm, scenario.robots).map_err(|e| one_line(&e))?;
         TeamDigest::of(scenario).check(&board, index)?;
@@ -88,6 +94,22 @@ pub(crate) fn connect(
                 IpcExchange::connect(&endpoint, &config, deadline).map_err(stop_or_text)?;
             exchange.inject(fault);
             Ok(Endpoint::Ipc(Box::new(exchange)))
+        }
+        Transport::Shm => {
+            let endpoint = ShmEndpoint {
+                index,
+                neighbours,
+                degrees: (0..graph.robots()).map(|j| graph.degree(j)).collect(),
+                payload_len: scenario.payload_len(),
+                tasks: scenario.tasks,
+                policy,
+                board_shm: scenario.board_shm.clone(),
+                table_shm: table_name(&scenario.iceoryx_prefix),
+                supervised,
+            };
+            let mut exchange = ShmExchange::connect(&endpoint, deadline).map_err(stop_or_text)?;
+            exchange.inject(fault);
+            Ok(Endpoint::Shm(Box::new(exchange)))
         }
         Transport::Uds => {
             let endpoint = UdsEndpoint {
@@ -167,6 +189,7 @@ impl Endpoint {
     pub(crate) fn exchange(&mut self) -> &mut dyn Exchange {
         match self {
             Self::Ipc(e) => e.as_mut(),
+            Self::Shm(e) => e.as_mut(),
             Self::Uds(e) => e.as_mut(),
             #[cfg(feature = "zenoh")]
             Self::Zenoh(e) => e.as_mut(),
@@ -177,6 +200,7 @@ impl Endpoint {
     pub(crate) fn request_stop(&self, signal: i32) {
         match self {
             Self::Ipc(exchange) => exchange.request_stop(signal),
+            Self::Shm(exchange) => exchange.request_stop(signal),
             Self::Uds(exchange) => exchange.request_stop(signal),
             #[cfg(feature = "zenoh")]
             Self::Zenoh(exchange) => exchange.request_stop(signal),
@@ -187,6 +211,16 @@ impl Endpoint {
     pub(crate) fn blame_for(&self, error: &ExchangeError) {
         match self {
             Self::Ipc(exchange) => {
+                let culprit = match error {
+                    // Blocked neighbours time out too: blame the agent everybody waits for.
+                    ExchangeError::Timeout { .. } => Some(exchange.laggard()),
+                    e => culprit(e),
+                };
+                if let Some(culprit) = culprit {
+                    exchange.blame(culprit);
+                }
+            }
+            Self::Shm(exchange) => {
                 let culprit = match error {
                     // Blocked neighbours time out too: blame the agent everybody waits for.
                     ExchangeError::Timeout { .. } => Some(exchange.laggard()),
@@ -224,8 +258,10 @@ impl Endpoint {
 }
 
 /// What a launcher's run needs besides the agents and the board, kept running until every
-/// agent is gone: the loopback router of a Zenoh run.
+/// agent is gone: the slot table of an shm run, the loopback router of a Zenoh run.
 pub(crate) struct LauncherSupport {
+    /// The slot table of an shm run (removed when dropped).
+    _slots: Option<SlotTable>,
     #[cfg(feature = "zenoh")]
     router: Option<(
         crate::zenoh_net::router::HostRouter,
@@ -243,6 +279,8 @@ pub(crate) struct LauncherSupport {
 /// Why a launcher could not start what its run's transport needs.
 #[derive(Debug, thiserror::Error)]
 pub enum SupportError {
+    #[error("cannot create the run's slot table")]
+    Slots(#[source] TableError),
     #[error("cannot start the run's Zenoh router: {0}")]
     ZenohRouter(String),
     #[error("cannot start the run's Zenoh router")]
@@ -281,6 +319,7 @@ impl LauncherSupport {
                     .map_err(SupportError::ZenohRouter)?
                 };
                 Ok(Self {
+                    _slots: None,
                     router: Some((router, links)),
                     announced: Some((first, subscriber)),
                 })
@@ -290,7 +329,22 @@ impl LauncherSupport {
                 let _ = namespace;
                 Err(crate::transport::ZenohNotBuilt.into())
             }
+            Transport::Shm => Ok(Self {
+                _slots: Some(
+                    SlotTable::create(
+                        &table_name(&namespace.prefix),
+                        scenario.robots,
+                        scenario.payload_len(),
+                    )
+                    .map_err(SupportError::Slots)?,
+                ),
+                #[cfg(feature = "zenoh")]
+                router: None,
+                #[cfg(feature = "zenoh")]
+                announced: None,
+            }),
             Transport::Sim | Transport::Threads | Transport::Ipc | Transport::Uds => Ok(Self {
+                _slots: None,
                 #[cfg(feature = "zenoh")]
                 router: None,
                 #[cfg(feature = "zenoh")]

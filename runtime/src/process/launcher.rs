@@ -135,6 +135,8 @@ impl Drop for RunGuard {
             }
         }
         self.board = None;
+        // The transport's support too (an shm run's slot table), before the namespace goes.
+        self.support = None;
         if std::env::var_os("ADMM_TA_STARTUP_TRACE").is_some() {
             for i in 0..self.children.len() {
                 eprintln!("{}", last_log_line(&self.namespace.dir, i));

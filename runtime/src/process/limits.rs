@@ -7,8 +7,9 @@
 //! Open files per agent process, counted in `/proc/PID/fd` on real runs and fitted (degree
 //! `d`): iceoryx2 `19 + 11·d` (degree 1, 2, 9, 49: 30, 41, 118, 558 — each neighbour costs a
 //! subscriber, a notifier and their shared-memory connections and segments); Unix sockets
-//! `6 + d`; Zenoh (threads and sockets of its runtime) about 64. One thread per agent process
-//! (ipc, uds); a Zenoh agent runs its runtime's threads too.
+//! `6 + d`; the shm slot table 6 (the board and the table, whatever the degree); Zenoh
+//! (threads and sockets of its runtime) about 64. One thread per agent process (shm, ipc,
+//! uds); a Zenoh agent runs its runtime's threads too.
 
 use crate::transport::Transport;
 
@@ -20,6 +21,7 @@ pub fn files_per_agent(transport: Transport, degree: usize) -> u64 {
     let d = degree as u64;
     match transport {
         Transport::Ipc => 19 + 11 * d,
+        Transport::Shm => 6,
         Transport::Uds => 6 + d,
         Transport::Zenoh => 64 + d,
         Transport::Sim | Transport::Threads => 0,

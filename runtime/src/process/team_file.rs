@@ -85,7 +85,10 @@ pub struct TeamFile {
 /// It is not a [`Transport`]: `mixed` is two transports at once (iceoryx2 among the agents of
 /// a host, Zenoh between hosts through each host's bridge), and a deployment decides more
 /// than an agent's exchange — whether the team has hosts, a shared board per host, bridges.
-/// [`Deployment::agent_transport`] is the exchange each agent runs.
+/// [`Deployment::agent_transport`] is the exchange each agent runs. The `shm` and `uds`
+/// transports run under a launcher only (`solve --transport shm`): a team file names no
+/// such deployment and is refused (the launcher creates and removes the shm slot table,
+/// and finds dead agents by `waitpid`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Deployment {
