@@ -319,6 +319,27 @@ pub enum Experiment {
         #[arg(long)]
         json: bool,
     },
+    /// Every size certified: the primal method with the defaults on n × n problems (20, 50,
+    /// 80, 120 robots), uniform and distance costs, chain / ring / random:0.1 / complete
+    /// graphs; per point the runs certified and optimal, median and largest rounds, median
+    /// wall time (sim). Exits non-zero unless every run certified the optimum.
+    #[command(name = "size-sweep")]
+    SizeSweep {
+        /// 10 and 20 robots, 2 seeds (default: 20, 50, 80, 120 robots, 3 seeds).
+        #[arg(long)]
+        quick: bool,
+        /// Sizes n, comma-separated (overrides the default).
+        #[arg(long, value_delimiter = ',')]
+        sizes: Vec<usize>,
+        /// Seeds per point (overrides the default).
+        #[arg(long)]
+        seeds: Option<u64>,
+        /// Graphs, comma-separated (default chain,ring,random:0.1,complete).
+        #[arg(long, value_delimiter = ',')]
+        topologies: Vec<String>,
+        #[arg(long, default_value = "experiment-results")]
+        out: PathBuf,
+    },
     /// Table 1: iterations of primal / dual / inexact dual at 20×20 on the complete graph
     /// (paper: 28 / 159 / 387), for uniform costs in [0,1) and shifted to [1,2).
     Table1 {

@@ -898,3 +898,28 @@ fn rounds_anatomy_quick_writes_its_table_json_and_charts() {
         assert_eq!(cell["wrong_stops"], 0, "{}", cell["name"]);
     }
 }
+
+#[test]
+fn size_sweep_checks_every_run_certified_and_optimal() {
+    let (table, json) = experiment(
+        &[
+            "size-sweep",
+            "--sizes",
+            "5,8",
+            "--seeds",
+            "1",
+            "--topologies",
+            "chain,complete",
+        ],
+        "size_sweep.json",
+    );
+    assert!(
+        table.contains("| 8 | geometric | chain | 1/1 | 1/1 |"),
+        "{table}"
+    );
+    assert!(
+        table.contains("Every run certified the optimal assignment."),
+        "{table}"
+    );
+    assert_eq!(json["points"].as_array().unwrap().len(), 2 * 2 * 2);
+}

@@ -16,7 +16,8 @@
 //! `Σ_j f_j + min_cover Σ_t (G[t, c(t)] − f_{c(t)})`, `f_j` robot `j`'s cheapest entry: an
 //! `m × n` problem over injective covers, `O(m² n)` instead of the `n × n` expansion's
 //! `O(n³)` (100 robots × 4 tasks: the difference between a stress run in seconds and in
-//! minutes). Everything is preallocated: a readout allocates nothing.
+//! minutes). Case 1 warm-starts each round's solve from the previous round's
+//! ([`LsapWorkspace::solve_warm`]). Everything is preallocated: a readout allocates nothing.
 
 use crate::lsap_workspace::LsapWorkspace;
 use crate::problem::AssignmentCase;
@@ -34,6 +35,8 @@ pub struct GReadout {
     /// `ε · U[0, 1)` per entry (column-major tasks × robots); empty when `ε = 0`.
     tie_break: Vec<f64>,
     epsilon: f64,
+    /// `G_i + E` of the current readout (column-major tasks × robots, as `Q_i`).
+    g: Vec<f64>,
     workspace: LsapWorkspace,
     /// Case 2: each robot's cheapest entry of `G_i + E` and its task.
     free_cost: Vec<f64>,
@@ -66,6 +69,7 @@ impl GReadout {
             case,
             tie_break,
             epsilon,
+            g: vec![0.0; tasks * robots],
             workspace: LsapWorkspace::new(rows, cols),
             free_cost: vec![0.0; robots],
             cheapest: vec![0; robots],
@@ -81,16 +85,23 @@ impl GReadout {
     /// (its `α_i`) into `out`.
     pub fn read(&mut self, q: &[f64], costs: &[f64], index: usize, out: &mut [usize]) {
         let (m, n) = (self.tasks, self.robots);
-        let tie = &self.tie_break;
-        let g = |t: usize, j: usize| {
-            let e = j * m + t;
-            q[e] + tie.get(e).copied().unwrap_or(0.0) + if j == index { costs[t] } else { 0.0 }
-        };
+        // `G_i + E` once per round: the solver reads entries many times.
+        self.g.copy_from_slice(q);
+        for (g, tie) in self.g.iter_mut().zip(&self.tie_break) {
+            *g += tie;
+        }
+        for (g, cost) in self.g[index * m..(index + 1) * m].iter_mut().zip(costs) {
+            *g += cost;
+        }
+        let values = &self.g;
+        let g = |t: usize, j: usize| values[j * m + t];
         // Finite iterates always have an assignment; a non-finite one leaves the readout
         // stale (`out` unchanged, no certificate slack) rather than stopping the robot.
         self.current = false;
         if Self::square(self.case, n, m) {
-            let Some(rows) = self.workspace.solve(|j, t| g(t, j)) else {
+            // Warm: the previous round's potentials and assignment (an exact minimiser all
+            // the same, in `O(n²)` when few robots' best tasks moved).
+            let Some(rows) = self.workspace.solve_warm(|j, t| g(t, j)) else {
                 return;
             };
             out.copy_from_slice(rows);

@@ -10,6 +10,7 @@ pub mod figures;
 pub mod plot;
 pub mod rounds;
 pub mod rounds_anatomy;
+pub mod size_sweep;
 pub mod surveillance;
 pub mod table1;
 

@@ -111,6 +111,8 @@ pub struct Run {
     pub optimal_decisions_from: Option<usize>,
     pub certified_stop: Option<usize>,
     pub optimal_at_stop: bool,
+    /// Wall time of the solve (lockstep simulation), milliseconds.
+    pub wall_ms: f64,
 }
 
 /// One method on one cost model and graph.
@@ -187,6 +189,7 @@ fn run_one(job: &Job, config: &AnatomyConfig) -> Result<Run, SolveError> {
         optimal_decisions_from: check.rounds_to_optimal_assignment,
         certified_stop: report.converged.then_some(report.iterations),
         optimal_at_stop: check.optimal,
+        wall_ms: report.wall_time_ms,
     })
 }
 

@@ -56,6 +56,7 @@ fn every_certified_assignment_is_optimal() {
         (6, 6),
         (7, 4),
         (8, 8),
+        (12, 12),
     ];
     let topologies = ["complete", "chain", "random:0.3", "star"];
     let (mut runs, mut wrong, mut uncertified) = (0, Vec::new(), Vec::new());
@@ -91,7 +92,7 @@ fn every_certified_assignment_is_optimal() {
             }
         }
     }
-    assert_eq!(runs, 320);
+    assert_eq!(runs, 360);
     assert!(wrong.is_empty(), "wrong certified stops: {wrong:#?}");
     assert!(uncertified.is_empty(), "not certified: {uncertified:#?}");
 }
@@ -168,4 +169,28 @@ fn the_multipliers_sum_to_zero_exactly_on_a_long_chain_run() {
     let optimum = oracle::solve(&problem).unwrap();
     let decided: Vec<usize> = sim.agents().iter().map(|a| a.decide()).collect();
     assert!((problem.cost_of(&decided).unwrap() - optimum.cost).abs() < 1e-9);
+}
+
+/// The long-graph regression guard of `admm-ta experiment size-sweep` (which runs chains up
+/// to 120 robots): a 30-robot chain (diameter 29) certifies the optimum, uniform and
+/// distance costs, within about ten diameters (measured: 2.5–4.5; the paper's variant
+/// needs thousands of rounds on chains).
+#[test]
+fn a_thirty_robot_chain_certifies_the_optimum_within_ten_diameters() {
+    for (model, name) in [(0, "uniform"), (2, "distance")] {
+        for seed in 1..=2 {
+            let problem =
+                TaskAssignmentProblem::new(costs(model, 30, 30, seed), CaseChoice::Auto).unwrap();
+            let graph = TopologySpec::Chain.build(30, seed).unwrap();
+            let options = SolveOptions::builder().seed(seed).build().unwrap();
+            let report = solve(&problem, &graph, &options).unwrap();
+            let optimum = oracle::solve(&problem).unwrap().cost;
+            let label = format!("{name}, seed {seed}: {} rounds", report.iterations);
+            assert!(report.converged && report.iterations <= 290, "{label}");
+            assert!(
+                (report.cost - optimum).abs() <= 1e-9 * optimum.abs().max(1.0),
+                "{label}"
+            );
+        }
+    }
 }

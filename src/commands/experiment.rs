@@ -4,7 +4,7 @@
 
 use crate::cli::{Experiment as Command, FigureArgs};
 use crate::commands::shared::{agent_program, progress_bar};
-use crate::exit::usage_bail;
+use crate::exit::{NotOptimal, usage_bail};
 use admm_ta::Method;
 use admm_ta::agents::surveillance::SurveillanceScenario;
 use admm_ta::runtime::episodes::EpisodeRunConfig;
@@ -12,7 +12,7 @@ use admm_ta::runtime::options::run::RunOptions;
 use admm_ta::runtime::transport::Execution;
 use admm_ta_bench::experiment::{Experiment, write};
 use admm_ta_bench::figures::{FigureConfig, convergence, scaling};
-use admm_ta_bench::{compare, rounds_anatomy, surveillance, table1};
+use admm_ta_bench::{compare, rounds_anatomy, size_sweep, surveillance, table1};
 use anyhow::{Context, Result};
 use std::path::Path;
 use std::time::Duration;
@@ -196,6 +196,49 @@ pub fn run(command: Command) -> Result<()> {
             } else {
                 report_written(&written);
                 print!("{}", anatomy.render());
+            }
+            Ok(())
+        }
+        Command::SizeSweep {
+            quick,
+            sizes,
+            seeds,
+            topologies,
+            out,
+        } => {
+            let mut config = if quick {
+                size_sweep::SweepConfig::quick()
+            } else {
+                size_sweep::SweepConfig::full()
+            };
+            if sizes.contains(&0) || seeds == Some(0) {
+                usage_bail!("--sizes and --seeds must be at least 1");
+            }
+            if !sizes.is_empty() {
+                config.sizes = sizes;
+            }
+            if !topologies.is_empty() {
+                for t in &topologies {
+                    t.parse::<admm_ta::TopologySpec>()
+                        .with_context(|| format!("--topologies: {t}"))?;
+                }
+                config.topologies = topologies;
+            }
+            config.seeds = seeds.unwrap_or(config.seeds);
+            let progress = |size: usize, done: usize, total: usize| {
+                eprint!("\rsize-sweep: {size}×{size}, {done}/{total} runs");
+                if done == total {
+                    eprintln!();
+                }
+            };
+            let sweep = size_sweep::run(&config, &progress)?;
+            let written = write(&sweep, &out)?;
+            report_written(&written);
+            print!("{}", sweep.render());
+            if !sweep.all_certified_optimal() {
+                return Err(
+                    NotOptimal("some run did not certify the optimal assignment".into()).into(),
+                );
             }
             Ok(())
         }
