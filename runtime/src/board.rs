@@ -185,22 +185,26 @@ impl Board {
 
     /// Opens the board of an independently started team, creating it if nobody has yet (or
     /// if the one there is left from a dead team: none of the agents recorded on it is
-    /// alive). Call it under a lock that the team's other agents take too.
+    /// alive). Call it under a lock that the team's other agents take too. `true` with a
+    /// board this call created (its caller creates the rest of the team's resources).
     pub fn open_or_create_for_team(
         shm: &str,
         agents: usize,
         tasks: usize,
         payload_len: usize,
-    ) -> Result<Self, BoardError> {
+    ) -> Result<(Self, bool), BoardError> {
         // A dead team's board (nobody recorded on it alive) is taken over.
         if let Ok(board) = Self::open(shm, agents)
             && (0..agents).any(|i| board.member_alive(i))
         {
             board.check_shape(tasks, payload_len)?;
-            return Ok(board);
+            return Ok((board, false));
         }
         // The last agent out removes it (with the team's other files), not its creator.
-        Self::create_owned(shm, agents, tasks, payload_len, false)
+        Ok((
+            Self::create_owned(shm, agents, tasks, payload_len, false)?,
+            true,
+        ))
     }
 
     /// Records agent `agent`'s process id (independently started teams).
