@@ -29,7 +29,7 @@ pub(crate) type RoundService<S> = PubSubFactory<S, [f64], RoundHeader>;
 /// round ahead (the neighbour barrier), so an agent holds the current round's sample and at
 /// most one of the next round (see [`crate::ipc::exchange`]).
 pub(crate) const SUBSCRIBER_BUFFER: usize = 2;
-const SUBSCRIBER_BORROWED: usize = 2;
+pub(crate) const SUBSCRIBER_BORROWED: usize = 2;
 
 /// Name of agent `i`'s round-message service.
 pub fn round_service(i: usize) -> String {
