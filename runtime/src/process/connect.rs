@@ -368,3 +368,40 @@ impl LauncherSupport {
         let _ = agent;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ipc::services::{Svc, open_round_service};
+    use iceoryx2::prelude::*;
+
+    #[test]
+    fn agents_only_open_the_services_their_creator_made() {
+        let namespace = RunNamespace::create().unwrap();
+        namespace.create_iceoryx_root().unwrap();
+        let config = run_config(&namespace.prefix, &namespace.iceoryx_root()).unwrap();
+        let node = NodeBuilder::new()
+            .config(&config)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
+            .create::<Svc>()
+            .unwrap();
+        // Before the creator: nothing to open (an agent never creates a service).
+        assert!(open_round_service(&node, 0, 2).is_err());
+        let degrees = [2, 2, 2];
+        let services = RunServices::create(&config, &degrees, false).unwrap();
+        for (j, &degree) in degrees.iter().enumerate() {
+            let service = open_round_service(&node, j, degree).unwrap();
+            assert_eq!(service.static_config().max_subscribers(), 2);
+        }
+        // One creator per run.
+        assert!(RunServices::create(&config, &degrees, false).is_err());
+        drop(services);
+        drop(node);
+        namespace.cleanup().unwrap();
+        assert!(
+            namespace.leftovers().is_empty(),
+            "{:?}",
+            namespace.leftovers()
+        );
+    }
+}
