@@ -289,7 +289,12 @@ impl Board {
         team: &[usize],
         deadline: std::time::Instant,
     ) -> Result<(), Rendezvous> {
+        // Sleeps on the barrier's wake word, which every `set_connected` bumps (no polling:
+        // a hundred agents polling while the last ones start took their cores), in slices
+        // between which it looks for stop requests and failure marks.
+        let word = self.barrier_wake_word();
         loop {
+            let seen = word.load(Ordering::Acquire);
             if let Some(signal) = self.stop_signal() {
                 return Err(Rendezvous::Stopped(signal));
             }
@@ -299,10 +304,14 @@ impl Board {
             if team.iter().all(|&a| self.connected(a)) {
                 return Ok(());
             }
-            if std::time::Instant::now() >= deadline {
+            let now = std::time::Instant::now();
+            if now >= deadline {
                 return Err(Rendezvous::NeverConnected(self.never_connected(team)));
             }
-            std::thread::sleep(std::time::Duration::from_micros(500));
+            let slice = deadline
+                .saturating_duration_since(now)
+                .min(std::time::Duration::from_millis(20));
+            crate::futex::wait(word, seen, slice);
         }
     }
 
@@ -383,6 +392,10 @@ impl Board {
     pub fn set_connected(&self, agent: usize) {
         self.word(LINE * (agent + 1) + 32)
             .store(2, Ordering::Release);
+        // Wakes the agents waiting for the team in `await_connected`.
+        let word = self.barrier_wake_word();
+        word.fetch_add(1, Ordering::Release);
+        crate::futex::wake(word, u32::MAX);
     }
 
     /// Agent `agent`'s process started and opened the board (start-up evidence: an agent

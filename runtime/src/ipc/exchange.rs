@@ -248,6 +248,7 @@ impl IpcExchange {
         let degree = endpoint.neighbours.len();
         let started = Instant::now();
         let mut last_scan = Instant::now();
+        let mut poll = Duration::from_micros(500);
         while own_round.dynamic_config().number_of_subscribers() < degree {
             if let Some(signal) = board.stop_signal() {
                 return Err(ExchangeError::Stopped { agent: i, signal });
@@ -292,7 +293,10 @@ impl IpcExchange {
                     started.elapsed()
                 )));
             }
-            std::thread::sleep(Duration::from_micros(500));
+            // Backing off (0.5 to 4 ms): while the last agents of a large team start, the
+            // waiting ones must not take their cores.
+            std::thread::sleep(poll);
+            poll = (poll * 2).min(Duration::from_millis(4));
         }
         // Every subscriber is there: connect to all of them now (not lazily in the first
         // send), recreating the publisher if a connection cannot be established.
