@@ -174,8 +174,9 @@ fn transport(agent: usize, what: impl std::fmt::Display) -> ExchangeError {
 }
 
 impl IpcExchange {
-    /// Creates this agent's node and ports, then waits (until `deadline`) for every
-    /// neighbour to subscribe, so that the round-0 message reaches everybody.
+    /// Creates this agent's node and its ports on the services its launcher created, then
+    /// waits (until `deadline`) for every neighbour to subscribe, so that the round-0 message
+    /// reaches everybody.
     pub fn connect(
         endpoint: &IpcEndpoint,
         config: &Config,
