@@ -598,6 +598,9 @@ fn bench_rounds_measures_every_transport_and_writes_json_csv_and_plots() {
         "| ipc |",
         "| uds |",
         "ipc / threads p50",
+        "uds / threads p50",
+        "start-up ms ipc",
+        "CPU µs/sample",
         "p99.9",
     ] {
         assert!(table.contains(needle), "{needle} not in:\n{table}");
@@ -625,6 +628,12 @@ fn bench_rounds_measures_every_transport_and_writes_json_csv_and_plots() {
         }
         assert!(r["overhead_us"]["p50"].as_f64().unwrap() <= round["p50"].as_f64().unwrap());
         assert!(r["cpu_us_per_round"].as_f64().unwrap() > 0.0);
+        // Per received sample: the agent-round's CPU over the (mean) degree.
+        let per_sample = r["cpu_us_per_sample"].as_f64().unwrap();
+        assert!(
+            per_sample > 0.0 && per_sample <= r["cpu_us_per_round"].as_f64().unwrap(),
+            "{r}"
+        );
         // The median of two repetitions, with their spread.
         assert_eq!(r["repeats"], 2);
         let range = r["round_p50_range_us"].as_array().unwrap();

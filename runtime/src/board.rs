@@ -185,22 +185,26 @@ impl Board {
 
     /// Opens the board of an independently started team, creating it if nobody has yet (or
     /// if the one there is left from a dead team: none of the agents recorded on it is
-    /// alive). Call it under a lock that the team's other agents take too.
+    /// alive). Call it under a lock that the team's other agents take too. `true` with a
+    /// board this call created (its caller creates the rest of the team's resources).
     pub fn open_or_create_for_team(
         shm: &str,
         agents: usize,
         tasks: usize,
         payload_len: usize,
-    ) -> Result<Self, BoardError> {
+    ) -> Result<(Self, bool), BoardError> {
         // A dead team's board (nobody recorded on it alive) is taken over.
         if let Ok(board) = Self::open(shm, agents)
             && (0..agents).any(|i| board.member_alive(i))
         {
             board.check_shape(tasks, payload_len)?;
-            return Ok(board);
+            return Ok((board, false));
         }
         // The last agent out removes it (with the team's other files), not its creator.
-        Self::create_owned(shm, agents, tasks, payload_len, false)
+        Ok((
+            Self::create_owned(shm, agents, tasks, payload_len, false)?,
+            true,
+        ))
     }
 
     /// Records agent `agent`'s process id (independently started teams).
@@ -285,7 +289,12 @@ impl Board {
         team: &[usize],
         deadline: std::time::Instant,
     ) -> Result<(), Rendezvous> {
+        // Sleeps on the barrier's wake word, which every `set_connected` bumps (no polling:
+        // a hundred agents polling while the last ones start took their cores), in slices
+        // between which it looks for stop requests and failure marks.
+        let word = self.barrier_wake_word();
         loop {
+            let seen = word.load(Ordering::Acquire);
             if let Some(signal) = self.stop_signal() {
                 return Err(Rendezvous::Stopped(signal));
             }
@@ -295,10 +304,14 @@ impl Board {
             if team.iter().all(|&a| self.connected(a)) {
                 return Ok(());
             }
-            if std::time::Instant::now() >= deadline {
+            let now = std::time::Instant::now();
+            if now >= deadline {
                 return Err(Rendezvous::NeverConnected(self.never_connected(team)));
             }
-            std::thread::sleep(std::time::Duration::from_micros(500));
+            let slice = deadline
+                .saturating_duration_since(now)
+                .min(std::time::Duration::from_millis(20));
+            crate::futex::wait(word, seen, slice);
         }
     }
 
@@ -379,6 +392,10 @@ impl Board {
     pub fn set_connected(&self, agent: usize) {
         self.word(LINE * (agent + 1) + 32)
             .store(2, Ordering::Release);
+        // Wakes the agents waiting for the team in `await_connected`.
+        let word = self.barrier_wake_word();
+        word.fetch_add(1, Ordering::Release);
+        crate::futex::wake(word, u32::MAX);
     }
 
     /// Agent `agent`'s process started and opened the board (start-up evidence: an agent

@@ -118,6 +118,41 @@ mod tests {
     }
 
     #[test]
+    fn the_read_check_wait_protocol_misses_no_wake_up() {
+        // Two threads hand a turn back and forth 20,000 times, each waiting the way the
+        // transports do (read the word, check, wait on the value read) with a long timeout:
+        // one lost wake-up would stall the exchange for that timeout.
+        const TURNS: u32 = 20_000;
+        let (turn, word) = (Arc::new(AtomicU32::new(0)), Arc::new(AtomicU32::new(0)));
+        let player = |me: u32| {
+            let (turn, word) = (turn.clone(), word.clone());
+            std::thread::spawn(move || {
+                let mut stalls = 0;
+                for t in (me..TURNS).step_by(2) {
+                    loop {
+                        let seen = word.load(Ordering::Acquire);
+                        if turn.load(Ordering::Acquire) == t {
+                            break;
+                        }
+                        if wait(&word, seen, Duration::from_secs(5)) == Wait::TimedOut {
+                            stalls += 1;
+                        }
+                    }
+                    turn.store(t + 1, Ordering::Release);
+                    word.fetch_add(1, Ordering::Release);
+                    wake(&word, u32::MAX);
+                }
+                stalls
+            })
+        };
+        let started = Instant::now();
+        let (a, b) = (player(0), player(1));
+        assert_eq!((a.join().unwrap(), b.join().unwrap()), (0, 0));
+        assert_eq!(turn.load(Ordering::Acquire), TURNS);
+        assert!(started.elapsed() < Duration::from_secs(5));
+    }
+
+    #[test]
     fn a_wait_on_a_changed_word_returns_at_once() {
         let word = AtomicU32::new(7);
         assert_eq!(wait(&word, 6, Duration::from_secs(60)), Wait::Changed);

@@ -113,6 +113,9 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
     };
     let recorded = latency.round.count.max(1);
     let per_round = |v: u64| v as f64 / recorded as f64;
+    // Samples an agent receives per round, on average: its degree.
+    let mean_degree = (0..graph.robots()).map(|i| graph.degree(i)).sum::<usize>() as f64
+        / graph.robots().max(1) as f64;
     Ok(CaseResult {
         case: case.clone(),
         payload_bytes: case.payload.values() * 8,
@@ -124,6 +127,7 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
         publish_p50_us: latency.publish.p50,
         barrier_p50_us: latency.barrier.p50,
         cpu_us_per_round: per_round(usage.cpu_ns) / 1e3,
+        cpu_us_per_sample: per_round(usage.cpu_ns) / 1e3 / mean_degree.max(1.0),
         voluntary_switches_per_round: per_round(usage.voluntary_switches),
         involuntary_switches_per_round: per_round(usage.involuntary_switches),
         startup_ms: startup,

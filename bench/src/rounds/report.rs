@@ -49,6 +49,8 @@ pub struct CaseResult {
     pub barrier_p50_us: f64,
     /// CPU time per agent-round, µs (user + system).
     pub cpu_us_per_round: f64,
+    /// CPU time of all agents per received sample, µs: CPU / (agent-rounds × mean degree).
+    pub cpu_us_per_sample: f64,
     pub voluntary_switches_per_round: f64,
     pub involuntary_switches_per_round: f64,
     pub startup_ms: Option<f64>,
@@ -80,13 +82,13 @@ pub struct RoundsReport {
 }
 
 /// Header of [`render_row`]'s Markdown table.
-pub const TABLE_HEADER: &str = "| agents | graph | payload | transport | wait | barrier | round p50 | p90 | p99 | p99.9 | max | overhead p50 | overhead p99 | compute p50 | CPU µs/round | csw/round | start-up ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+pub const TABLE_HEADER: &str = "| agents | graph | payload | transport | wait | barrier | round p50 | p90 | p99 | p99.9 | max | overhead p50 | overhead p99 | compute p50 | CPU µs/round | CPU µs/sample | csw/round | start-up ms |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 /// One Markdown table row (latencies in µs).
 pub fn render_row(r: &CaseResult) -> String {
     let c = &r.case;
     format!(
-        "{} {} | {:.1} | {:.1} | {:.1} | {:.0} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {} |",
+        "{} {} | {:.1} | {:.1} | {:.1} | {:.0} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {} |",
         c.columns(),
         if r.repeats > 1 {
             format!(
@@ -104,18 +106,17 @@ pub fn render_row(r: &CaseResult) -> String {
         r.overhead_us.p99,
         r.compute_p50_us,
         r.cpu_us_per_round,
+        r.cpu_us_per_sample,
         r.voluntary_switches_per_round + r.involuntary_switches_per_round,
         r.startup_ms.map_or("-".into(), |v| format!("{v:.0}")),
     )
 }
 
-/// Ratios of round p50 between transports on otherwise equal cases (`ipc/threads`,
-/// `uds/ipc`, `zenoh/ipc`), as Markdown.
+/// Ratios of round p50 between transports on otherwise equal cases, as Markdown: every
+/// transport measured against `threads` (`ipc / threads`, `uds / threads`, …, one column
+/// each), then `uds / ipc` and `zenoh / ipc` (p50 and p99), and the start-up (ms) of every
+/// process transport.
 pub fn render_ratios(report: &RoundsReport) -> String {
-    let mut lines = vec![
-        "| agents | graph | payload | wait | barrier | ipc / threads p50 | uds / ipc p50 | uds / ipc p99 | zenoh / ipc p50 | zenoh / ipc p99 |".to_string(),
-        "|---|---|---|---|---|---|---|---|---|---|".to_string(),
-    ];
     let find = |case: &Case, t: Transport| {
         report.results.iter().find(|r| {
             let mut other = case.clone();
@@ -123,32 +124,65 @@ pub fn render_ratios(report: &RoundsReport) -> String {
             r.case == other
         })
     };
-    for r in report
-        .results
+    // The transports measured, in the order of `Transport::ALL`.
+    let measured: Vec<Transport> = Transport::ALL
+        .into_iter()
+        .filter(|t| report.results.iter().any(|r| r.case.transport == *t))
+        .collect();
+    let against_threads: Vec<Transport> = measured
         .iter()
-        .filter(|r| r.case.transport == Transport::Ipc)
-    {
+        .copied()
+        .filter(|&t| t != Transport::Threads && t != Transport::Sim)
+        .collect();
+    let mut header = "| agents | graph | payload | wait | barrier |".to_string();
+    for t in &against_threads {
+        header.push_str(&format!(" {t} / threads p50 |"));
+    }
+    header.push_str(" uds / ipc p50 | uds / ipc p99 | zenoh / ipc p50 | zenoh / ipc p99 |");
+    for t in &against_threads {
+        header.push_str(&format!(" start-up ms {t} |"));
+    }
+    let columns = 5 + 2 * against_threads.len() + 4;
+    let mut lines = vec![header, format!("|{}", "---|".repeat(columns))];
+    let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+        (Some(a), Some(b)) if b > 0.0 => format!("{:.2}×", a / b),
+        _ => "-".into(),
+    };
+    // One line per configuration: the cases of its first process transport.
+    let Some(&first) = against_threads.first() else {
+        return lines.join("\n");
+    };
+    for r in report.results.iter().filter(|r| r.case.transport == first) {
         let c = &r.case;
-        let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
-            (Some(a), Some(b)) if b > 0.0 => format!("{:.2}×", a / b),
-            _ => "-".into(),
-        };
-        let threads = find(c, Transport::Threads);
-        let uds = find(c, Transport::Uds);
-        let zenoh = find(c, Transport::Zenoh);
-        lines.push(format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+        let p50 = |t: Transport| find(c, t).map(|r| r.round_us.p50);
+        let p99 = |t: Transport| find(c, t).map(|r| r.round_us.p99);
+        let mut line = format!(
+            "| {} | {} | {} | {} | {} |",
             c.agents,
             c.topology,
             c.payload,
             c.wait.name(),
-            c.barrier_name(),
-            ratio(Some(r.round_us.p50), threads.map(|t| t.round_us.p50)),
-            ratio(uds.map(|u| u.round_us.p50), Some(r.round_us.p50)),
-            ratio(uds.map(|u| u.round_us.p99), Some(r.round_us.p99)),
-            ratio(zenoh.map(|z| z.round_us.p50), Some(r.round_us.p50)),
-            ratio(zenoh.map(|z| z.round_us.p99), Some(r.round_us.p99)),
-        ));
+            c.barrier_name()
+        );
+        for &t in &against_threads {
+            line.push_str(&format!(" {} |", ratio(p50(t), p50(Transport::Threads))));
+        }
+        for (a, b) in [
+            (p50(Transport::Uds), p50(Transport::Ipc)),
+            (p99(Transport::Uds), p99(Transport::Ipc)),
+            (p50(Transport::Zenoh), p50(Transport::Ipc)),
+            (p99(Transport::Zenoh), p99(Transport::Ipc)),
+        ] {
+            line.push_str(&format!(" {} |", ratio(a, b)));
+        }
+        for &t in &against_threads {
+            let startup = find(c, t).and_then(|r| r.startup_ms);
+            line.push_str(&format!(
+                " {} |",
+                startup.map_or("-".into(), |v| format!("{v:.0}"))
+            ));
+        }
+        lines.push(line);
     }
     lines.join("\n")
 }
@@ -156,13 +190,13 @@ pub fn render_ratios(report: &RoundsReport) -> String {
 /// `rounds.csv`: one line per measured case.
 pub fn to_csv(report: &RoundsReport) -> String {
     let mut out = String::from(
-        "agents,topology,payload,payload_bytes,transport,wait,barrier,step,recorded,round_p50_us,round_p90_us,round_p99_us,round_p999_us,round_max_us,overhead_p50_us,overhead_p90_us,overhead_p99_us,overhead_p999_us,overhead_max_us,compute_p50_us,wait_p50_us,publish_p50_us,barrier_p50_us,cpu_us_per_round,voluntary_switches_per_round,involuntary_switches_per_round,startup_ms,wall_ms,repeats,round_p50_min_us,round_p50_max_us\n",
+        "agents,topology,payload,payload_bytes,transport,wait,barrier,step,recorded,round_p50_us,round_p90_us,round_p99_us,round_p999_us,round_max_us,overhead_p50_us,overhead_p90_us,overhead_p99_us,overhead_p999_us,overhead_max_us,compute_p50_us,wait_p50_us,publish_p50_us,barrier_p50_us,cpu_us_per_round,cpu_us_per_sample,voluntary_switches_per_round,involuntary_switches_per_round,startup_ms,wall_ms,repeats,round_p50_min_us,round_p50_max_us\n",
     );
     for r in &report.results {
         let c = &r.case;
         let t = |t: &Tail| format!("{},{},{},{},{}", t.p50, t.p90, t.p99, t.p999, t.max);
         out += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             c.agents,
             c.topology,
             c.payload,
@@ -179,6 +213,7 @@ pub fn to_csv(report: &RoundsReport) -> String {
             r.publish_p50_us,
             r.barrier_p50_us,
             r.cpu_us_per_round,
+            r.cpu_us_per_sample,
             r.voluntary_switches_per_round,
             r.involuntary_switches_per_round,
             r.startup_ms.map_or(String::new(), |v| v.to_string())

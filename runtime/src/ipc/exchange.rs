@@ -1,23 +1,29 @@
 //! The iceoryx2 end of one agent process: one publish-subscribe service per agent carrying
-//! its round messages (`[f64]` payload + [`RoundHeader`] user header), one event service per
-//! agent to wake it, and the run-wide *board* in shared memory ([`crate::board`]: arrival
-//! counters and the optional global barrier).
+//! its round messages (`[f64]` payload + [`RoundHeader`] user header), created by the run's
+//! launcher before the agents start ([`crate::ipc::services`]), and the run-wide *board* in
+//! shared memory ([`crate::board`]: arrival counters, futex wake-up words, the optional
+//! global barrier).
 //!
 //! Agent `i` publishes on `admm-ta/i/round`; each neighbour subscribes to it. The payload is
 //! written in place into the loaned sample and read in place by the neighbours: no copy on
-//! either side. A waiting agent checks its subscribers, spins briefly (only when it has a
-//! core of its own) and then sleeps on its listener (`admm-ta/i/wake`) until the deadline.
+//! either side. A waiting agent receives only from the neighbours whose message of the round
+//! it does not hold yet (a "still missing" list, no scan of every subscriber per wake-up),
+//! keeps the header and payload of every held sample at hand, spins briefly (only when it
+//! has a core of its own) and then sleeps on its futex wake-up word until the deadline, in
+//! slices between which it looks for failed agents.
 //!
 //! Wake-ups: after publishing round `r`, `i` increments each neighbour `j`'s arrival counter
-//! for the parity of `r` on the board, and notifies `j` only if the count reached
-//! `deg(j) · (⌊r/2⌋ + 1)`, i.e. it was the last of `j`'s round-`r` messages to be counted.
-//! So a waiting agent is woken about once per round, not once per neighbour: on a complete
-//! graph of 50 agents sharing 2 cores, waking every agent 49 times per round cost more than
-//! the algorithm. The counts are cumulative, never reset: a message is counted after it is
-//! delivered, so a reset could race with a late count and lose a wake-up. Counts of round
-//! `r + 2` can precede late counts of round `r`, but the count that completes round `r + 2`
-//! is always one of round `r + 2` (a neighbour counts its round `r` before its round `r + 2`),
-//! so a wake-up is never lost; at worst one is spurious.
+//! for the parity of `r` on the board, and wakes `j` (bumps `j`'s wake word, then
+//! `FUTEX_WAKE`) only if the count reached `deg(j) · (⌊r/2⌋ + 1)`, i.e. it was the last of
+//! `j`'s round-`r` messages to be counted. So a waiting agent is woken about once per round,
+//! not once per neighbour: on a complete graph of 50 agents sharing 2 cores, waking every
+//! agent 49 times per round cost more than the algorithm. The counts are cumulative, never
+//! reset: a message is counted after it is delivered, so a reset could race with a late
+//! count and lose a wake-up. Counts of round `r + 2` can precede late counts of round `r`,
+//! but the count that completes round `r + 2` is always one of round `r + 2` (a neighbour
+//! counts its round `r` before its round `r + 2`), so a wake-up is never lost; at worst one
+//! is spurious. The waiter reads its wake word *before* it looks at its subscribers and
+//! sleeps only while the word still holds that value, so a wake-up in between is not lost.
 //!
 //! Buffers: a neighbour is at most one round ahead (neighbour barrier), so each subscriber
 //! holds at most two unread samples and borrows at most two; safe overflow is off, and a
@@ -32,15 +38,14 @@ use crate::error_text::one_line;
 use crate::exchange::header::{MessageFault, Placement, RoundHeader, check_message};
 use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::Fault;
+use crate::futex;
 use crate::ipc::nodes::{node_name, scan_dead_agents};
 use crate::ipc::services::{
-    SUBSCRIBER_BUFFER, ServiceError, Svc, open_barrier_service, open_bridge_wake_service,
-    open_round_service, open_wake_service, retry_until,
+    SUBSCRIBER_BUFFER, ServiceError, Svc, open_bridge_wake_service, open_round_service,
 };
 use crate::wait::{Arrival, WaitPolicy};
 use admm_ta_agents::agent::Inbox;
 use iceoryx2::port::DegradationAction;
-use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
@@ -84,9 +89,42 @@ const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
 /// `waitpid` anyway; the scan is for agents started without one.)
 const DEAD_NODE_SCAN_EVERY: Duration = Duration::from_millis(500);
 
-struct BarrierPorts {
-    listener: Listener<Svc>,
-    notifier: Notifier<Svc>,
+/// A neighbour's sample of the gathered round with its header and payload at hand: read
+/// once when it arrives, not re-derived from the shared memory at every use.
+struct Held {
+    sample: Option<RoundSample>,
+    header: RoundHeader,
+    /// The sample's payload (`len` values), valid while `sample` is held.
+    payload: *const f64,
+    len: usize,
+}
+
+impl Held {
+    fn empty() -> Self {
+        Self {
+            sample: None,
+            header: RoundHeader::default(),
+            payload: std::ptr::null(),
+            len: 0,
+        }
+    }
+
+    fn hold(&mut self, sample: RoundSample) {
+        self.header = *sample.user_header();
+        let payload = sample.payload();
+        (self.payload, self.len) = (payload.as_ptr(), payload.len());
+        self.sample = Some(sample);
+    }
+
+    fn payload(&self) -> &[f64] {
+        if self.sample.is_none() {
+            return &[];
+        }
+        // SAFETY: `payload` and `len` describe the payload of `sample`, which is held (its
+        // shared memory stays mapped and untouched by the publisher) as long as `self` is
+        // not changed, and `&self` keeps it so for the returned slice's lifetime.
+        unsafe { std::slice::from_raw_parts(self.payload, self.len) }
+    }
 }
 
 /// One agent's iceoryx2 ports.
@@ -96,17 +134,20 @@ pub struct IpcExchange {
     payload_len: usize,
     policy: WaitPolicy,
     publisher: Publisher<Svc, [f64], RoundHeader>,
-    listener: Listener<Svc>,
     subscribers: Vec<Subscriber<Svc, [f64], RoundHeader>>,
-    notifiers: Vec<Notifier<Svc>>,
     /// Wakes the host's bridge (agents with neighbours on other hosts).
     bridge: Option<Notifier<Svc>>,
-    held: Vec<Option<RoundSample>>,
+    held: Vec<Held>,
     pending: Vec<Option<RoundSample>>,
+    /// Neighbours (indices into `neighbours`) whose message of the round being gathered is
+    /// not held yet (capacity: the degree; never reallocated).
+    missing: Vec<usize>,
+    /// The value of this agent's wake word read before its last look at the subscribers.
+    wake_seen: u32,
     gathered: u64,
     degrees: Vec<usize>,
     board: Board,
-    barrier: Option<BarrierPorts>,
+    global_barrier: bool,
     /// The run's iceoryx2 configuration (to scan its nodes for dead ones).
     config: Config,
     last_dead_node_scan: Instant,
@@ -119,6 +160,12 @@ pub struct IpcExchange {
     _node: Node<Svc>,
 }
 
+/// Bumps the futex word `word` and wakes whoever sleeps on it.
+fn wake(word: &std::sync::atomic::AtomicU32) {
+    word.fetch_add(1, Ordering::Release);
+    futex::wake(word, u32::MAX);
+}
+
 fn transport(agent: usize, what: impl std::fmt::Display) -> ExchangeError {
     ExchangeError::Transport {
         agent,
@@ -127,8 +174,9 @@ fn transport(agent: usize, what: impl std::fmt::Display) -> ExchangeError {
 }
 
 impl IpcExchange {
-    /// Creates this agent's node and ports, then waits (until `deadline`) for every
-    /// neighbour to subscribe, so that the round-0 message reaches everybody.
+    /// Creates this agent's node and its ports on the services its launcher created, then
+    /// waits (until `deadline`) for every neighbour to subscribe, so that the round-0 message
+    /// reaches everybody.
     pub fn connect(
         endpoint: &IpcEndpoint,
         config: &Config,
@@ -153,28 +201,10 @@ impl IpcExchange {
             .create::<Svc>()
             .map_err(|e| err(format!("cannot create the iceoryx2 node: {e:?}")))?;
         let service_err = |e: ServiceError| err(one_line(&e));
-        // Opening races with the neighbours creating the same services: retried until the
-        // start-up deadline.
-        let round_of = |j: usize| {
-            retry_until(deadline, || {
-                open_round_service(&node, j, endpoint.degrees[j])
-            })
-            .map_err(service_err)
-        };
-        let wake_of = |j: usize| {
-            retry_until(deadline, || {
-                open_wake_service(&node, j, endpoint.degrees[j])
-            })
-            .map_err(service_err)
-        };
-        // Listener before subscribers: a neighbour that sees our subscriber can wake us.
+        // The services exist (the launcher created them before starting us): open only.
+        let round_of = |j: usize| open_round_service(&node, j, endpoint.degrees[j]);
         let t_node = t0.elapsed();
-        let own_wake = wake_of(i)?;
-        let listener = own_wake
-            .listener_builder()
-            .create()
-            .map_err(|e| err(format!("cannot create the listener: {e:?}")))?;
-        let own_round = round_of(i)?;
+        let own_round = round_of(i).map_err(service_err)?;
         // A connection to a subscriber that cannot be established is an error here (the
         // default only warns and skips that subscriber for good): the rendezvous retries.
         let new_publisher = || {
@@ -190,11 +220,10 @@ impl IpcExchange {
             new_publisher().map_err(|e| err(format!("cannot create the publisher: {e:?}")))?;
         let t_own = t0.elapsed();
         let mut subscribers = Vec::with_capacity(endpoint.neighbours.len());
-        let mut notifiers = Vec::with_capacity(endpoint.neighbours.len());
         // Kept to name the neighbours that never show up.
         let mut neighbour_services = Vec::with_capacity(endpoint.neighbours.len());
         for &j in &endpoint.neighbours {
-            let service = round_of(j)?;
+            let service = round_of(j).map_err(service_err)?;
             subscribers.push(
                 service
                     .subscriber_builder()
@@ -203,18 +232,7 @@ impl IpcExchange {
                     .map_err(|e| err(format!("cannot subscribe to agent {j}: {e:?}")))?,
             );
             neighbour_services.push(service);
-            notifiers.push(
-                wake_of(j)?
-                    .notifier_builder()
-                    .create()
-                    .map_err(|e| err(format!("cannot create a notifier for agent {j}: {e:?}")))?,
-            );
         }
-        let barrier = if endpoint.global_barrier {
-            Some(open_barrier(&node, endpoint.degrees.len(), &err)?)
-        } else {
-            None
-        };
         let bridge = if endpoint.notify_bridge {
             Some(
                 open_bridge_wake_service(&node, endpoint.degrees.len())
@@ -231,6 +249,7 @@ impl IpcExchange {
         let degree = endpoint.neighbours.len();
         let started = Instant::now();
         let mut last_scan = Instant::now();
+        let mut poll = Duration::from_micros(500);
         while own_round.dynamic_config().number_of_subscribers() < degree {
             if let Some(signal) = board.stop_signal() {
                 return Err(ExchangeError::Stopped { agent: i, signal });
@@ -275,7 +294,10 @@ impl IpcExchange {
                     started.elapsed()
                 )));
             }
-            std::thread::sleep(Duration::from_micros(500));
+            // Backing off (0.5 to 4 ms): while the last agents of a large team start, the
+            // waiting ones must not take their cores.
+            std::thread::sleep(poll);
+            poll = (poll * 2).min(Duration::from_millis(4));
         }
         // Every subscriber is there: connect to all of them now (not lazily in the first
         // send), recreating the publisher if a connection cannot be established.
@@ -310,16 +332,16 @@ impl IpcExchange {
             payload_len: endpoint.payload_len,
             policy: endpoint.policy,
             publisher,
-            listener,
             subscribers,
-            notifiers,
             bridge,
-            held: (0..degree).map(|_| None).collect(),
+            held: (0..degree).map(|_| Held::empty()).collect(),
             pending: (0..degree).map(|_| None).collect(),
+            missing: Vec::with_capacity(degree),
+            wake_seen: 0,
             gathered: 0,
             degrees: endpoint.degrees.clone(),
             board,
-            barrier,
+            global_barrier: endpoint.global_barrier,
             config: config.clone(),
             last_dead_node_scan: Instant::now(),
             fault: None,
@@ -404,18 +426,15 @@ impl IpcExchange {
 
     /// Moves neighbour `k`'s round-`round` message into `held[k]`; `false` if not there yet.
     fn advance(&mut self, k: usize, round: u64) -> Result<bool, ExchangeError> {
-        if self.held[k]
-            .as_ref()
-            .is_some_and(|s| s.user_header().round == round)
-        {
+        if self.held[k].sample.is_some() && self.held[k].header.round == round {
             return Ok(true);
         }
-        if self.pending[k]
-            .as_ref()
-            .is_some_and(|s| s.user_header().round == round)
-        {
-            self.held[k] = self.pending[k].take();
-            return Ok(true);
+        if let Some(next) = self.pending[k].take() {
+            if next.user_header().round == round {
+                self.held[k].hold(next);
+                return Ok(true);
+            }
+            self.pending[k] = Some(next);
         }
         loop {
             let sample = self.subscribers[k]
@@ -454,7 +473,7 @@ impl IpcExchange {
             })?;
             match placement {
                 Placement::Current => {
-                    self.held[k] = Some(sample);
+                    self.held[k].hold(sample);
                     return Ok(true);
                 }
                 Placement::Next => self.pending[k] = Some(sample),
@@ -462,34 +481,29 @@ impl IpcExchange {
         }
     }
 
+    /// Receives from the neighbours still missing for `round` (only those, and only once the
+    /// board says they published it: an empty receive costs about as much as a full one);
+    /// `true` once every neighbour's message is held. Reads this agent's wake word first
+    /// (see the module's wake-ups: a neighbour's published round is stored before it
+    /// counts its arrival, so the wake-up that completes the round makes them all visible).
     fn all_held(&mut self, round: u64) -> Result<bool, ExchangeError> {
-        let mut all = true;
-        for k in 0..self.subscribers.len() {
-            all &= self.advance(k, round)?;
-        }
-        Ok(all)
-    }
-
-    /// Sleeps on `listener` until notified or `deadline`.
-    fn sleep_on(
-        listener: &Listener<Svc>,
-        agent: usize,
-        deadline: Instant,
-    ) -> Result<(), ExchangeError> {
-        let left = deadline.saturating_duration_since(Instant::now());
-        if !left.is_zero() {
-            match listener.timed_wait(|_| {}, left) {
-                // A termination signal woke us: the caller looks at it next.
-                Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
-                Err(e) => {
-                    return Err(transport(
-                        agent,
-                        format!("waiting for a wake-up failed: {e:?}"),
-                    ));
-                }
+        self.wake_seen = self.board.wake_word(self.index).load(Ordering::Acquire);
+        let mut at = 0;
+        while at < self.missing.len() {
+            let k = self.missing[at];
+            // (A faulty neighbour's wrong round is published ahead, so it is still received
+            // and refused.)
+            if self.board.published_round(self.neighbours[k]) < round {
+                at += 1;
+                continue;
+            }
+            if self.advance(k, round)? {
+                self.missing.swap_remove(at);
+            } else {
+                at += 1;
             }
         }
-        Ok(())
+        Ok(self.missing.is_empty())
     }
 
     /// Publishes the payload `compute` writes in place, as `fault` (tests) says if any.
@@ -535,16 +549,14 @@ impl IpcExchange {
             ));
         }
         self.board.set_published_round(i, header.round);
-        for (notifier, &j) in self.notifiers.iter().zip(&self.neighbours) {
+        for &j in &self.neighbours {
             let arrived = self
                 .board
                 .arrivals(j, header.round)
                 .fetch_add(1, Ordering::AcqRel)
                 + 1;
             if arrived == arrivals_target(self.degrees[j], header.round) {
-                notifier
-                    .notify()
-                    .map_err(|e| transport(i, format!("notify failed: {e:?}")))?;
+                wake(self.board.wake_word(j));
             }
         }
         if let Some(bridge) = &self.bridge {
@@ -598,27 +610,9 @@ pub(crate) fn rendezvous_error(
     }
 }
 
-fn open_barrier(
-    node: &Node<Svc>,
-    parties: usize,
-    err: &dyn Fn(String) -> ExchangeError,
-) -> Result<BarrierPorts, ExchangeError> {
-    let service = open_barrier_service(node, parties).map_err(|e| err(one_line(&e)))?;
-    Ok(BarrierPorts {
-        listener: service
-            .listener_builder()
-            .create()
-            .map_err(|e| err(format!("cannot create the barrier listener: {e:?}")))?,
-        notifier: service
-            .notifier_builder()
-            .create()
-            .map_err(|e| err(format!("cannot create the barrier notifier: {e:?}")))?,
-    })
-}
-
 /// Neighbours' payloads of the gathered round, read in place from the received samples.
 struct SampleInbox<'a> {
-    held: &'a [Option<RoundSample>],
+    held: &'a [Held],
 }
 
 impl Inbox for SampleInbox<'_> {
@@ -626,7 +620,7 @@ impl Inbox for SampleInbox<'_> {
         self.held.len()
     }
     fn payload(&self, k: usize) -> &[f64] {
-        self.held[k].as_ref().map_or(&[], |s| s.payload())
+        self.held[k].payload()
     }
 }
 
@@ -649,29 +643,26 @@ impl Exchange for IpcExchange {
     fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
         let started = Instant::now();
         self.check_peers(round, Duration::ZERO)?;
+        self.missing.clear();
+        self.missing.extend(0..self.neighbours.len());
         let held = self.policy.wait_until(
             self,
             deadline,
             |s| s.all_held(round),
             |s, deadline| {
-                // Sleep in slices, looking for failed agents in between.
-                Self::sleep_on(
-                    &s.listener,
-                    s.index,
-                    deadline.min(Instant::now() + FAILURE_CHECK_SLICE),
-                )?;
+                // Sleep in slices, looking for failed agents in between; a wake-up since
+                // `all_held` read the word ends the sleep at once.
+                let slice = deadline
+                    .saturating_duration_since(Instant::now())
+                    .min(FAILURE_CHECK_SLICE);
+                futex::wait(s.board.wake_word(s.index), s.wake_seen, slice);
                 s.check_peers(round, started.elapsed())
             },
         )?;
         if !held {
-            let missing = (0..self.neighbours.len())
-                .filter(|&k| {
-                    self.held[k]
-                        .as_ref()
-                        .is_none_or(|s| s.user_header().round != round)
-                })
-                .map(|k| self.neighbours[k])
-                .collect();
+            let mut missing: Vec<usize> =
+                self.missing.iter().map(|&k| self.neighbours[k]).collect();
+            missing.sort_unstable();
             return Err(ExchangeError::Timeout {
                 agent: self.index,
                 round,
@@ -684,17 +675,11 @@ impl Exchange for IpcExchange {
     }
 
     fn neighbour_header(&self, k: usize) -> &RoundHeader {
-        self.held[k]
-            .as_ref()
-            .expect("neighbour_header is called after a successful gather")
-            .user_header()
+        &self.held[k].header
     }
 
     fn neighbour_payload(&self, k: usize) -> &[f64] {
-        self.held[k]
-            .as_ref()
-            .expect("neighbour_payload is called after a successful gather")
-            .payload()
+        self.held[k].payload()
     }
 
     fn compute_and_publish(
@@ -713,25 +698,32 @@ impl Exchange for IpcExchange {
 
     fn global_barrier(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
         let i = self.index;
-        let Some(barrier) = &self.barrier else {
+        if !self.global_barrier {
             return Err(transport(i, "this run has no global barrier"));
-        };
+        }
         let started = Instant::now();
-        let (state, parties) = (self.board.barrier(), self.board.agents());
+        let (board, parties) = (&self.board, self.board.agents());
+        let (state, word) = (board.barrier(), board.barrier_wake_word());
+        // Read before arriving: a release after this read changes the word.
+        let mut seen = word.load(Ordering::Acquire);
         match state.arrive(parties) {
             Arrival::Released => {
-                barrier
-                    .notifier
-                    .notify()
-                    .map_err(|e| transport(i, format!("notify failed: {e:?}")))?;
+                wake(word);
                 Ok(())
             }
             Arrival::Wait(ticket) => {
                 let released = self.policy.wait_until(
-                    &mut (),
+                    &mut seen,
                     deadline,
-                    |()| Ok(state.released(ticket)),
-                    |(), deadline| Self::sleep_on(&barrier.listener, i, deadline),
+                    |seen| {
+                        *seen = word.load(Ordering::Acquire);
+                        Ok(state.released(ticket))
+                    },
+                    |seen, deadline| {
+                        let left = deadline.saturating_duration_since(Instant::now());
+                        futex::wait(word, *seen, left.min(FAILURE_CHECK_SLICE));
+                        Ok::<(), ExchangeError>(())
+                    },
                 )?;
                 if released {
                     Ok(())

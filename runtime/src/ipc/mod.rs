@@ -1,7 +1,8 @@
 //! The `ipc` transport: one OS process per agent over iceoryx2 zero-copy publish-subscribe.
 //!
 //! * [`exchange`]: an agent's iceoryx2 ports (the [`crate::exchange::Exchange`]);
-//! * [`services`]: the run's iceoryx2 services, named and opened alike by every participant;
+//! * [`services`]: the run's iceoryx2 services, created by the launcher (or a team's first
+//!   member) before the agents start and only opened by them;
 //! * [`nodes`]: the run's iceoryx2 configuration, node names and dead-node scans.
 //!
 //! The run's shared board lives in [`crate::board`] (the `uds` transport and the process

@@ -28,6 +28,15 @@ pub fn run_config(prefix: &str, root: &std::path::Path) -> Result<Config, String
     config.global.node.cleanup_dead_nodes_on_creation = false;
     config.global.node.cleanup_dead_nodes_on_destruction = false;
     config.global.service.cleanup_dead_nodes_on_open = false;
+    // Every subscriber allocates (and zeroes) room for this many expired connections (a
+    // publisher gone while its samples are still borrowed): 128 by default, where a round
+    // service has one publisher whose samples a subscriber borrows at most
+    // `SUBSCRIBER_BORROWED` of. The default made the subscribers the largest cost of
+    // start-up.
+    config
+        .defaults
+        .publish_subscribe
+        .subscriber_expired_connection_buffer = crate::ipc::services::SUBSCRIBER_BORROWED;
     Ok(config)
 }
 

@@ -30,9 +30,7 @@ use crate::board::{Board, arrivals_target};
 use crate::error_text::one_line;
 use crate::exchange::header::{RoundHeader, words_as_bytes};
 use crate::ipc::nodes::run_config;
-use crate::ipc::services::{
-    ServiceError, Svc, open_bridge_wake_service, open_round_service, open_wake_service,
-};
+use crate::ipc::services::{ServiceError, Svc, open_bridge_wake_service, open_round_service};
 use crate::process::member::{Membership, member_scenario};
 use crate::process::scenario::Scenario;
 use crate::process::team_file::{HostEntry, Team};
@@ -417,15 +415,6 @@ impl Forwarder {
                 .map_err(|e| format!("bridge: cannot publish for agent {r}: {e:?}"))?;
             publishers.insert(r, (service, publisher, layout.local_neighbours(r)));
         }
-        let mut notifiers = HashMap::new();
-        for i in layout.local_senders() {
-            let notifier = open_wake_service(&node, i, layout.degrees[i])
-                .map_err(text)?
-                .notifier_builder()
-                .create()
-                .map_err(|e| format!("bridge: cannot wake agent {i}: {e:?}"))?;
-            notifiers.insert(i, notifier);
-        }
         let mut pending: VecDeque<(usize, ZBytes)> = VecDeque::new();
         let mut tokens: HashMap<usize, zenoh::liveliness::LivelinessToken> = HashMap::new();
         let mut joined = vec![false; self.scenario.robots];
@@ -488,12 +477,11 @@ impl Forwarder {
                         .arrivals(j, header.round)
                         .fetch_add(1, Ordering::AcqRel)
                         + 1;
-                    if arrived == arrivals_target(layout.degrees[j], header.round)
-                        && let Some(notifier) = notifiers.get(&j)
-                    {
-                        notifier
-                            .notify()
-                            .map_err(|e| format!("bridge: notify failed: {e:?}"))?;
+                    if arrived == arrivals_target(layout.degrees[j], header.round) {
+                        // As a local neighbour would: bump j's wake word, then wake it.
+                        let word = board.wake_word(j);
+                        word.fetch_add(1, Ordering::Release);
+                        crate::futex::wake(word, u32::MAX);
                     }
                 }
                 self.shared.forwarded_in.fetch_add(1, Ordering::Relaxed);

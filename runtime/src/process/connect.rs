@@ -11,6 +11,7 @@ use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::{FaultKind, fault_for};
 use crate::ipc::exchange::{IpcEndpoint, IpcExchange};
 use crate::ipc::nodes::run_config;
+use crate::ipc::services::RunServices;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::process::team_digest::TeamDigest;
@@ -257,9 +258,43 @@ impl Endpoint {
     }
 }
 
+/// What a process transport's agents open but do not create, made before the first agent
+/// starts (by the launcher, or a team's first member under the team's lock) and kept until
+/// the agents are gone: the iceoryx2 services of an `ipc` run (every agent's round service,
+/// and a mixed host's bridge wake-up).
+pub(crate) struct RunResources {
+    _ipc: Option<RunServices>,
+}
+
+impl RunResources {
+    /// Creates the resources of `scenario`'s run (its iceoryx2 root directory must exist).
+    pub(crate) fn create(scenario: &Scenario) -> Result<Self, String> {
+        match scenario.transport {
+            Transport::Ipc => {
+                let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
+                let graph = scenario.graph().map_err(|e| e.to_string())?;
+                let degrees: Vec<usize> = (0..graph.robots()).map(|j| graph.degree(j)).collect();
+                let services =
+                    RunServices::create(&config, &degrees, scenario.local_agents.is_some())
+                        .map_err(|e| one_line(&e))?;
+                Ok(Self {
+                    _ipc: Some(services),
+                })
+            }
+            Transport::Sim
+            | Transport::Threads
+            | Transport::Shm
+            | Transport::Uds
+            | Transport::Zenoh => Ok(Self { _ipc: None }),
+        }
+    }
+}
+
 /// What a launcher's run needs besides the agents and the board, kept running until every
-/// agent is gone: the slot table of an shm run, the loopback router of a Zenoh run.
+/// agent is gone: the transport's [`RunResources`], the slot table of an shm run, the
+/// loopback router of a Zenoh run.
 pub(crate) struct LauncherSupport {
+    _resources: RunResources,
     /// The slot table of an shm run (removed when dropped).
     _slots: Option<SlotTable>,
     #[cfg(feature = "zenoh")]
@@ -285,15 +320,18 @@ pub enum SupportError {
     ZenohRouter(String),
     #[error("cannot start the run's Zenoh router")]
     NotBuilt(#[from] crate::transport::ZenohNotBuilt),
+    #[error("{0}")]
+    Resources(String),
 }
 
 impl LauncherSupport {
     /// Starts what `scenario`'s transport needs in the run of `namespace`, and tells the
-    /// scenario where to find it.
+    /// scenario where to find it (its iceoryx2 root directory must exist).
     pub(crate) fn start(
         scenario: &mut Scenario,
         namespace: &RunNamespace,
     ) -> Result<Self, SupportError> {
+        let resources = RunResources::create(scenario).map_err(SupportError::Resources)?;
         match scenario.transport {
             #[cfg(feature = "zenoh")]
             Transport::Zenoh => {
@@ -319,6 +357,7 @@ impl LauncherSupport {
                     .map_err(SupportError::ZenohRouter)?
                 };
                 Ok(Self {
+                    _resources: resources,
                     _slots: None,
                     router: Some((router, links)),
                     announced: Some((first, subscriber)),
@@ -326,10 +365,11 @@ impl LauncherSupport {
             }
             #[cfg(not(feature = "zenoh"))]
             Transport::Zenoh => {
-                let _ = namespace;
+                let _ = (namespace, resources);
                 Err(crate::transport::ZenohNotBuilt.into())
             }
             Transport::Shm => Ok(Self {
+                _resources: resources,
                 _slots: Some(
                     SlotTable::create(
                         &table_name(&namespace.prefix),
@@ -344,6 +384,7 @@ impl LauncherSupport {
                 announced: None,
             }),
             Transport::Sim | Transport::Threads | Transport::Ipc | Transport::Uds => Ok(Self {
+                _resources: resources,
                 _slots: None,
                 #[cfg(feature = "zenoh")]
                 router: None,
@@ -383,5 +424,42 @@ impl LauncherSupport {
         }
         #[cfg(not(feature = "zenoh"))]
         let _ = agent;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ipc::services::{Svc, open_round_service};
+    use iceoryx2::prelude::*;
+
+    #[test]
+    fn agents_only_open_the_services_their_creator_made() {
+        let namespace = RunNamespace::create().unwrap();
+        namespace.create_iceoryx_root().unwrap();
+        let config = run_config(&namespace.prefix, &namespace.iceoryx_root()).unwrap();
+        let node = NodeBuilder::new()
+            .config(&config)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
+            .create::<Svc>()
+            .unwrap();
+        // Before the creator: nothing to open (an agent never creates a service).
+        assert!(open_round_service(&node, 0, 2).is_err());
+        let degrees = [2, 2, 2];
+        let services = RunServices::create(&config, &degrees, false).unwrap();
+        for (j, &degree) in degrees.iter().enumerate() {
+            let service = open_round_service(&node, j, degree).unwrap();
+            assert_eq!(service.static_config().max_subscribers(), 2);
+        }
+        // One creator per run.
+        assert!(RunServices::create(&config, &degrees, false).is_err());
+        drop(services);
+        drop(node);
+        namespace.cleanup().unwrap();
+        assert!(
+            namespace.leftovers().is_empty(),
+            "{:?}",
+            namespace.leftovers()
+        );
     }
 }

@@ -135,7 +135,8 @@ impl Drop for RunGuard {
             }
         }
         self.board = None;
-        // The transport's support too (an shm run's slot table), before the namespace goes.
+        // The transport's support (the run's services, an shm run's slot table) before the
+        // files under them.
         self.support = None;
         if std::env::var_os("ADMM_TA_STARTUP_TRACE").is_some() {
             for i in 0..self.children.len() {
@@ -239,6 +240,10 @@ pub fn launch(
         )
         .map_err(LaunchError::Board)?,
     );
+    // Every service of the run before the first agent starts (agents only open them).
+    namespace
+        .create_iceoryx_root()
+        .map_err(LaunchError::RunDirectory)?;
     guard.support = Some(LauncherSupport::start(&mut scenario, &namespace)?);
     let run_dir = namespace.dir.clone();
     let scenario_path = run_dir.join("scenario.json");
@@ -248,9 +253,6 @@ pub fn launch(
     let scenario_digest = sha256_hex(text.as_bytes());
     // The team's identity, checked by every agent before it opens a service.
     TeamDigest::of(&scenario).publish(guard.board.as_ref().expect("the board exists"));
-    namespace
-        .create_iceoryx_root()
-        .map_err(LaunchError::RunDirectory)?;
 
     let spawned_unix_ns = unix_ns();
     for index in 0..scenario.robots {

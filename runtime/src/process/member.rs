@@ -6,8 +6,9 @@
 //! `result-I.json` into the team's results directory; `admm-ta collect --team FILE`
 //! assembles the assignment.
 //!
-//! The run's shared board is created by whichever agent comes first (under a file lock in
-//! the team's directory) and removed, with every other shared-memory file of the team, by the
+//! The run's shared board and, for `ipc`, every iceoryx2 service of the team are created by
+//! whichever agent comes first (under a file lock in the team's directory, so the others only
+//! open them: no open/create races); the board is removed, with every other shared-memory file of the team, by the
 //! last agent to leave. A board left by a dead team (no agent recorded on it is alive) is
 //! taken over by the next team of that name. One team per name at a time.
 
@@ -17,6 +18,7 @@ use crate::exchange::round_loop::{AgentStop, merge_outcomes};
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::latency::LatencySummary;
 use crate::process::agent::{AgentReport, run_scenario};
+use crate::process::connect::RunResources;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::process::team_digest::TeamDigest;
@@ -121,6 +123,9 @@ pub(crate) fn member_scenario(
 /// bridge) the slots of the agents it stands in for. The board is created by whoever comes
 /// first; the last member to leave removes every shared-memory file of the namespace.
 pub(crate) struct Membership {
+    /// The team's services, created by its first member and kept until it leaves (a
+    /// service lives while a node holds it: the other members hold their own ports).
+    _resources: Option<RunResources>,
     board: Board,
     namespace: RunNamespace,
     slots: Vec<usize>,
@@ -136,8 +141,7 @@ impl Membership {
     ) -> Result<Self, String> {
         let _lock = FileLock::acquire(&namespace.dir.join("lock"), deadline)?;
         let n = scenario.robots;
-        let fresh = Board::open(&scenario.board_shm, n).is_err();
-        let board = Board::open_or_create_for_team(
+        let (board, fresh) = Board::open_or_create_for_team(
             &scenario.board_shm,
             n,
             scenario.tasks,
@@ -157,12 +161,18 @@ impl Membership {
         }
         // Mode 0700, ours, not a symlink (its name in /dev/shm is predictable).
         crate::process::private_dir::ensure_private_dir(&scenario.iceoryx_root)?;
-        if fresh {
+        let resources = if fresh {
             // Nodes of a dead team of this name.
             let _ = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)
                 .map(|c| cleanup_dead_nodes(&c));
-        }
+            // The first member creates every service of the team before anybody opens one
+            // (the others wait for the lock we hold).
+            Some(RunResources::create(scenario)?)
+        } else {
+            None
+        };
         Ok(Self {
+            _resources: resources,
             board,
             namespace: namespace.clone(),
             slots: slots.to_vec(),
@@ -185,6 +195,7 @@ impl Membership {
                 last
             })
             .unwrap_or(false);
+        drop(self._resources);
         if last {
             drop(self.board);
             let _ = self.namespace.cleanup();
