@@ -421,6 +421,13 @@ impl Board {
         self.word(LINE * (agent + 1) + 32).load(Ordering::Acquire) == 2
     }
 
+    /// The agent that published the fewest rounds (the lowest number among equals): after
+    /// a timeout, the one everybody is waiting for, directly or through a chain of blocked
+    /// neighbours (a stopped process).
+    pub fn laggard(&self) -> Option<usize> {
+        (0..self.agents).min_by_key(|&a| (self.published_round(a), a))
+    }
+
     /// Last round agent `agent` published (0 before its first step).
     pub fn published_round(&self, agent: usize) -> u64 {
         self.word(LINE * (agent + 1) + 16).load(Ordering::Relaxed)

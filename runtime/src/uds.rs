@@ -339,9 +339,7 @@ impl UdsExchange {
     /// The agent that published the fewest rounds: after a timeout, the one everybody is
     /// waiting for, directly or through a chain of blocked neighbours (a stopped process).
     pub fn laggard(&self) -> usize {
-        (0..self.board.agents())
-            .min_by_key(|&a| (self.board.published_round(a), a))
-            .unwrap_or(self.index)
+        self.board.laggard().unwrap_or(self.index)
     }
 
     /// Asks the team to stop: this agent got termination signal `signal` (first request wins).

@@ -364,9 +364,7 @@ impl IpcExchange {
     /// The agent that published the fewest rounds: after a timeout, the one everybody is
     /// waiting for, directly or through a chain of blocked neighbours.
     pub fn laggard(&self) -> usize {
-        (0..self.board.agents())
-            .min_by_key(|&a| (self.board.published_round(a), a))
-            .unwrap_or(self.index)
+        self.board.laggard().unwrap_or(self.index)
     }
 
     /// Fault injection (tests, [`crate::fault`]).
