@@ -294,6 +294,12 @@ fn an_agent_crashing_on_one_host_stops_both_hosts_naming_it() {
                     message.contains("agent 7"),
                     "{transport}: agent {id}: {message}"
                 );
+                // A failure of the team, not bad input: exit 4.
+                assert_eq!(
+                    out.status.code(),
+                    Some(4),
+                    "{transport}: agent {id}: {message}"
+                );
             }
         }
         for out in &hosts {
@@ -459,6 +465,7 @@ fn a_host_or_agent_whose_team_file_differs_is_refused_by_name_and_the_team_runs_
         err.contains("agent 9's team file differs from the running team's (digest"),
         "{err}"
     );
+    assert_eq!(out.status.code(), Some(2), "refused, not failed: {err}");
     assert!(err.contains("parameters differ"), "{err}");
     eprintln!(
         "zenoh: agent 9 refused in {took:?} (exit {:?})",

@@ -342,6 +342,8 @@ fn an_agent_of_another_team_is_refused_by_name_before_round_0_and_the_team_runs_
         let out = start(file, 3).wait_with_output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{needle}: a wrong agent joined");
+        // Refused, not failed: bad input (exit 2), told apart from a fault (exit 4).
+        assert_eq!(out.status.code(), Some(2), "{err}");
         assert_eq!(err.trim().lines().count(), 1, "{err}");
         assert!(
             err.contains("agent 3's team file differs from the running team's (digest"),

@@ -38,10 +38,13 @@ pub fn run(args: AgentArgs) -> Result<()> {
     };
     result.map_err(|e| {
         // Exchange errors already start with "agent N:".
-        if e.starts_with(&format!("agent {index}:")) || e.starts_with(&format!("agent {index}'s")) {
-            anyhow::anyhow!(e)
+        let text = e.text();
+        if text.starts_with(&format!("agent {index}:"))
+            || text.starts_with(&format!("agent {index}'s"))
+        {
+            anyhow::Error::from(e)
         } else {
-            anyhow::anyhow!("agent {index}: {e}")
+            anyhow::Error::from(e.prefixed(&format!("agent {index}: ")))
         }
     })
 }

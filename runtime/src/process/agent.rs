@@ -8,6 +8,7 @@
 use crate::error_text::one_line;
 use crate::exchange::ExchangeError;
 use crate::exchange::round_loop::{AgentOutcome, run_agent};
+use crate::process::agent_error::AgentError;
 use crate::process::connect::connect;
 use crate::process::scenario::{Scenario, ScenarioWorkload};
 use crate::workload::episode::{EpisodeRecord, run_surveillance_agent};
@@ -62,11 +63,13 @@ pub fn run(
     index: usize,
     scenario_path: &Path,
     scenario_digest: &str,
-) -> Result<(), String> {
+) -> Result<(), AgentError> {
     let _signals = crate::signals::install();
     // Not a symlink, ours, mode 0600, and what the launcher wrote (its digest).
-    let bytes = crate::process::private_dir::read_verified(scenario_path, scenario_digest)?;
-    let scenario = Scenario::parse(&bytes, scenario_path, run_id).map_err(|e| one_line(&e))?;
+    let bytes = crate::process::private_dir::read_verified(scenario_path, scenario_digest)
+        .map_err(AgentError::Refused)?;
+    let scenario = Scenario::parse(&bytes, scenario_path, run_id)
+        .map_err(|e| AgentError::Refused(one_line(&e)))?;
     let run_dir = scenario_path.parent().unwrap_or(Path::new("."));
     run_scenario(
         &scenario,
@@ -87,11 +90,15 @@ pub fn run_scenario(
     run_dir: &Path,
     result: &Path,
     supervised: bool,
-) -> Result<AgentReport, String> {
+) -> Result<AgentReport, AgentError> {
     let started_unix_ns = unix_ns();
     let started = Instant::now();
-    let graph = scenario.graph().map_err(|e| e.to_string())?;
-    let plan = scenario.plan(index).map_err(|e| e.to_string())?;
+    let graph = scenario
+        .graph()
+        .map_err(|e| AgentError::Refused(e.to_string()))?;
+    let plan = scenario
+        .plan(index)
+        .map_err(|e| AgentError::Refused(e.to_string()))?;
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
     let mut endpoint = connect(scenario, &graph, index, run_dir, supervised, deadline)
         .inspect_err(|_| record_stop(scenario))?;
@@ -103,7 +110,9 @@ pub fn run_scenario(
                 .map(|(records, outcome)| (outcome, records))
         }
         _ => {
-            let mut agent = scenario.workload_agent(index).map_err(|e| e.to_string())?;
+            let mut agent = scenario
+                .workload_agent(index)
+                .map_err(|e| AgentError::Refused(e.to_string()))?;
             run_agent(&mut *agent, endpoint.exchange(), &plan).map(|o| (o, Vec::new()))
         }
     };

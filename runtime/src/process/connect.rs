@@ -12,6 +12,7 @@ use crate::fault::{FaultKind, fault_for};
 use crate::ipc::exchange::{IpcEndpoint, IpcExchange};
 use crate::ipc::nodes::run_config;
 use crate::ipc::services::RunServices;
+use crate::process::agent_error::AgentError;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::process::team_digest::TeamDigest;
@@ -44,7 +45,7 @@ pub(crate) fn connect(
     run_dir: &Path,
     supervised: bool,
     deadline: Instant,
-) -> Result<Endpoint, String> {
+) -> Result<Endpoint, AgentError> {
     let any_fault = fault_for(index)?;
     if let Some(fault) = any_fault.filter(|f| f.kind == FaultKind::NeverStart) {
         // Fault injection: this agent never connects (until a signal or its launcher ends).
@@ -55,7 +56,8 @@ pub(crate) fn connect(
         return Err(stop_or_text(ExchangeError::Stopped {
             agent: index,
             signal: crate::signals::received().unwrap_or(libc::SIGTERM),
-        }));
+        })
+        .into());
     }
     let fault = if scenario.transport.capabilities().fault_injection {
         any_fault
@@ -70,7 +72,9 @@ pub(crate) fn connect(
     ) {
         // Another team's agent is refused by name before it opens a service.
         let board = Board::open(&scenario.board_shm, scenario.robots).map_err(|e| one_line(&e))?;
-        TeamDigest::of(scenario).check(&board, index)?;
+        TeamDigest::of(scenario)
+            .check(&board, index)
+            .map_err(AgentError::Refused)?;
     }
     match scenario.transport {
         Transport::Ipc => {
@@ -145,24 +149,28 @@ pub(crate) fn connect(
             )
             .map_err(|e| match &e {
                 // Another team's agent is refused by name, naming the parts.
-                ExchangeError::OtherTeam { running, .. } => TeamDigest::from_hex(running)
-                    .and_then(|running| {
-                        TeamDigest::of(scenario)
-                            .compare(&running, &format!("agent {index}"))
-                            .err()
-                    })
-                    .unwrap_or_else(|| e.to_string()),
-                _ => stop_or_text(e),
+                ExchangeError::OtherTeam { running, .. } => AgentError::Refused(
+                    TeamDigest::from_hex(running)
+                        .and_then(|running| {
+                            TeamDigest::of(scenario)
+                                .compare(&running, &format!("agent {index}"))
+                                .err()
+                        })
+                        .unwrap_or_else(|| e.to_string()),
+                ),
+                _ => AgentError::Failed(stop_or_text(e)),
             })?;
             exchange.inject(fault);
             Ok(Endpoint::Zenoh(Box::new(exchange)))
         }
         #[cfg(not(feature = "zenoh"))]
-        Transport::Zenoh => Err(crate::transport::ZenohNotBuilt.to_string()),
-        Transport::Sim | Transport::Threads => Err(format!(
+        Transport::Zenoh => Err(AgentError::Refused(
+            crate::transport::ZenohNotBuilt.to_string(),
+        )),
+        Transport::Sim | Transport::Threads => Err(AgentError::Refused(format!(
             "scenario is inconsistent: the {} transport runs no agent processes",
             scenario.transport
-        )),
+        ))),
     }
 }
 
