@@ -12,8 +12,8 @@
 
 use admm_ta::agents::lsap::LsapError;
 use admm_ta::agents::problem::ProblemError;
-use admm_ta::runtime::process::agent_error::AgentError;
 use admm_ta::runtime::process::launcher::LaunchError;
+use admm_ta::runtime::process::member_error::MemberError;
 use admm_ta::runtime::runner::RunError;
 use admm_ta::runtime::solve::report::SolveReport;
 use admm_ta::{ConfigError, SolveError, StopRule, TopologyError};
@@ -97,10 +97,10 @@ pub fn code_of(error: &anyhow::Error) -> u8 {
         if cause.is::<ConfigError>() || cause.is::<TopologyError>() || cause.is::<UsageError>() {
             return 2;
         }
-        if let Some(e) = cause.downcast_ref::<AgentError>() {
+        if let Some(e) = cause.downcast_ref::<MemberError>() {
             return match e {
-                AgentError::Refused(_) => 2,
-                AgentError::Failed(_) => 4,
+                MemberError::Refused(_) => 2,
+                MemberError::Failed(_) => 4,
             };
         }
         if cause.is::<RunsFailed>() {

@@ -437,10 +437,12 @@ fn a_host_or_agent_whose_team_file_differs_is_refused_by_name_and_the_team_runs_
             "{transport}: {err}"
         );
         assert!(err.contains("parameters differ"), "{transport}: {err}");
-        eprintln!(
-            "{transport}: host beta refused in {took:?} (exit {:?})",
-            out.status.code()
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{transport}: refused, not failed: {err}"
         );
+        eprintln!("{transport}: host beta refused in {took:?}");
         // The right beta completes the team, as on an ipc board.
         let beta = start_host(&team, "beta", &[5, 6, 7, 8, 9], &[]);
         let (hosts, agents) = wait_all(vec![alpha, beta], Duration::from_secs(90));

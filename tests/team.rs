@@ -310,6 +310,13 @@ fn host_refuses_what_it_cannot_run() {
     };
     assert!(err.contains(needle), "{err}");
     assert_eq!(err.trim().lines().count(), 1, "{err}");
+    if cfg!(feature = "zenoh") {
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "a host not in the team file: {err}"
+        );
+    }
 }
 
 #[test]

@@ -5,8 +5,7 @@ use anyhow::Result;
 
 #[cfg(feature = "zenoh")]
 pub fn run(args: HostArgs) -> Result<()> {
-    let report = admm_ta::runtime::process::host::run_host(&args.team, &args.name)
-        .map_err(anyhow::Error::msg)?;
+    let report = admm_ta::runtime::process::host::run_host(&args.team, &args.name)?;
     println!("{}", serde_json::to_string(&report)?);
     Ok(())
 }

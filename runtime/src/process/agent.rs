@@ -8,8 +8,8 @@
 use crate::error_text::one_line;
 use crate::exchange::ExchangeError;
 use crate::exchange::round_loop::{AgentOutcome, run_agent};
-use crate::process::agent_error::AgentError;
 use crate::process::connect::connect;
+use crate::process::member_error::MemberError;
 use crate::process::scenario::{Scenario, ScenarioWorkload};
 use crate::workload::episode::{EpisodeRecord, run_surveillance_agent};
 use serde::{Deserialize, Serialize};
@@ -63,13 +63,13 @@ pub fn run(
     index: usize,
     scenario_path: &Path,
     scenario_digest: &str,
-) -> Result<(), AgentError> {
+) -> Result<(), MemberError> {
     let _signals = crate::signals::install();
     // Not a symlink, ours, mode 0600, and what the launcher wrote (its digest).
     let bytes = crate::process::private_dir::read_verified(scenario_path, scenario_digest)
-        .map_err(AgentError::Refused)?;
+        .map_err(MemberError::Refused)?;
     let scenario = Scenario::parse(&bytes, scenario_path, run_id)
-        .map_err(|e| AgentError::Refused(one_line(&e)))?;
+        .map_err(|e| MemberError::Refused(one_line(&e)))?;
     let run_dir = scenario_path.parent().unwrap_or(Path::new("."));
     run_scenario(
         &scenario,
@@ -90,15 +90,15 @@ pub fn run_scenario(
     run_dir: &Path,
     result: &Path,
     supervised: bool,
-) -> Result<AgentReport, AgentError> {
+) -> Result<AgentReport, MemberError> {
     let started_unix_ns = unix_ns();
     let started = Instant::now();
     let graph = scenario
         .graph()
-        .map_err(|e| AgentError::Refused(e.to_string()))?;
+        .map_err(|e| MemberError::Refused(e.to_string()))?;
     let plan = scenario
         .plan(index)
-        .map_err(|e| AgentError::Refused(e.to_string()))?;
+        .map_err(|e| MemberError::Refused(e.to_string()))?;
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
     let mut endpoint = connect(scenario, &graph, index, run_dir, supervised, deadline)
         .inspect_err(|_| record_stop(scenario))?;
@@ -112,7 +112,7 @@ pub fn run_scenario(
         _ => {
             let mut agent = scenario
                 .workload_agent(index)
-                .map_err(|e| AgentError::Refused(e.to_string()))?;
+                .map_err(|e| MemberError::Refused(e.to_string()))?;
             run_agent(&mut *agent, endpoint.exchange(), &plan).map(|o| (o, Vec::new()))
         }
     };

@@ -12,7 +12,7 @@ use crate::fault::{FaultKind, fault_for};
 use crate::ipc::exchange::{IpcEndpoint, IpcExchange};
 use crate::ipc::nodes::run_config;
 use crate::ipc::services::RunServices;
-use crate::process::agent_error::AgentError;
+use crate::process::member_error::MemberError;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::process::team_digest::TeamDigest;
@@ -45,7 +45,7 @@ pub(crate) fn connect(
     run_dir: &Path,
     supervised: bool,
     deadline: Instant,
-) -> Result<Endpoint, AgentError> {
+) -> Result<Endpoint, MemberError> {
     let any_fault = fault_for(index)?;
     if let Some(fault) = any_fault.filter(|f| f.kind == FaultKind::NeverStart) {
         // Fault injection: this agent never connects (until a signal or its launcher ends).
@@ -74,7 +74,7 @@ pub(crate) fn connect(
         let board = Board::open(&scenario.board_shm, scenario.robots).map_err(|e| one_line(&e))?;
         TeamDigest::of(scenario)
             .check(&board, index)
-            .map_err(AgentError::Refused)?;
+            .map_err(MemberError::Refused)?;
     }
     match scenario.transport {
         Transport::Ipc => {
@@ -149,7 +149,7 @@ pub(crate) fn connect(
             )
             .map_err(|e| match &e {
                 // Another team's agent is refused by name, naming the parts.
-                ExchangeError::OtherTeam { running, .. } => AgentError::Refused(
+                ExchangeError::OtherTeam { running, .. } => MemberError::Refused(
                     TeamDigest::from_hex(running)
                         .and_then(|running| {
                             TeamDigest::of(scenario)
@@ -158,16 +158,16 @@ pub(crate) fn connect(
                         })
                         .unwrap_or_else(|| e.to_string()),
                 ),
-                _ => AgentError::Failed(stop_or_text(e)),
+                _ => MemberError::Failed(stop_or_text(e)),
             })?;
             exchange.inject(fault);
             Ok(Endpoint::Zenoh(Box::new(exchange)))
         }
         #[cfg(not(feature = "zenoh"))]
-        Transport::Zenoh => Err(AgentError::Refused(
+        Transport::Zenoh => Err(MemberError::Refused(
             crate::transport::ZenohNotBuilt.to_string(),
         )),
-        Transport::Sim | Transport::Threads => Err(AgentError::Refused(format!(
+        Transport::Sim | Transport::Threads => Err(MemberError::Refused(format!(
             "scenario is inconsistent: the {} transport runs no agent processes",
             scenario.transport
         ))),

@@ -15,6 +15,7 @@
 //! came) and for the run no longer than every round's deadline allows.
 
 use crate::process::member::team_scenario;
+use crate::process::member_error::MemberError;
 use crate::process::team_digest::TeamDigest;
 use crate::process::team_file::Team;
 use crate::zenoh_net::links::ZenohLinks;
@@ -65,19 +66,21 @@ impl TeamWatch {
 /// How long a host stopped by a signal waits for the team's agents to leave.
 const STOP_GRACE: Duration = Duration::from_secs(2);
 
-/// Runs host `name` of the team in `team_path` until the team's run is over.
-pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
+/// Runs host `name` of the team in `team_path` until the team's run is over. The team
+/// file, the host's name and a team file that differs from the running team's are refused
+/// ([`MemberError::Refused`]); what fails once the host runs is a failure.
+pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError> {
     let _signals = crate::signals::install();
     let started = Instant::now();
-    let team = Team::read(team_path)?;
+    let team = Team::read(team_path).map_err(MemberError::Refused)?;
     if !team.file.transport.across_hosts() {
-        return Err(
+        return Err(MemberError::Refused(
             "this team runs on one machine over iceoryx2 (transport = \"iceoryx2\"): it has no hosts"
                 .into(),
-        );
+        ));
     }
     let n = team.file.robots;
-    let host = team.host(name)?.clone();
+    let host = team.host(name).map_err(MemberError::Refused)?.clone();
     let others: Vec<String> = team
         .file
         .hosts
@@ -177,12 +180,12 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
             let running = presence.alive.iter().filter(|&&a| a).count();
             if running == 0 || Instant::now() >= until {
                 let seen = presence.seen.iter().filter(|&&s| s).count();
-                return Err(format!(
+                return Err(MemberError::Failed(format!(
                     "host {}: stopped by {}: {} agent(s) stopped, {running} still leaving",
                     host.name,
                     crate::signals::name(signal),
                     seen - running,
-                ));
+                )));
             }
         }
         if let Some(bridge) = &bridge {
@@ -196,18 +199,18 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
         let now = Instant::now();
         if !all_seen && presence.failed.is_none() && now >= startup_deadline {
             let missing: Vec<usize> = (0..n).filter(|&a| !presence.seen[a]).collect();
-            return Err(format!(
+            return Err(MemberError::Failed(format!(
                 "host {}: agent(s) {missing:?} never joined the team's Zenoh network within {:.1?} (not started, or their host unreachable)",
                 host.name,
                 started.elapsed()
-            ));
+            )));
         }
         if now >= run_deadline {
             let running: Vec<usize> = (0..n).filter(|&a| presence.alive[a]).collect();
-            return Err(format!(
+            return Err(MemberError::Failed(format!(
                 "host {}: agent(s) {running:?} still ran after every round's deadline",
                 host.name
-            ));
+            )));
         }
         presence = watch
             .changed
@@ -220,10 +223,10 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, String> {
     drop(presence);
     let (forwarded_out, forwarded_in) = bridge.map_or((0, 0), |b| b.finish());
     if let Some(failed) = failed {
-        return Err(format!(
+        return Err(MemberError::Failed(format!(
             "host {}: the team's run failed: agent {failed} failed (see its output)",
             host.name
-        ));
+        )));
     }
     Ok(HostReport {
         host: host.name,
@@ -246,8 +249,8 @@ fn check_team_digest(
     links: &ZenohLinks,
     session: &zenoh::Session,
     deadline: Instant,
-) -> Result<zenoh::liveliness::LivelinessToken, String> {
-    let digest = TeamDigest::of(&team_scenario(team)?);
+) -> Result<zenoh::liveliness::LivelinessToken, MemberError> {
+    let digest = TeamDigest::of(&team_scenario(team).map_err(MemberError::Refused)?);
     let started_ms = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_millis() as u64);
@@ -271,7 +274,9 @@ fn check_team_digest(
         if let Some((hex, _, _)) = earlier_differing {
             let running = TeamDigest::from_hex(hex)
                 .ok_or_else(|| format!("a host announced a malformed team digest {hex}"))?;
-            digest.compare(&running, &format!("host {name}"))?;
+            digest
+                .compare(&running, &format!("host {name}"))
+                .map_err(MemberError::Refused)?;
         }
         if seen.len() >= others || Instant::now() >= deadline {
             return Ok(token);

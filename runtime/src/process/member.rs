@@ -18,8 +18,8 @@ use crate::exchange::round_loop::{AgentStop, merge_outcomes};
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::latency::LatencySummary;
 use crate::process::agent::{AgentReport, run_scenario};
-use crate::process::agent_error::AgentError;
 use crate::process::connect::RunResources;
+use crate::process::member_error::MemberError;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::process::team_digest::TeamDigest;
@@ -206,14 +206,14 @@ impl Membership {
 
 /// Runs agent `id` of the team in `team_path` to the end; errors are one line.
 /// Everything before the run itself (the team file, the id, the limits, joining the team)
-/// is refused ([`AgentError::Refused`]); what fails while it runs is a failure.
-pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, AgentError> {
+/// is refused ([`MemberError::Refused`]); what fails while it runs is a failure.
+pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberError> {
     let _signals = crate::signals::install();
     let started = Instant::now();
-    let team = Team::read(team_path).map_err(AgentError::Refused)?;
+    let team = Team::read(team_path).map_err(MemberError::Refused)?;
     let n = team.file.robots;
     if id >= n {
-        return Err(AgentError::Refused(format!(
+        return Err(MemberError::Refused(format!(
             "--id {id} is out of range for a team of {n} robots"
         )));
     }
@@ -223,12 +223,12 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, AgentError
         .bridged()
         .then(|| team.host_of(id))
         .flatten();
-    let (mut scenario, namespace) = member_scenario(&team, host).map_err(AgentError::Refused)?;
+    let (mut scenario, namespace) = member_scenario(&team, host).map_err(MemberError::Refused)?;
     let degree = scenario.graph().map_or(n, |g| g.degree(id));
-    crate::process::limits::check(scenario.transport, 1, degree).map_err(AgentError::Refused)?;
+    crate::process::limits::check(scenario.transport, 1, degree).map_err(MemberError::Refused)?;
     let results = team.results_dir();
     std::fs::create_dir_all(&results)
-        .map_err(|e| AgentError::Refused(format!("cannot create {}: {e}", results.display())))?;
+        .map_err(|e| MemberError::Refused(format!("cannot create {}: {e}", results.display())))?;
     let result = member_result(&results, id);
     // A result of an earlier run must not pass for this one's.
     let _ = std::fs::remove_file(&result);
@@ -247,7 +247,7 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, AgentError
     }
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
     let membership =
-        Membership::join(&scenario, &namespace, &[id], deadline).map_err(AgentError::Refused)?;
+        Membership::join(&scenario, &namespace, &[id], deadline).map_err(MemberError::Refused)?;
     let report = run_scenario(&scenario, id, &namespace.dir, &result, false);
     if let Some(signal) = crate::signals::received() {
         // A termination signal (to us, or to another member: then it is on the board

@@ -4,7 +4,7 @@
 //! * [`launcher`]: spawns, supervises and reaps the agent processes of a run;
 //! * [`limits`]: open files and processes a team needs, checked before spawning;
 //! * [`agent`]: the body of `admm-ta agent`;
-//! * [`agent_error`]: why an agent process ended without its result (refused or failed);
+//! * [`member_error`]: why an agent or host process ended without its result (refused or failed);
 //! * [`connect`]: the one place that maps a process transport to its exchange;
 //! * [`stop`]: how a run stops on a termination signal, and what children's states say;
 //! * [`scenario`]: the file the launcher writes for its agents;
@@ -16,11 +16,11 @@
 //! * `host` and `bridge` (feature `zenoh`): one machine of a multi-host team.
 
 pub mod agent;
-pub mod agent_error;
 pub mod connect;
 pub mod launcher;
 pub mod limits;
 pub mod member;
+pub mod member_error;
 pub mod namespace;
 pub mod private_dir;
 pub mod scenario;
