@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{children_of, leftovers_of};
+use common::{children_of, leftovers_of, wait_with_deadline};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -28,22 +28,6 @@ fn solve_on(transport: &str, args: &str, fault: Option<&str>) -> Child {
         None => command.env_remove("ADMM_TA_FAULT"),
     };
     command.spawn().expect("the admm-ta binary runs")
-}
-
-/// Waits for `child` with a deadline (the test itself must never hang).
-fn wait_with_deadline(child: &mut Child, limit: Duration) -> std::process::ExitStatus {
-    let started = Instant::now();
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            return status;
-        }
-        if started.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("the launcher did not exit within {limit:?}");
-        }
-        std::thread::sleep(Duration::from_millis(1));
-    }
 }
 
 fn stderr_of(child: &mut Child) -> String {

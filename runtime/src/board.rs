@@ -304,14 +304,40 @@ impl Board {
             if team.iter().all(|&a| self.connected(a)) {
                 return Ok(());
             }
-            let now = std::time::Instant::now();
-            if now >= deadline {
+            if std::time::Instant::now() >= deadline {
                 return Err(Rendezvous::NeverConnected(self.never_connected(team)));
             }
-            let slice = deadline
-                .saturating_duration_since(now)
-                .min(std::time::Duration::from_millis(20));
-            crate::futex::wait(word, seen, slice);
+            crate::futex::wait_slice(word, seen, deadline);
+        }
+    }
+
+    /// Arrives at the run's global barrier and waits, under `policy`, for the last of its
+    /// agents until `deadline`: `Ok(false)` at the deadline. Sleeps on the barrier's wake
+    /// word in slices; `between(whole_slice_passed)` runs after each (a transport's failure
+    /// checks) and ends the wait with its error.
+    pub fn global_barrier<E>(
+        &self,
+        policy: crate::wait::WaitPolicy,
+        deadline: std::time::Instant,
+        mut between: impl FnMut(bool) -> Result<(), E>,
+    ) -> Result<bool, E> {
+        let (state, word) = (self.barrier(), self.barrier_wake_word());
+        // Read before arriving: a release after this read changes the word.
+        let mut seen = word.load(Ordering::Acquire);
+        match state.arrive(self.agents) {
+            crate::wait::Arrival::Released => {
+                crate::futex::bump_and_wake(word);
+                Ok(true)
+            }
+            crate::wait::Arrival::Wait(ticket) => policy.wait_until(
+                &mut seen,
+                deadline,
+                |seen| {
+                    *seen = word.load(Ordering::Acquire);
+                    Ok(state.released(ticket))
+                },
+                |seen, deadline| between(crate::futex::wait_slice(word, *seen, deadline)),
+            ),
         }
     }
 
@@ -393,9 +419,7 @@ impl Board {
         self.word(LINE * (agent + 1) + 32)
             .store(2, Ordering::Release);
         // Wakes the agents waiting for the team in `await_connected`.
-        let word = self.barrier_wake_word();
-        word.fetch_add(1, Ordering::Release);
-        crate::futex::wake(word, u32::MAX);
+        crate::futex::bump_and_wake(self.barrier_wake_word());
     }
 
     /// Agent `agent`'s process started and opened the board (start-up evidence: an agent

@@ -23,8 +23,12 @@
 //! assert_eq!(futex::wake(&word, u32::MAX), 0);
 //! ```
 
-use std::sync::atomic::AtomicU32;
-use std::time::Duration;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::{Duration, Instant};
+
+/// Longest sleep of a waiter on a run's board between two looks at its failure mark, stop
+/// request and launcher (every process transport's wait slice).
+pub const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
 
 /// How a [`wait`] ended. Every outcome but [`Wait::TimedOut`] may be spurious: the caller
 /// re-checks its condition in any case.
@@ -90,12 +94,27 @@ pub fn wake(word: &AtomicU32, waiters: u32) -> usize {
     r.max(0) as usize
 }
 
+/// The waker's half of the read-check-wait protocol: bumps `word`, then wakes every
+/// sleeper on it.
+pub fn bump_and_wake(word: &AtomicU32) {
+    word.fetch_add(1, Ordering::Release);
+    wake(word, u32::MAX);
+}
+
+/// Sleeps while `word` holds `seen`, until `deadline` but at most [`FAILURE_CHECK_SLICE`];
+/// `true` if the whole slice passed without a wake-up (or no time was left). Every outcome
+/// leads the caller to a new check.
+pub fn wait_slice(word: &AtomicU32, seen: u32, deadline: Instant) -> bool {
+    let left = deadline
+        .saturating_duration_since(Instant::now())
+        .min(FAILURE_CHECK_SLICE);
+    left.is_zero() || wait(word, seen, left) == Wait::TimedOut
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::sync::Arc;
-    use std::sync::atomic::Ordering;
-    use std::time::Instant;
 
     #[test]
     fn a_waker_ends_a_long_wait_at_once() {

@@ -43,7 +43,7 @@ use crate::ipc::nodes::{node_name, scan_dead_agents};
 use crate::ipc::services::{
     SUBSCRIBER_BUFFER, ServiceError, Svc, open_bridge_wake_service, open_round_service,
 };
-use crate::wait::{Arrival, WaitPolicy};
+use crate::wait::WaitPolicy;
 use admm_ta_agents::agent::Inbox;
 use iceoryx2::port::DegradationAction;
 use iceoryx2::port::notifier::Notifier;
@@ -80,8 +80,6 @@ pub struct IpcEndpoint {
     pub local_agents: Option<Vec<usize>>,
 }
 
-/// How long a waiting agent sleeps before it looks for failed agents again.
-const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
 /// A waiting agent scans the run's iceoryx2 nodes for dead ones once it has waited this
 /// long for a round, and again at this interval. Scans read every node of the run, so they
 /// are kept off the normal path: with 100 agents on 2 cores, scanning after 100 ms slowed
@@ -158,12 +156,6 @@ pub struct IpcExchange {
     launcher: Option<u32>,
     // Ports first: they must drop before the node.
     _node: Node<Svc>,
-}
-
-/// Bumps the futex word `word` and wakes whoever sleeps on it.
-fn wake(word: &std::sync::atomic::AtomicU32) {
-    word.fetch_add(1, Ordering::Release);
-    futex::wake(word, u32::MAX);
 }
 
 fn transport(agent: usize, what: impl std::fmt::Display) -> ExchangeError {
@@ -554,7 +546,7 @@ impl IpcExchange {
                 .fetch_add(1, Ordering::AcqRel)
                 + 1;
             if arrived == arrivals_target(self.degrees[j], header.round) {
-                wake(self.board.wake_word(j));
+                futex::bump_and_wake(self.board.wake_word(j));
             }
         }
         if let Some(bridge) = &self.bridge {
@@ -650,10 +642,7 @@ impl Exchange for IpcExchange {
             |s, deadline| {
                 // Sleep in slices, looking for failed agents in between; a wake-up since
                 // `all_held` read the word ends the sleep at once.
-                let slice = deadline
-                    .saturating_duration_since(Instant::now())
-                    .min(FAILURE_CHECK_SLICE);
-                futex::wait(s.board.wake_word(s.index), s.wake_seen, slice);
+                futex::wait_slice(s.board.wake_word(s.index), s.wake_seen, deadline);
                 s.check_peers(round, started.elapsed())
             },
         )?;
@@ -700,41 +689,19 @@ impl Exchange for IpcExchange {
             return Err(transport(i, "this run has no global barrier"));
         }
         let started = Instant::now();
-        let (board, parties) = (&self.board, self.board.agents());
-        let (state, word) = (board.barrier(), board.barrier_wake_word());
-        // Read before arriving: a release after this read changes the word.
-        let mut seen = word.load(Ordering::Acquire);
-        match state.arrive(parties) {
-            Arrival::Released => {
-                wake(word);
-                Ok(())
-            }
-            Arrival::Wait(ticket) => {
-                let released = self.policy.wait_until(
-                    &mut seen,
-                    deadline,
-                    |seen| {
-                        *seen = word.load(Ordering::Acquire);
-                        Ok(state.released(ticket))
-                    },
-                    |seen, deadline| {
-                        let left = deadline.saturating_duration_since(Instant::now());
-                        futex::wait(word, *seen, left.min(FAILURE_CHECK_SLICE));
-                        Ok::<(), ExchangeError>(())
-                    },
-                )?;
-                if released {
-                    Ok(())
-                } else {
-                    Err(ExchangeError::BarrierTimeout {
-                        agent: i,
-                        round,
-                        arrived: state.arrived(),
-                        expected: parties,
-                        waited: started.elapsed(),
-                    })
-                }
-            }
+        let released = self
+            .board
+            .global_barrier(self.policy, deadline, |_| Ok::<(), ExchangeError>(()))?;
+        if released {
+            Ok(())
+        } else {
+            Err(ExchangeError::BarrierTimeout {
+                agent: i,
+                round,
+                arrived: self.board.barrier().arrived(),
+                expected: self.board.agents(),
+                waited: started.elapsed(),
+            })
         }
     }
 }

@@ -479,9 +479,7 @@ impl Forwarder {
                         + 1;
                     if arrived == arrivals_target(layout.degrees[j], header.round) {
                         // As a local neighbour would: bump j's wake word, then wake it.
-                        let word = board.wake_word(j);
-                        word.fetch_add(1, Ordering::Release);
-                        crate::futex::wake(word, u32::MAX);
+                        crate::futex::bump_and_wake(board.wake_word(j));
                     }
                 }
                 self.shared.forwarded_in.fetch_add(1, Ordering::Relaxed);

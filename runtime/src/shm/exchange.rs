@@ -9,7 +9,7 @@
 //! agent that is not asleep. A waiting agent reads its wake-up word, checks its neighbours'
 //! published-round words (acquire), marks the word as slept on (its lowest bit, by a
 //! compare-and-swap from the value read: a bump in between fails it, and the agent checks
-//! again) and sleeps on the marked value, in slices of [`FAILURE_CHECK_SLICE`], looking at
+//! again) and sleeps on the marked value, in slices of [`futex::FAILURE_CHECK_SLICE`], looking at
 //! the board's failure mark and stop request in between (see [`crate::futex`] for why no
 //! wake-up is lost). Wakers bump the word by 2, keeping the mark; the agent clears it once
 //! its round is complete. The global barrier is the board's counting barrier with its futex
@@ -27,13 +27,10 @@ use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::Fault;
 use crate::futex;
 use crate::shm::table::SlotTable;
-use crate::wait::{Arrival, WaitPolicy};
+use crate::wait::WaitPolicy;
 use admm_ta_agents::agent::Inbox;
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::time::{Duration, Instant};
-
-/// Longest sleep between two looks at the run's failure mark and stop request.
-const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
+use std::time::Instant;
 
 /// The mark of an agent's wake-up word that says it sleeps (or is about to) on it; wakers
 /// bump the word by 2 so that the mark stays.
@@ -200,15 +197,6 @@ impl ShmExchange {
         Ok(())
     }
 
-    /// Sleeps on `word` while it holds `seen`, until `deadline` or the next failure check;
-    /// `true` if the whole slice passed. Every outcome (woken, changed, a signal, the
-    /// timeout) leads to a new check.
-    fn sleep(word: &AtomicU32, seen: u32, deadline: Instant) -> bool {
-        let now = Instant::now();
-        let slice = deadline.min(now + FAILURE_CHECK_SLICE) - now;
-        slice.is_zero() || futex::wait(word, seen, slice) == futex::Wait::TimedOut
-    }
-
     /// Sleeps on the own wake-up word, read as `seen` before the last check: marks it as
     /// slept on first (see the module docs); `true` if a whole slice passed.
     fn sleep_marked(word: &AtomicU32, seen: &mut u32, deadline: Instant) -> bool {
@@ -224,7 +212,7 @@ impl ShmExchange {
                 Err(_) => return false,
             }
         }
-        Self::sleep(word, *seen, deadline)
+        futex::wait_slice(word, *seen, deadline)
     }
 
     /// Whether every neighbour published round `round`, from neighbour `waiting.next` on
@@ -420,40 +408,19 @@ impl Exchange for ShmExchange {
 
     fn global_barrier(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
         let started = Instant::now();
-        let (state, parties) = (self.board.barrier(), self.board.agents());
-        let word = self.board.barrier_wake_word();
-        match state.arrive(parties) {
-            Arrival::Released => {
-                word.fetch_add(1, Ordering::Release);
-                futex::wake(word, u32::MAX);
-                Ok(())
-            }
-            Arrival::Wait(ticket) => {
-                let mut seen = 0;
-                let released = self.policy.wait_until(
-                    &mut seen,
-                    deadline,
-                    |seen| {
-                        *seen = word.load(Ordering::Acquire);
-                        Ok(state.released(ticket))
-                    },
-                    |seen, deadline| {
-                        let slept = Self::sleep(word, *seen, deadline);
-                        self.check_peers(round, slept)
-                    },
-                )?;
-                if released {
-                    Ok(())
-                } else {
-                    Err(ExchangeError::BarrierTimeout {
-                        agent: self.index,
-                        round,
-                        arrived: state.arrived(),
-                        expected: parties,
-                        waited: started.elapsed(),
-                    })
-                }
-            }
+        let released = self.board.global_barrier(self.policy, deadline, |slept| {
+            self.check_peers(round, slept)
+        })?;
+        if released {
+            Ok(())
+        } else {
+            Err(ExchangeError::BarrierTimeout {
+                agent: self.index,
+                round,
+                arrived: self.board.barrier().arrived(),
+                expected: self.board.agents(),
+                waited: started.elapsed(),
+            })
         }
     }
 }
