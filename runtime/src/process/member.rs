@@ -185,21 +185,33 @@ impl Membership {
     }
 
     /// Counts the slots out; the last member of the team removes its namespace.
+    ///
+    /// The services a first member created are dropped while the team's lock is held: the
+    /// last member removes every file of the namespace under that lock, so a creator that
+    /// dropped them after releasing it could find their storage already gone (iceoryx2
+    /// then warns on standard error that "the static storage was already removed").
     pub(crate) fn leave(self) {
+        let Self {
+            _resources: resources,
+            board,
+            namespace,
+            slots,
+        } = self;
         let deadline = Instant::now() + Duration::from_secs(5);
-        let last = FileLock::acquire(&self.namespace.dir.join("lock"), deadline)
-            .map(|_lock| {
+        let last = match FileLock::acquire(&namespace.dir.join("lock"), deadline) {
+            Ok(_lock) => {
                 let mut last = false;
-                for &slot in &self.slots {
-                    last |= self.board.member_left(slot);
+                for &slot in &slots {
+                    last |= board.member_left(slot);
                 }
+                drop(resources);
                 last
-            })
-            .unwrap_or(false);
-        drop(self._resources);
+            }
+            Err(_) => false,
+        };
         if last {
-            drop(self.board);
-            let _ = self.namespace.cleanup();
+            drop(board);
+            let _ = namespace.cleanup();
         }
     }
 }
