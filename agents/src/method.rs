@@ -218,9 +218,10 @@ const PRIMAL: MethodInfo = MethodInfo {
     agents: Some(AgentMethod::Primal),
     stops: ALL_STOPS,
     // X, Q, Z, the projection's workspace and two round buffers: six m×n matrices; the fast
-    // variant's integer multipliers, edge sums and tie-break matrix: three more.
+    // variant's integer multipliers, edge sums and tie-break matrix: three more; the
+    // certificate's minimiser of `G_i`: one more.
     memory: Memory {
-        bytes: |n, m| per_agent(n, 9.0 * (m * n) as f64),
+        bytes: |n, m| per_agent(n, 10.0 * (m * n) as f64),
         of: TEAM_STATE,
         because: "each robot holds an m×n matrix",
     },

@@ -31,8 +31,10 @@ use crate::general::GeneralProblem;
 pub use crate::primal_settings::{PrimalSettings, ProjectionPath};
 use crate::problem::AssignmentCase;
 use crate::projection::{ProjectionStats, QpProjector, TransportPolytopeProjector};
+use crate::readout::GReadout;
 use crate::rounding;
 use faer::{MatMut, MatRef};
+use std::cell::RefCell;
 
 enum Projector {
     Fast(Box<TransportPolytopeProjector>),
@@ -57,6 +59,17 @@ pub struct PrimalAgent {
     last_projection: ProjectionStats,
     /// The fast variant's state (`None`: Algorithm 1).
     fast: Option<Box<FastConsensus>>,
+    /// Scratch of [`PrimalAgent::certificate_slack_for`]: its assignment problem is solved
+    /// in buffers allocated here, not per check (it runs inside the round loop).
+    certificate: RefCell<CertificateScratch>,
+}
+
+/// The minimiser of `G_i` over the polytope (a readout without tie-break) and room for it.
+#[derive(Debug, Clone)]
+struct CertificateScratch {
+    readout: GReadout,
+    best: Vec<usize>,
+    load: Vec<u32>,
 }
 
 impl PrimalAgent {
@@ -104,6 +117,11 @@ impl PrimalAgent {
             fast: settings
                 .fast
                 .map(|f| Box::new(FastConsensus::new(tasks, robots, case, degree, &f))),
+            certificate: RefCell::new(CertificateScratch {
+                readout: GReadout::new(tasks, robots, case, 0.0),
+                best: vec![0; robots],
+                load: vec![0; tasks],
+            }),
         }
     }
 
@@ -183,25 +201,29 @@ impl PrimalAgent {
     /// `∞` when it is not feasible.
     pub fn certificate_slack_for(&self, assignment: &[usize]) -> f64 {
         let (m, n) = (self.tasks, self.robots);
-        let mut load = vec![0; m];
+        let mut scratch = self.certificate.borrow_mut();
+        let CertificateScratch {
+            readout,
+            best,
+            load,
+        } = &mut *scratch;
         if assignment.len() != n
             || assignment.iter().any(|&t| t >= m)
-            || !rounding::covers(assignment, self.case, &mut load)
+            || !rounding::covers(assignment, self.case, load)
         {
+            return f64::INFINITY;
+        }
+        // The exact minimiser of `G_i` over the polytope (no tie-break: ε = 0).
+        readout.read(&self.q, &self.costs, self.index, best);
+        if readout.slack_bound().is_none() {
+            // A non-finite iterate: no certificate.
             return f64::INFINITY;
         }
         let g = |t: usize, j: usize| {
             self.q[j * m + t] + if j == self.index { self.costs[t] } else { 0.0 }
         };
-        let values = (0..n).flat_map(|j| (0..m).map(move |t| g(t, j))).collect();
-        let Ok(costs) = crate::problem::CostMatrix::new(n, m, values) else {
-            return f64::INFINITY;
-        };
-        let Ok(best) = crate::oracle::solve_costs(&costs, self.case) else {
-            return f64::INFINITY;
-        };
         let value = |a: &[usize]| a.iter().enumerate().map(|(j, &t)| g(t, j)).sum::<f64>();
-        (value(assignment) - value(&best)).max(0.0)
+        (value(assignment) - value(best)).max(0.0)
     }
 
     /// Statistics of the last projection.
