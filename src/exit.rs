@@ -16,6 +16,7 @@ use admm_ta::runtime::process::launcher::LaunchError;
 use admm_ta::runtime::process::member_error::MemberError;
 use admm_ta::runtime::runner::RunError;
 use admm_ta::runtime::solve::report::SolveReport;
+use admm_ta::runtime::transport::ZenohNotBuilt;
 use admm_ta::{ConfigError, SolveError, StopRule, TopologyError};
 
 /// A bad command line or input found by the command itself (exit 2).
@@ -94,7 +95,13 @@ pub fn code_of(error: &anyhow::Error) -> u8 {
         if let Some(LsapError::Infeasible) = cause.downcast_ref::<LsapError>() {
             return 3;
         }
-        if cause.is::<ConfigError>() || cause.is::<TopologyError>() || cause.is::<UsageError>() {
+        // An option this build cannot honour (`host` without `--features zenoh`) is a usage
+        // error like any other.
+        if cause.is::<ConfigError>()
+            || cause.is::<TopologyError>()
+            || cause.is::<UsageError>()
+            || cause.is::<ZenohNotBuilt>()
+        {
             return 2;
         }
         if let Some(e) = cause.downcast_ref::<MemberError>() {
@@ -111,4 +118,20 @@ pub fn code_of(error: &anyhow::Error) -> u8 {
         }
     }
     1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn typed_causes_decide_the_exit_code_anywhere_in_the_chain() {
+        let not_built = anyhow::Error::from(ZenohNotBuilt).context("host alpha");
+        assert_eq!(code_of(&not_built), 2);
+        let refused = anyhow::Error::from(MemberError::Refused("bad team file".into()));
+        assert_eq!(code_of(&refused), 2);
+        let failed = anyhow::Error::from(MemberError::Failed("agent 3 died".into()));
+        assert_eq!(code_of(&failed), 4);
+        assert_eq!(code_of(&anyhow::anyhow!("an untyped error")), 1);
+    }
 }
