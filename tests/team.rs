@@ -370,3 +370,121 @@ fn an_agent_of_another_team_is_refused_by_name_before_round_0_and_the_team_runs_
     }
     assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
 }
+
+/// Runs every agent of `team` (robots `0..n`) to the end; their exit codes.
+fn run_team(team: &Path, n: usize) -> Vec<Option<i32>> {
+    let children: Vec<Child> = (0..n).map(|id| start(team, id)).collect();
+    children
+        .into_iter()
+        .map(|c| c.wait_with_output().unwrap().status.code())
+        .collect()
+}
+
+fn collect(team: &Path, extra: &[&str]) -> std::process::Output {
+    admm_ta()
+        .args(["collect", "--team", team.to_str().unwrap()])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_team_takes_forbidden_pairs_and_profits_and_collect_ends_as_solve_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("p{}", std::process::id());
+    // Profits; (0, 0), (1, 1) and (3, 3) may not be taken, and robot 2's best is forbidden
+    // in the CSV itself (-inf).
+    let csv = dir.path().join("profits.csv");
+    std::fs::write(&csv, "9,1,2,3\n4,8,1,2\n-inf,3,2,7\n1,2,6,9\n").unwrap();
+    let pairs = dir.path().join("pairs.txt");
+    std::fs::write(&pairs, "# robot,task\n0,0\n1,1\n3,3\n").unwrap();
+    let team = team_file(dir.path(), &run, 4, &csv, "chain", 60.0);
+    let text = std::fs::read_to_string(&team).unwrap();
+    std::fs::write(
+        &team,
+        format!("{text}maximize = true\nforbidden = \"pairs.txt\"\n"),
+    )
+    .unwrap();
+    assert_eq!(run_team(&team, 4), vec![Some(0); 4]);
+    let out = collect(&team, &["--check", "--json"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // The centralized solver on the same input, for reference.
+    let reference = admm_ta()
+        .args([
+            "solve",
+            "--method",
+            "hungarian",
+            "--maximize",
+            "--json",
+            "--costs",
+        ])
+        .arg(&csv)
+        .arg("--forbidden")
+        .arg(&pairs)
+        .output()
+        .unwrap();
+    assert!(reference.status.success());
+    let reference: serde_json::Value = serde_json::from_slice(&reference.stdout).unwrap();
+    assert_eq!(result["maximize"], true, "{result}");
+    assert_eq!(result["certified"], true, "{result}");
+    assert_eq!(result["optimal"], true, "{result}");
+    assert_eq!(result["cost"], reference["cost"], "{result} vs {reference}");
+    let assignment: Vec<usize> = serde_json::from_value(result["assignment"].clone()).unwrap();
+    for (robot, task) in [(0, 0), (1, 1), (3, 3), (2, 0)] {
+        assert_ne!(
+            assignment[robot], task,
+            "forbidden pair used: {assignment:?}"
+        );
+    }
+    let text = String::from_utf8_lossy(&collect(&team, &[]).stdout).into_owned();
+    assert!(
+        text.contains("profit") && text.contains("certified optimal"),
+        "{text}"
+    );
+
+    // Results of another team in the same directory are refused (bad input, 2).
+    let changed = std::fs::read_to_string(&team)
+        .unwrap()
+        .replace("chain", "ring");
+    std::fs::write(&team, changed).unwrap();
+    let out = collect(&team, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("is not a result of this team"), "{err}");
+
+    // One round of Algorithm 1 certifies nothing: the agents and collect exit 5 and say so.
+    let text = std::fs::read_to_string(&team).unwrap();
+    std::fs::write(
+        &team,
+        format!("{text}max_iters = 1\nprimal_variant = \"paper\"\n"),
+    )
+    .unwrap();
+    assert_eq!(run_team(&team, 4), vec![Some(5); 4]);
+    let out = collect(&team, &[]);
+    assert_eq!(
+        out.status.code(),
+        Some(5),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("NOT certified optimal"), "{text}");
+    // Whatever one round left (conflicting choices are repaired), no forbidden pair is used.
+    let out = collect(&team, &["--json"]);
+    let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(result["certified"], false, "{result}");
+    let assignment: Vec<usize> = serde_json::from_value(result["assignment"].clone()).unwrap();
+    for (robot, task) in [(0, 0), (1, 1), (3, 3), (2, 0)] {
+        assert_ne!(
+            assignment[robot], task,
+            "forbidden pair used: {assignment:?}"
+        );
+    }
+    assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
+}

@@ -1,11 +1,15 @@
 //! `admm-ta agent`: one agent process, of an independently started team or of a launcher's run.
 
 use crate::cli::AgentArgs;
-use crate::exit::usage_bail;
+use crate::exit::{Outcome, usage_bail};
 use admm_ta::runtime::process::{agent, member};
 use anyhow::Result;
 
-pub fn run(args: AgentArgs) -> Result<()> {
+/// Runs the agent. An independently started agent whose team reached the round limit before
+/// any certificate ends with [`Outcome::Uncertified`] (5), as `solve` and `collect` do; an
+/// agent of a launcher's run leaves that to the launcher.
+pub fn run(args: AgentArgs) -> Result<Outcome> {
+    let mut outcome = Outcome::Success;
     let (index, result) = match args {
         AgentArgs {
             team: Some(team),
@@ -14,6 +18,9 @@ pub fn run(args: AgentArgs) -> Result<()> {
         } => {
             let report = member::run_member(&team, id);
             if let Ok(r) = &report {
+                if !r.outcome.converged {
+                    outcome = Outcome::Uncertified;
+                }
                 println!(
                     "{}",
                     serde_json::json!({
@@ -36,7 +43,7 @@ pub fn run(args: AgentArgs) -> Result<()> {
         } => (index, agent::run(&run, index, &scenario, &digest)),
         _ => usage_bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
     };
-    result.map_err(|e| {
+    result.map(|()| outcome).map_err(|e| {
         // Exchange errors already start with "agent N:".
         let text = e.text();
         if text.starts_with(&format!("agent {index}:"))

@@ -1,25 +1,36 @@
 //! `admm-ta collect`: the assignment of an independently started team, from its agents' results.
 
 use crate::cli::CollectArgs;
-use crate::exit::NotOptimal;
+use crate::exit::{NotOptimal, Outcome, UsageError};
 use admm_ta::runtime::process::member;
 use anyhow::Result;
 
-pub fn run(args: CollectArgs) -> Result<()> {
-    let result = member::collect(&args.team, args.check).map_err(anyhow::Error::msg)?;
+/// Prints the team's assignment. Ends as `solve` does: with `--check` the centralized
+/// optimum decides (6 when not optimal); otherwise a team stopped by the round limit before
+/// any certificate is [`Outcome::Uncertified`] (5). A CBAA team that completed its protocol
+/// ends with 0, as `solve` does, while its text and JSON say it is not certified optimal.
+pub fn run(args: CollectArgs) -> Result<Outcome> {
+    // A bad team file, missing results or results of another team: bad input (2).
+    let result = member::collect(&args.team, args.check).map_err(UsageError)?;
     if args.json {
         println!("{}", serde_json::to_string(&result)?);
     } else {
         println!(
-            "team {}: assignment {:?}, cost {:.6}, {} rounds, {}{}",
+            "team {}: assignment {:?}, {} {:.6}{}, {} rounds, {}{}",
             result.run,
             result.assignment,
+            if result.maximize { "profit" } else { "cost" },
             result.cost,
-            result.iterations,
-            if result.converged {
-                "certified"
+            if result.repaired {
+                " (robots' choices conflicted and were repaired)"
             } else {
-                "round limit reached (not certified)"
+                ""
+            },
+            result.iterations,
+            match (result.certified, result.converged) {
+                (true, _) => "certified optimal",
+                (false, true) => "NOT certified optimal (CBAA is a heuristic)",
+                (false, false) => "round limit reached: NOT certified optimal",
             },
             match (result.optimal, result.optimal_cost) {
                 (Some(true), _) => ", optimal".to_string(),
@@ -33,8 +44,10 @@ pub fn run(args: CollectArgs) -> Result<()> {
             round.p50, round.p90, round.p99, round.max
         );
     }
-    if result.optimal == Some(false) {
-        return Err(NotOptimal("the team's assignment is not optimal".into()).into());
+    match result.optimal {
+        Some(false) => Err(NotOptimal("the team's assignment is not optimal".into()).into()),
+        Some(true) => Ok(Outcome::Success),
+        None if !result.converged => Ok(Outcome::Uncertified),
+        None => Ok(Outcome::Success),
     }
-    Ok(())
 }

@@ -19,8 +19,8 @@ pub fn run(command: Command) -> Result<u8> {
     match command {
         Command::Solve(args) => solve::run(args).map(|outcome| outcome.code()),
         Command::Demo(args) => demo::run(args).map(|()| 0),
-        Command::Agent(args) => agent::run(args).map(|()| 0),
-        Command::Collect(args) => collect::run(args).map(|()| 0),
+        Command::Agent(args) => agent::run(args).map(|outcome| outcome.code()),
+        Command::Collect(args) => collect::run(args).map(|outcome| outcome.code()),
         Command::Host(args) => host::run(args).map(|()| 0),
         Command::Bench { bench } => bench::run(bench).map(|()| 0),
         Command::Experiment { experiment } => experiment::run(experiment).map(|()| 0),

@@ -27,6 +27,11 @@ pub struct AgentReport {
     /// Its episodes, in a repeated-assignment run.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub episodes: Vec<EpisodeRecord>,
+    /// An independently started agent: the digest of its team
+    /// ([`crate::process::team_digest::TeamDigest`], hex), so that `collect` refuses the
+    /// result of another team written to the same directory.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub team: Option<String>,
 }
 
 /// Path of agent `index`'s result file in the run directory.
@@ -77,19 +82,21 @@ pub fn run(
         run_dir,
         &result_path(run_dir, index),
         true,
+        None,
     )
     .map(|_| ())
 }
 
 /// Runs agent `index` of `scenario` and writes its report to `result` (atomically);
 /// `supervised`: a launcher started it (it stops if the launcher dies). `run_dir` holds the
-/// uds sockets.
+/// uds sockets; `team`: the team's digest an independently started agent records.
 pub fn run_scenario(
     scenario: &Scenario,
     index: usize,
     run_dir: &Path,
     result: &Path,
     supervised: bool,
+    team: Option<String>,
 ) -> Result<AgentReport, MemberError> {
     let started_unix_ns = unix_ns();
     let started = Instant::now();
@@ -136,6 +143,7 @@ pub fn run_scenario(
         connected_unix_ns,
         started_unix_ns,
         episodes,
+        team,
     };
     let partial = result.with_extension("json.partial");
     let text = serde_json::to_string(&report).map_err(|e| e.to_string())?;

@@ -27,7 +27,8 @@ use crate::process::team_file::{HostEntry, Team};
 use crate::workload::Workload;
 use crate::workload::plan::prepare;
 use admm_ta_agents::local_stop::LocalCertifiedStop;
-use admm_ta_agents::oracle;
+use admm_ta_agents::method::Method;
+use admm_ta_agents::{oracle, rounding};
 use serde::Serialize;
 use std::os::fd::AsRawFd;
 use std::path::{Path, PathBuf};
@@ -242,6 +243,7 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
     std::fs::create_dir_all(&results)
         .map_err(|e| MemberError::Refused(format!("cannot create {}: {e}", results.display())))?;
     let result = member_result(&results, id);
+    let digest = Some(TeamDigest::of(&scenario).to_hex());
     // A result of an earlier run must not pass for this one's.
     let _ = std::fs::remove_file(&result);
     if !team.file.transport.host_board() {
@@ -251,7 +253,7 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
         let startup =
             Duration::from_millis(scenario.startup_timeout_ms).saturating_sub(started.elapsed());
         scenario.startup_timeout_ms = startup.as_millis() as u64;
-        let report = run_scenario(&scenario, id, &results, &result, false);
+        let report = run_scenario(&scenario, id, &results, &result, false, digest);
         // Nothing of the run is in it (other agents of this host may still be starting:
         // only an empty directory goes).
         let _ = std::fs::remove_dir(&namespace.dir);
@@ -260,7 +262,7 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
     let membership =
         Membership::join(&scenario, &namespace, &[id], deadline).map_err(MemberError::Refused)?;
-    let report = run_scenario(&scenario, id, &namespace.dir, &result, false);
+    let report = run_scenario(&scenario, id, &namespace.dir, &result, false, digest);
     if let Some(signal) = crate::signals::received() {
         // A termination signal (to us, or to another member: then it is on the board
         // already): the whole team stops, nobody failed.
@@ -279,7 +281,15 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
 pub struct TeamResult {
     pub run: String,
     pub assignment: Vec<usize>,
+    /// The assignment's total in the user's numbers (a profit with `maximize`).
     pub cost: f64,
+    /// The team file's `maximize`: `cost` is a profit.
+    pub maximize: bool,
+    /// The agents' choices conflicted (the round limit stopped them) and were repaired.
+    pub repaired: bool,
+    /// The method proved the assignment optimal: every agent certified the same round
+    /// (CBAA, a heuristic, never does).
+    pub certified: bool,
     /// Rounds every agent ran.
     pub iterations: u64,
     /// Every agent certified the same round.
@@ -297,6 +307,7 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
     let team = Team::read(team_path)?;
     let n = team.file.robots;
     let (problem, _) = team.problem_and_graph()?;
+    let digest = TeamDigest::of(&team_scenario(&team)?).to_hex();
     let results = team.results_dir();
     let mut reports = Vec::with_capacity(n);
     let mut missing = Vec::new();
@@ -316,6 +327,15 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
             results.display()
         ));
     }
+    if let Some(id) = reports
+        .iter()
+        .position(|r| r.team.as_deref() != Some(digest.as_str()))
+    {
+        return Err(format!(
+            "{} is not a result of this team (another team file, or the team file changed since the run)",
+            member_result(&results, id).display()
+        ));
+    }
     let rounds: Vec<u64> = reports.iter().map(|r| r.outcome.rounds).collect();
     let certified: Vec<Option<u64>> = reports.iter().map(|r| r.outcome.certified_round).collect();
     if rounds.iter().any(|&r| r != rounds[0]) || certified.iter().any(|c| *c != certified[0]) {
@@ -327,12 +347,18 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
     let (latency, _) = merge_outcomes(reports.iter().map(|r| &r.outcome))
         .map_err(|e| format!("agent {}'s result: {}", e.agent, e.source))?;
     let internal: Vec<usize> = reports.iter().map(|r| r.outcome.task).collect();
-    let assignment = problem.from_internal(&internal);
-    if !problem.is_feasible(&assignment) {
+    let decisions = problem.from_internal(&internal);
+    let (assignment, repaired) = if problem.is_feasible(&decisions) {
+        (decisions, false)
+    } else if certified[0].is_none() {
+        // The round limit stopped the team before its choices agreed: the feasible
+        // assignment that changes the fewest robots, as `solve` reports (uncertified).
+        rounding::repair(&problem, &decisions)
+    } else {
         return Err(format!(
-            "the agents' tasks {assignment:?} are not a feasible assignment"
+            "the agents' tasks {decisions:?} are not a feasible assignment"
         ));
-    }
+    };
     let cost = problem.cost_of(&assignment).map_err(|e| e.to_string())?;
     let optimum = if check {
         Some(oracle::solve(&problem).map_err(|e| e.to_string())?.cost)
@@ -343,6 +369,9 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
         run: team.file.run.clone(),
         assignment,
         cost,
+        maximize: team.file.maximize,
+        repaired,
+        certified: certified[0].is_some() && team.file.method != Method::Cbaa,
         iterations: rounds[0],
         converged: certified[0].is_some(),
         certified_round: certified[0],

@@ -6,6 +6,8 @@
 //! run = "demo"              # letters, digits, dashes: namespaces the shared memory
 //! robots = 10
 //! costs = "costs.csv"       # a CSV (relative to this file), or "random" with tasks and seed
+//! forbidden = "pairs.txt"   # optional: robot,task pairs nobody may take (as solve --forbidden)
+//! maximize = false          # true: the costs are profits (as solve --maximize)
 //! topology = "ring"         # complete | chain | ring | star | grid | random:P | geometric:R | FILE.toml
 //! method = "primal"
 //! results = "results"       # each agent writes result-<id>.json here
@@ -35,6 +37,7 @@ use crate::options::{SolveOptions, StopRule};
 use crate::process::namespace::RunNamespace;
 use crate::transport::Transport;
 use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
+use admm_ta_agents::forbidden;
 use admm_ta_agents::method::Method;
 use admm_ta_agents::primal_settings::PrimalVariant;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
@@ -54,6 +57,13 @@ pub struct TeamFile {
     pub tasks: Option<usize>,
     #[serde(default)]
     pub seed: u64,
+    /// A file of `robot,task` pairs that no robot may take (relative to this file), as
+    /// `solve --forbidden`; `inf` in the CSV (`-inf` with `maximize`) marks them too.
+    #[serde(default)]
+    pub forbidden: Option<PathBuf>,
+    /// The costs are profits to maximise (as `solve --maximize`).
+    #[serde(default)]
+    pub maximize: bool,
     #[serde(default = "complete")]
     pub topology: String,
     #[serde(default)]
@@ -245,8 +255,21 @@ impl Team {
                 costs.tasks()
             ));
         }
-        let problem =
-            TaskAssignmentProblem::new(costs, CaseChoice::Auto).map_err(|e| e.to_string())?;
+        let costs = match &f.forbidden {
+            Some(file) => {
+                let path = self.path(file);
+                let pairs = forbidden::read(&path, costs.robots(), costs.tasks())
+                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                forbidden::apply(&costs, &pairs, f.maximize).map_err(|e| e.to_string())?
+            }
+            None => costs,
+        };
+        let problem = if f.maximize {
+            TaskAssignmentProblem::maximizing(costs, CaseChoice::Auto)
+        } else {
+            TaskAssignmentProblem::new(costs, CaseChoice::Auto)
+        }
+        .map_err(|e| e.to_string())?;
         let graph = if f.topology.ends_with(".toml") {
             let path = self.path(Path::new(&f.topology));
             let graph = topology_file::read(&path).map_err(|e| e.to_string())?;
