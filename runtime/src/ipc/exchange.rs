@@ -14,7 +14,7 @@
 //!
 //! Wake-ups: after publishing round `r`, `i` increments each neighbour `j`'s arrival counter
 //! for the parity of `r` on the board, and wakes `j` (bumps `j`'s wake word, then
-//! `FUTEX_WAKE`) only if the count reached `deg(j) · (⌊r/2⌋ + 1)`, i.e. it was the last of
+//! `FUTEX_WAKE` if `j` sleeps: [`futex::bump_and_wake`]) only if the count reached `deg(j) · (⌊r/2⌋ + 1)`, i.e. it was the last of
 //! `j`'s round-`r` messages to be counted. So a waiting agent is woken about once per round,
 //! not once per neighbour: on a complete graph of 50 agents sharing 2 cores, waking every
 //! agent 49 times per round cost more than the algorithm. The counts are cumulative, never
@@ -23,7 +23,9 @@
 //! but the count that completes round `r + 2` is always one of round `r + 2` (a neighbour
 //! counts its round `r` before its round `r + 2`), so a wake-up is never lost; at worst one
 //! is spurious. The waiter reads its wake word *before* it looks at its subscribers and
-//! sleeps only while the word still holds that value, so a wake-up in between is not lost.
+//! sleeps only while the word still holds that value, so a wake-up in between is not lost
+//! (the protocol of [`crate::futex`]: an agent that is not asleep costs its waker no system
+//! call).
 //!
 //! Buffers: a neighbour is at most one round ahead (neighbour barrier), so each subscriber
 //! holds at most two unread samples and borrows at most two; safe overflow is off, and a
