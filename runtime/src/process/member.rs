@@ -186,6 +186,10 @@ impl Membership {
 
     /// Counts the slots out; the last member of the team removes its namespace.
     pub(crate) fn leave(self) {
+        // The services' owner removes them before it counts out: the last member's cleanup
+        // of the namespace then comes after (removed the other way round, iceoryx2 warns on
+        // stderr that the static storage was already removed).
+        drop(self._resources);
         let deadline = Instant::now() + Duration::from_secs(5);
         let last = FileLock::acquire(&self.namespace.dir.join("lock"), deadline)
             .map(|_lock| {
@@ -196,7 +200,6 @@ impl Membership {
                 last
             })
             .unwrap_or(false);
-        drop(self._resources);
         if last {
             drop(self.board);
             let _ = self.namespace.cleanup();
