@@ -122,7 +122,7 @@ fn every_injected_fault_is_reported_with_the_failed_agent() {
         ("nan", vec!["agent 3 failed", "neighbour 3", "NaN"]),
         (
             "wrong-round",
-            vec!["agent 3 failed", "neighbour 3, got round 1011"],
+            vec!["agent 3 failed", "neighbour 3, got round 1012"],
         ),
         (
             "wrong-size",

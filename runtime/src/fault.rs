@@ -117,7 +117,9 @@ impl Fault {
     pub fn corrupt(&self, payload: &mut [f64], header: &mut RoundHeader) {
         match self.kind {
             FaultKind::Nan => payload[payload.len() / 2] = f64::NAN,
-            FaultKind::WrongRound => header.round += 1000,
+            // Odd: a round of the other parity, which never completes the receivers' arrival
+            // counts of the round they wait for (they must still receive and refuse it).
+            FaultKind::WrongRound => header.round += 1001,
             _ => {}
         }
     }

@@ -14,7 +14,7 @@
 //!
 //! Wake-ups: after publishing round `r`, `i` increments each neighbour `j`'s arrival counter
 //! for the parity of `r` on the board, and wakes `j` (bumps `j`'s wake word, then
-//! `FUTEX_WAKE`) only if the count reached `deg(j) · (⌊r/2⌋ + 1)`, i.e. it was the last of
+//! `FUTEX_WAKE` if `j` sleeps: [`futex::bump_and_wake`]) only if the count reached `deg(j) · (⌊r/2⌋ + 1)`, i.e. it was the last of
 //! `j`'s round-`r` messages to be counted. So a waiting agent is woken about once per round,
 //! not once per neighbour: on a complete graph of 50 agents sharing 2 cores, waking every
 //! agent 49 times per round cost more than the algorithm. The counts are cumulative, never
@@ -23,7 +23,9 @@
 //! but the count that completes round `r + 2` is always one of round `r + 2` (a neighbour
 //! counts its round `r` before its round `r + 2`), so a wake-up is never lost; at worst one
 //! is spurious. The waiter reads its wake word *before* it looks at its subscribers and
-//! sleeps only while the word still holds that value, so a wake-up in between is not lost.
+//! sleeps only while the word still holds that value, so a wake-up in between is not lost
+//! (the protocol of [`crate::futex`]: an agent that is not asleep costs its waker no system
+//! call).
 //!
 //! Buffers: a neighbour is at most one round ahead (neighbour barrier), so each subscriber
 //! holds at most two unread samples and borrows at most two; safe overflow is off, and a
@@ -471,19 +473,31 @@ impl IpcExchange {
         }
     }
 
-    /// Receives from the neighbours still missing for `round` (only those, and only once the
-    /// board says they published it: an empty receive costs about as much as a full one);
-    /// `true` once every neighbour's message is held. Reads this agent's wake word first
-    /// (see the module's wake-ups: a neighbour's published round is stored before it
-    /// counts its arrival, so the wake-up that completes the round makes them all visible).
-    fn all_held(&mut self, round: u64) -> Result<bool, ExchangeError> {
+    /// Receives from the neighbours still missing for `round`; `true` once every
+    /// neighbour's message is held. Reads this agent's wake word first (see the module's
+    /// wake-ups: a neighbour counts its arrival after delivering its sample, and the count
+    /// that completes the round is the one that wakes this agent).
+    ///
+    /// Until every message of the round is counted on the board, nothing is received (an
+    /// empty receive costs about as much as a full one, and so does a look at every
+    /// neighbour's published round), unless `look_at_each` (once per failure-check slice of
+    /// a wait): then every missing neighbour that published the round (or, faulty, a round
+    /// of the wrong parity ahead, which is never counted for this round) is received from,
+    /// so that such a message is refused instead of waited for.
+    fn all_held(&mut self, round: u64, look_at_each: bool) -> Result<bool, ExchangeError> {
         self.wake_seen = self.board.wake_word(self.index).load(Ordering::Acquire);
+        let counted = self
+            .board
+            .arrivals(self.index, round)
+            .load(Ordering::Acquire)
+            >= arrivals_target(self.degrees[self.index], round);
+        if !counted && !look_at_each {
+            return Ok(false);
+        }
         let mut at = 0;
         while at < self.missing.len() {
             let k = self.missing[at];
-            // (A faulty neighbour's wrong round is published ahead, so it is still received
-            // and refused.)
-            if self.board.published_round(self.neighbours[k]) < round {
+            if !counted && self.board.published_round(self.neighbours[k]) < round {
                 at += 1;
                 continue;
             }
@@ -635,10 +649,18 @@ impl Exchange for IpcExchange {
         self.check_peers(round, Duration::ZERO)?;
         self.missing.clear();
         self.missing.extend(0..self.neighbours.len());
+        // Every failure-check slice without the round complete, look at each neighbour once.
+        let mut next_look = started + futex::FAILURE_CHECK_SLICE;
         let held = self.policy.wait_until(
             self,
             deadline,
-            |s| s.all_held(round),
+            |s| {
+                let look_at_each = Instant::now() >= next_look;
+                if look_at_each {
+                    next_look += futex::FAILURE_CHECK_SLICE;
+                }
+                s.all_held(round, look_at_each)
+            },
             |s, deadline| {
                 // Sleep in slices, looking for failed agents in between; a wake-up since
                 // `all_held` read the word ends the sleep at once.

@@ -5,15 +5,13 @@
 //! the message at each neighbour `j` (the board's arrival counter of `j` for the parity of
 //! `k + 1`) and, if it was the last of `j`'s round-`k + 1` messages
 //! ([`arrivals_target`]), bumps `j`'s wake-up word on the board and, if `j` sleeps,
-//! futex-wakes it: one wake-up per waiting agent per round, and no system call at all for an
-//! agent that is not asleep. A waiting agent reads its wake-up word, checks its neighbours'
-//! published-round words (acquire), marks the word as slept on (its lowest bit, by a
-//! compare-and-swap from the value read: a bump in between fails it, and the agent checks
-//! again) and sleeps on the marked value, in slices of [`futex::FAILURE_CHECK_SLICE`], looking at
-//! the board's failure mark and stop request in between (see [`crate::futex`] for why no
-//! wake-up is lost). Wakers bump the word by 2, keeping the mark; the agent clears it once
-//! its round is complete. The global barrier is the board's counting barrier with its futex
-//! word (several sleepers: every release wakes them all).
+//! futex-wakes it ([`futex::bump_and_wake`]): one wake-up per waiting agent per round, and no
+//! system call at all for an agent that is not asleep. A waiting agent reads its wake-up
+//! word, checks its neighbours' published-round words (acquire) and sleeps with
+//! [`futex::wait_slice`], in slices of [`futex::FAILURE_CHECK_SLICE`], looking at the board's
+//! failure mark and stop request in between (see [`crate::futex`] for the protocol and why
+//! no wake-up is lost). The global barrier is the board's counting barrier with its futex
+//! word.
 //!
 //! A neighbour is at most one round ahead (the neighbour barrier), so the slot of parity
 //! `k % 2` still holds round `k` while anybody gathers it, and the own slot of parity
@@ -29,12 +27,8 @@ use crate::futex;
 use crate::shm::table::SlotTable;
 use crate::wait::WaitPolicy;
 use admm_ta_agents::agent::Inbox;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::Instant;
-
-/// The mark of an agent's wake-up word that says it sleeps (or is about to) on it; wakers
-/// bump the word by 2 so that the mark stays.
-const SLEEPING: u32 = 1;
 
 /// What one agent process needs to join an `shm` run.
 #[derive(Debug, Clone)]
@@ -197,24 +191,6 @@ impl ShmExchange {
         Ok(())
     }
 
-    /// Sleeps on the own wake-up word, read as `seen` before the last check: marks it as
-    /// slept on first (see the module docs); `true` if a whole slice passed.
-    fn sleep_marked(word: &AtomicU32, seen: &mut u32, deadline: Instant) -> bool {
-        if *seen & SLEEPING == 0 {
-            match word.compare_exchange(
-                *seen,
-                *seen | SLEEPING,
-                Ordering::AcqRel,
-                Ordering::Acquire,
-            ) {
-                Ok(_) => *seen |= SLEEPING,
-                // Bumped since the check: check again.
-                Err(_) => return false,
-            }
-        }
-        futex::wait_slice(word, *seen, deadline)
-    }
-
     /// Whether every neighbour published round `round`, from neighbour `waiting.next` on
     /// (publication is monotonic: those before it were seen already).
     fn all_published(&self, round: u64, waiting: &mut Waiting) -> bool {
@@ -278,10 +254,7 @@ impl ShmExchange {
         for (&j, &degree) in self.neighbours.iter().zip(&self.neighbour_degrees) {
             let arrived = self.board.arrivals(j, round).fetch_add(1, Ordering::AcqRel) + 1;
             if arrived == arrivals_target(degree, round) {
-                let word = self.board.wake_word(j);
-                if word.fetch_add(2, Ordering::AcqRel) & SLEEPING != 0 {
-                    futex::wake(word, 1);
-                }
+                futex::bump_and_wake(self.board.wake_word(j));
             }
         }
     }
@@ -332,15 +305,10 @@ impl Exchange for ShmExchange {
             |waiting| {
                 // The word before the check: a wake-up after it changes the word.
                 waiting.seen = word.load(Ordering::Acquire);
-                let ready = self.all_published(round, waiting);
-                if ready && waiting.seen & SLEEPING != 0 {
-                    // Nobody needs to wake us until the next sleep.
-                    word.fetch_and(!SLEEPING, Ordering::Relaxed);
-                }
-                Ok(ready)
+                Ok(self.all_published(round, waiting))
             },
             |waiting, deadline| {
-                let slept = Self::sleep_marked(word, &mut waiting.seen, deadline);
+                let slept = futex::wait_slice(word, waiting.seen, deadline);
                 self.check_peers(round, slept)
             },
         )?;
