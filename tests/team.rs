@@ -488,3 +488,39 @@ fn a_team_takes_forbidden_pairs_and_profits_and_collect_ends_as_solve_does() {
     }
     assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
 }
+
+#[test]
+fn a_second_copy_of_a_running_agent_is_refused_and_the_team_runs_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("dup{}", std::process::id());
+    let team = dir.path().join("team.toml");
+    std::fs::write(
+        &team,
+        format!("run = \"{run}\"\nrobots = 4\ncosts = \"random\"\ntasks = 4\ntopology = \"ring\"\nresults = \"results\"\nstartup_timeout = 60.0\nround_timeout = 20.0\n"),
+    )
+    .unwrap();
+    // Agents 0..3 start; 3 is late, so the team waits at start-up.
+    let members: Vec<(usize, Child)> = [0, 1, 2]
+        .into_iter()
+        .map(|id| (id, start(&team, id)))
+        .collect();
+    std::thread::sleep(Duration::from_millis(500));
+    let copy = start(&team, 1).wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&copy.stderr);
+    assert_eq!(copy.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("agent 1 of this team is already running (pid"),
+        "{err}"
+    );
+    let last = start(&team, 3);
+    for (id, child) in members.into_iter().chain([(3, last)]) {
+        let out = child.wait_with_output().unwrap();
+        assert!(
+            out.status.success(),
+            "agent {id}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
+}

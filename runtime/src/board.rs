@@ -213,8 +213,13 @@ impl Board {
             .store(u64::from(pid), Ordering::Release);
     }
 
-    fn member_pid(&self, agent: usize) -> u32 {
-        self.word(LINE * (agent + 1) + 24).load(Ordering::Acquire) as u32
+    /// The process id recorded for agent `agent` of an independently started team (`None`:
+    /// it has not joined, or it left).
+    pub(crate) fn member_pid(&self, agent: usize) -> Option<u32> {
+        match self.word(LINE * (agent + 1) + 24).load(Ordering::Acquire) as u32 {
+            0 => None,
+            pid => Some(pid),
+        }
     }
 
     /// Counts agent `agent` of an independently started team out (call it under the team's
@@ -230,8 +235,7 @@ impl Board {
     /// Agent `agent` of an independently started team has joined and its process lives (a
     /// zombie — exited, not yet reaped by whoever started it — does not).
     pub(crate) fn member_alive(&self, agent: usize) -> bool {
-        let pid = self.member_pid(agent);
-        pid != 0 && process_alive(pid)
+        self.member_pid(agent).is_some_and(process_alive)
     }
 
     /// Marks agent `failed` as failed (the first mark wins); every agent stops at its next

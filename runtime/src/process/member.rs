@@ -158,6 +158,21 @@ impl Membership {
         if let Some(&first) = slots.first() {
             digest.check(&board, first)?;
         }
+        // One process per slot: a second copy of a running agent (a supervisor's restart, a
+        // script started twice) is refused by name before it touches anything, and the team
+        // runs on; so is a copy of one that already took part in this run.
+        for &slot in slots {
+            if let Some(pid) = board.member_pid(slot).filter(|_| board.member_alive(slot)) {
+                return Err(format!(
+                    "agent {slot} of this team is already running (pid {pid}): one process per agent"
+                ));
+            }
+            if !fresh && board.registered(slot) {
+                return Err(format!(
+                    "agent {slot} already took part in this team's run: it cannot join it twice"
+                ));
+            }
+        }
         for &slot in slots {
             board.set_member_pid(slot, std::process::id());
         }
