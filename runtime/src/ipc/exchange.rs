@@ -148,14 +148,10 @@ pub struct IpcExchange {
     degrees: Vec<usize>,
     board: Board,
     global_barrier: bool,
-    /// The run's iceoryx2 configuration (to scan its nodes for dead ones).
-    config: Config,
-    last_dead_node_scan: Instant,
+    /// Looks for a failed peer, a stop request or a gone launcher while the agent waits.
+    watch: PeerWatch,
     /// Fault injection (tests): misbehave when publishing after gathering its round.
     fault: Option<Fault>,
-    /// The launcher's pid: if this process is orphaned (the launcher died), it stops.
-    /// The launcher's pid, for supervised agents.
-    launcher: Option<u32>,
     // Ports first: they must drop before the node.
     _node: Node<Svc>,
 }
@@ -336,10 +332,13 @@ impl IpcExchange {
             degrees: endpoint.degrees.clone(),
             board,
             global_barrier: endpoint.global_barrier,
-            config: config.clone(),
-            last_dead_node_scan: Instant::now(),
+            watch: PeerWatch {
+                index: i,
+                config: config.clone(),
+                last_dead_node_scan: Instant::now(),
+                launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
+            },
             fault: None,
-            launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
             _node: node,
         })
     }
@@ -366,54 +365,9 @@ impl IpcExchange {
         self.fault = fault;
     }
 
-    /// Stops this agent if another agent failed: marked on the board (by the launcher or a
-    /// peer), or found dead among the run's iceoryx2 nodes (scanned at most every
-    /// [`DEAD_NODE_SCAN_EVERY`]; a dead node's stale resources are removed on the way).
+    /// Stops this agent if another agent failed ([`PeerWatch::check`]).
     fn check_peers(&mut self, round: u64, waited: Duration) -> Result<(), ExchangeError> {
-        let failed = |failed, how: &str| ExchangeError::PeerFailed {
-            agent: self.index,
-            failed,
-            round,
-            how: how.into(),
-        };
-        if let Some(signal) = self.board.stop_signal() {
-            return Err(ExchangeError::Stopped {
-                agent: self.index,
-                signal,
-            });
-        }
-        if let Some(agent) = self.board.failed() {
-            let how = if agent == self.index {
-                "was reported failed by a neighbour"
-            } else {
-                "failed"
-            };
-            return Err(failed(agent, how));
-        }
-        // A system call: every 64 rounds and in long waits, not in every round.
-        let look_for_launcher = round.is_multiple_of(64) || !waited.is_zero();
-        if let Some(launcher) = self.launcher
-            && look_for_launcher
-            && std::os::unix::process::parent_id() != launcher
-        {
-            return Err(transport(
-                self.index,
-                format!("stopped at round {round}: its launcher (pid {launcher}) is gone"),
-            ));
-        }
-        // Under a launcher, `waitpid` finds a dead agent; the scan is for agents started
-        // without one, and for a subscriber that vanished (`waited` = `MAX`). (It can also mistake a neighbour that is just finishing — its node's
-        // token released before its files are gone — for a dead one.)
-        if (self.launcher.is_none() || waited == Duration::MAX)
-            && waited >= DEAD_NODE_SCAN_EVERY
-            && self.last_dead_node_scan.elapsed() >= DEAD_NODE_SCAN_EVERY
-        {
-            self.last_dead_node_scan = Instant::now();
-            if let Some(agent) = scan_dead_agents(&self.config, self.index, &self.board) {
-                return Err(failed(agent, "died (its iceoryx2 node is dead)"));
-            }
-        }
-        Ok(())
+        self.watch.check(&self.board, round, waited)
     }
 
     /// Moves neighbour `k`'s round-`round` message into `held[k]`; `false` if not there yet.
@@ -711,9 +665,16 @@ impl Exchange for IpcExchange {
             return Err(transport(i, "this run has no global barrier"));
         }
         let started = Instant::now();
-        let released = self
-            .board
-            .global_barrier(self.policy, deadline, |_| Ok::<(), ExchangeError>(()))?;
+        // The same watch as a round's wait: a failed or stopped team ends the barrier too.
+        let (board, watch) = (&self.board, &mut self.watch);
+        let released = board.global_barrier(self.policy, deadline, |slept| {
+            let waited = if slept {
+                started.elapsed()
+            } else {
+                Duration::ZERO
+            };
+            watch.check(board, round, waited)
+        })?;
         if released {
             Ok(())
         } else {
@@ -725,5 +686,69 @@ impl Exchange for IpcExchange {
                 waited: started.elapsed(),
             })
         }
+    }
+}
+
+/// What an ipc agent watches while it waits: the board's stop request and failure mark, its
+/// launcher, and (without a launcher) the run's iceoryx2 nodes for a dead one.
+struct PeerWatch {
+    index: usize,
+    /// The run's iceoryx2 configuration (to scan its nodes for dead ones).
+    config: Config,
+    last_dead_node_scan: Instant,
+    /// The launcher's pid, for supervised agents: if this process is orphaned (the
+    /// launcher died), it stops.
+    launcher: Option<u32>,
+}
+
+impl PeerWatch {
+    /// Stops this agent if another agent failed: marked on the board (by the launcher or a
+    /// peer), or found dead among the run's iceoryx2 nodes (scanned at most every
+    /// [`DEAD_NODE_SCAN_EVERY`]; a dead node's stale resources are removed on the way).
+    fn check(&mut self, board: &Board, round: u64, waited: Duration) -> Result<(), ExchangeError> {
+        let failed = |failed, how: &str| ExchangeError::PeerFailed {
+            agent: self.index,
+            failed,
+            round,
+            how: how.into(),
+        };
+        if let Some(signal) = board.stop_signal() {
+            return Err(ExchangeError::Stopped {
+                agent: self.index,
+                signal,
+            });
+        }
+        if let Some(agent) = board.failed() {
+            let how = if agent == self.index {
+                "was reported failed by a neighbour"
+            } else {
+                "failed"
+            };
+            return Err(failed(agent, how));
+        }
+        // A system call: every 64 rounds and in long waits, not in every round.
+        let look_for_launcher = round.is_multiple_of(64) || !waited.is_zero();
+        if let Some(launcher) = self.launcher
+            && look_for_launcher
+            && std::os::unix::process::parent_id() != launcher
+        {
+            return Err(transport(
+                self.index,
+                format!("stopped at round {round}: its launcher (pid {launcher}) is gone"),
+            ));
+        }
+        // Under a launcher, `waitpid` finds a dead agent; the scan is for agents started
+        // without one, and for a subscriber that vanished (`waited` = `MAX`). (It can also mistake a neighbour that is just finishing — its node's
+        // token released before its files are gone — for a dead one.)
+        if (self.launcher.is_none() || waited == Duration::MAX)
+            && waited >= DEAD_NODE_SCAN_EVERY
+            && self.last_dead_node_scan.elapsed() >= DEAD_NODE_SCAN_EVERY
+        {
+            self.last_dead_node_scan = Instant::now();
+            if let Some(agent) = scan_dead_agents(&self.config, self.index, board) {
+                return Err(failed(agent, "died (its iceoryx2 node is dead)"));
+            }
+        }
+        Ok(())
     }
 }
