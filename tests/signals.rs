@@ -318,3 +318,41 @@ fn a_signal_to_a_zenoh_launcher_or_host_stops_the_team() {
     kill(group as i32, libc::SIGTERM);
     all_stop_with(children, libc::SIGTERM, sent);
 }
+
+/// The state letter of process `pid` (`T`: stopped), if it exists.
+fn state_of(pid: u32) -> Option<char> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    stat[stat.rfind(')')? + 1..].trim_start().chars().next()
+}
+
+/// Waits (10 s at most) until `done` holds for every process of `pids`.
+fn wait_for_states(pids: &[u32], done: impl Fn(Option<char>) -> bool, what: &str) {
+    let started = Instant::now();
+    while !pids.iter().all(|&p| done(state_of(p))) {
+        assert!(started.elapsed() < Duration::from_secs(10), "never {what}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[test]
+fn job_control_and_user_signals_keep_their_unix_meaning() {
+    // A terminal's Ctrl-Z (SIGTSTP to the job's group) suspends the whole team, SIGCONT
+    // resumes it; a SIGUSR1 to an agent ends that agent and the launcher names it.
+    let mut launcher = long_run(4, "ipc");
+    let pid = launcher.id();
+    wait_for_agents(pid, 4, Duration::from_millis(300));
+    let agents: Vec<u32> = children_of(pid).into_iter().map(|(p, _)| p).collect();
+    let team: Vec<u32> = agents.iter().copied().chain([pid]).collect();
+    kill(-(pid as i32), libc::SIGTSTP);
+    wait_for_states(&team, |s| s == Some('T'), "suspended");
+    kill(-(pid as i32), libc::SIGCONT);
+    wait_for_states(&team, |s| s != Some('T'), "resumed");
+    kill(agents[1] as i32, libc::SIGUSR1);
+    let status = wait_with_deadline(&mut launcher, Duration::from_secs(30));
+    let stderr = stderr_of(&mut launcher);
+    assert_eq!(status.code(), Some(4), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("failed (killed by signal 10)"), "{stderr}");
+    assert!(children_of(pid).is_empty(), "unreaped children");
+    assert!(leftovers_of(pid).is_empty(), "{:?}", leftovers_of(pid));
+}

@@ -8,7 +8,9 @@
 //!
 //! iceoryx2 installs handlers of its own for these signals the first time it zeroes shared
 //! memory (and its nodes may look at them in `Node::wait`); [`install`] lets it do so first
-//! and then replaces them, and our nodes are built with `SignalHandlingMode::Disabled`.
+//! and then replaces them, and our nodes are built with `SignalHandlingMode::Disabled`. Its
+//! handler also captures job-control and user signals (SIGTSTP, SIGCONT, SIGQUIT, SIGUSR1,
+//! …), which it only records: [`install`] gives them back their default actions.
 //!
 //! [`install`] returns a guard; the handlers stay while a guard lives (the launcher's run,
 //! or the whole life of an agent or host process), then the previous ones come back.
@@ -23,6 +25,23 @@ static COUNT: AtomicU32 = AtomicU32::new(0);
 
 /// The signals that stop a team.
 pub const TERMINATION: [i32; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP];
+
+/// Signals iceoryx2's signal handler captures (only recording them) besides the termination
+/// ones: their default actions come back, so that the processes of a team behave as any
+/// Unix program — Ctrl-Z (SIGTSTP) suspends, SIGCONT resumes, Ctrl-\\ (SIGQUIT) and SIGUSR1
+/// end the process (an agent ended so is a failed agent, named by the launcher).
+const DEFAULT_ACTION: [i32; 10] = [
+    libc::SIGQUIT,
+    libc::SIGTSTP,
+    libc::SIGCONT,
+    libc::SIGTTIN,
+    libc::SIGTTOU,
+    libc::SIGUSR1,
+    libc::SIGUSR2,
+    libc::SIGPROF,
+    libc::SIGURG,
+    libc::SIGVTALRM,
+];
 
 extern "C" fn on_signal(signal: libc::c_int) {
     let _ = RECEIVED.compare_exchange(0, signal, Ordering::AcqRel, Ordering::Acquire);
@@ -52,6 +71,10 @@ pub fn install() -> SignalGuard {
         // iceoryx2 registers its own handlers lazily, once per process: let it do so now,
         // so that it cannot replace ours later.
         let _ = iceoryx2_bb_posix::signal::SignalHandler::last_signal();
+        for signal in DEFAULT_ACTION {
+            // SAFETY: restoring a signal's default action.
+            unsafe { libc::signal(signal, libc::SIG_DFL) };
+        }
         RECEIVED.store(0, Ordering::Release);
         COUNT.store(0, Ordering::Release);
         installed.previous.clear();
