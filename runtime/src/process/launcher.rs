@@ -379,9 +379,17 @@ pub fn launch(
         if let Some(culprit) = failed
             && let Some(mut child) = guard.children[culprit].take()
         {
-            let _ = child.kill();
-            let _ = child.wait();
-            failures[culprit] = Some("killed by the launcher".into());
+            // It may have ended already (a neighbour saw it first): its own exit says how.
+            failures[culprit] = match child.try_wait() {
+                Ok(Some(status)) => {
+                    describe_exit(status).or_else(|| Some("exited with code 0".into()))
+                }
+                _ => {
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    Some("killed by the launcher".into())
+                }
+            };
         }
         if let Some(ends) = grace_ends
             && std::time::Instant::now() >= ends
