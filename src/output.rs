@@ -73,10 +73,6 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         .iter()
         .enumerate()
         .map(|(robot, task)| {
-            let robot = report
-                .degraded
-                .as_ref()
-                .map_or(robot, |d| d.survivors[robot]);
             if *task == IDLE {
                 format!("{robot}→-")
             } else {

@@ -188,7 +188,18 @@ fn on_failure_continue_resolves_without_the_failed_robot_or_says_why_not() {
         let degraded = &report["degraded"];
         assert_eq!(degraded["failed_robot"], 3, "{kind}");
         assert_eq!(degraded["survivors"].as_array().unwrap().len(), 11);
-        assert_eq!(report["robots"], 11);
+        // The user's robot numbers: robot 3 has no task, the others keep their places.
+        assert_eq!(report["robots"], 12);
+        let assignment = report["assignment"].as_array().unwrap();
+        assert_eq!(assignment.len(), 12, "{kind}: {report}");
+        assert!(assignment[3].is_null(), "{kind}: {report}");
+        assert!(
+            assignment
+                .iter()
+                .enumerate()
+                .all(|(r, t)| r == 3 || t.as_u64().is_some_and(|t| t < 8)),
+            "{kind}: {report}"
+        );
         assert_eq!(report["check"]["optimal"], true, "{kind}");
         assert!(
             leftovers_of(pid).is_empty(),

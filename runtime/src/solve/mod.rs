@@ -28,7 +28,9 @@ use crate::workload::plan::prepare;
 use admm_ta_agents::local_stop::LocalCertifiedStop;
 use admm_ta_agents::method::Method;
 use admm_ta_agents::oracle::{self, OptimalAssignment};
-use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_agents::problem::{
+    AssignmentCase, CaseChoice, CostMatrix, IDLE, TaskAssignmentProblem,
+};
 use admm_ta_agents::rounding;
 use admm_ta_agents::ties;
 use admm_ta_topologies::Graph;
@@ -62,6 +64,14 @@ pub fn solve(
     };
     match solve_without(problem, graph, options, failed) {
         Ok((survivors, mut report)) => {
+            // In the user's numbering: the failed robot has no task (`null` in JSON).
+            let mut assignment = vec![IDLE; problem.robots()];
+            for (k, &robot) in survivors.iter().enumerate() {
+                assignment[robot] = report.assignment[k];
+            }
+            report.assignment = assignment;
+            report.idle_robots = report.idle_robots.iter().map(|&k| survivors[k]).collect();
+            report.robots = problem.robots();
             report.degraded = Some(Degraded {
                 failure: first.to_string(),
                 failed_robot: failed,

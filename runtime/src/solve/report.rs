@@ -14,7 +14,7 @@ pub struct Degraded {
     /// The failure of the first run, as the launcher reported it.
     pub failure: String,
     pub failed_robot: usize,
-    /// Original index of each robot of `assignment` (the survivors, in order).
+    /// The robots that re-solved (the user's numbers, in order).
     pub survivors: Vec<usize>,
     /// Rounds of the first run lost to the failure (the failed robot's last published round).
     pub lost_rounds: u64,
@@ -120,8 +120,9 @@ pub struct SolveReport {
     pub iterate_digests: Vec<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub check: Option<OracleCheck>,
-    /// Set when a robot failed and the survivors re-solved without it: `assignment`,
-    /// `robots`, `cost` and `check` are then the survivors'.
+    /// Set when a robot failed and the survivors re-solved without it: `cost` and `check`
+    /// are then the survivors'; `assignment` and `idle_robots` keep the user's robot
+    /// numbers, the failed robot without a task (`null`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub degraded: Option<Degraded>,
 }
