@@ -932,3 +932,44 @@ fn size_sweep_checks_every_run_certified_and_optimal() {
     );
     assert_eq!(json["points"].as_array().unwrap().len(), 2 * 2 * 2);
 }
+
+#[test]
+fn one_robot_with_many_tasks_is_solved_or_refused_without_quadratic_memory() {
+    use std::os::unix::process::CommandExt;
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("wide.csv");
+    let row: Vec<String> = (0..20_000)
+        .map(|k| format!("{}", 1.0 + ((k * 7919) % 20_011) as f64 / 20_011.0))
+        .collect();
+    std::fs::write(&csv, row.join(",") + "\n").unwrap();
+    // 2 GiB of address space: the tasks' complete graph (2·10⁸ edges) would need 7 GiB.
+    for (method, code) in [("hungarian", 0), ("primal", 2), ("market", 2)] {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_admm-ta"));
+        command
+            .args(["solve", "--json", "--method", method, "--costs"])
+            .arg(&csv);
+        // SAFETY: setrlimit only, between fork and exec.
+        unsafe {
+            command.pre_exec(|| {
+                let limit = libc::rlimit {
+                    rlim_cur: 2 << 30,
+                    rlim_max: 2 << 30,
+                };
+                if libc::setrlimit(libc::RLIMIT_AS, &limit) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+        let out = command.output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "{method}: {err}");
+        if code == 0 {
+            let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+            // The cheapest task: k = 0 has cost 1.0, every other is above it.
+            assert_eq!(report["assignment"][0], 0, "{report}");
+        } else {
+            assert!(err.contains("GiB of"), "{method}: {err}");
+        }
+    }
+}

@@ -168,6 +168,8 @@ fn solve_user(
     options: &SolveOptions,
 ) -> Result<SolveReport, SolveError> {
     user::check_supported(problem, options.method())?;
+    // Refused before anything large is built (the exact optimum, the tasks' graph).
+    check_size(problem, graph, options.method())?;
     let needs_optimum = options.method() == Method::Hungarian
         || options.check()
         || options.stop() == StopRule::Oracle;
@@ -209,9 +211,14 @@ fn solve_user(
             Some(exact) => Some(user::internal_optimum(problem, exact)?),
             None => None,
         };
+        // The centralized solver has no team: no graph to lift onto the tasks.
+        let internal_graph = match options.method().agent_method() {
+            Some(_) => user::internal_graph(problem, graph)?,
+            None => graph.clone(),
+        };
         solve_once(
             problem.internal(),
-            &user::internal_graph(problem, graph)?,
+            &internal_graph,
             options,
             internal_optimum,
             user::affine(problem),
@@ -226,22 +233,11 @@ fn solve_user(
     Ok(report)
 }
 
-fn solve_once(
-    problem: &TaskAssignmentProblem,
-    graph: &Graph,
-    options: &SolveOptions,
-    optimum: Option<OptimalAssignment>,
-    affine: Affine,
-) -> Result<SolveReport, SolveError> {
-    let (n, m) = (problem.robots(), problem.tasks());
-    if graph.robots() != n {
-        return Err(SolveError::SizeMismatch {
-            graph: graph.robots(),
-            problem: n,
-        });
-    }
-    let memory = &options.method().info().memory;
-    let bytes = (memory.bytes)(n, m);
+/// Refuses a solve whose method would need more than [`MEMORY_LIMIT_BYTES`] on an
+/// `n × m` problem, plus `extra` bytes (the team's graph).
+fn refuse_beyond_memory(method: Method, n: usize, m: usize, extra: f64) -> Result<(), SolveError> {
+    let memory = &method.info().memory;
+    let bytes = (memory.bytes)(n, m) + extra;
     if bytes > MEMORY_LIMIT_BYTES {
         return Err(SolveError::TooLarge {
             robots: n,
@@ -251,6 +247,56 @@ fn solve_once(
             because: memory.because,
         });
     }
+    Ok(())
+}
+
+/// The memory check of [`solve_once`], done on the user's problem before anything large is
+/// built: the centralized solvers on the user's shape; a team on the shape its agents solve
+/// (the tasks are the agents when `n < m` is transposed), with the edges of the graph they
+/// then run on (counted, not built: each pair of hosts that are the same or neighbours
+/// links every task of one with every task of the other).
+fn check_size(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    method: Method,
+) -> Result<(), SolveError> {
+    if method.agent_method().is_none() || method == Method::DistHungarian {
+        return refuse_beyond_memory(method, problem.robots(), problem.tasks(), 0.0);
+    }
+    let internal = problem.internal();
+    let (agents, hosts) = (internal.robots(), graph.robots());
+    let mut edges = 0.0;
+    if agents != hosts && problem.robots() == hosts {
+        // Agent `a` runs on host `a mod hosts`.
+        let per_host = |h: usize| ((agents + hosts - 1 - h) / hosts) as f64;
+        for h in 0..hosts {
+            let c = per_host(h);
+            edges += c * (c - 1.0) / 2.0;
+            for &g in graph.neighbours(h).iter().filter(|&&g| g > h) {
+                edges += c * per_host(g);
+            }
+        }
+    }
+    // Two adjacency entries per edge, and the edge list they are built from.
+    refuse_beyond_memory(method, agents, internal.tasks(), 32.0 * edges)
+}
+
+fn solve_once(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    options: &SolveOptions,
+    optimum: Option<OptimalAssignment>,
+    affine: Affine,
+) -> Result<SolveReport, SolveError> {
+    let (n, m) = (problem.robots(), problem.tasks());
+    let team = options.method().agent_method().is_some();
+    if team && graph.robots() != n {
+        return Err(SolveError::SizeMismatch {
+            graph: graph.robots(),
+            problem: n,
+        });
+    }
+    refuse_beyond_memory(options.method(), n, m, 0.0)?;
     // A team method's plan (ρ, tolerance, agents); `None`: the centralized solver.
     let plan = match options.method().agent_method() {
         Some(method) => Some(prepare(problem, graph, options, method)?),
