@@ -250,7 +250,7 @@ fn two_hosts_reach_the_optimum_with_the_iterates_of_sim(transport: &str, run: &s
         );
     }
     for host in ["alpha", "beta"] {
-        let left = shm_left(&format!("adtat{run}-{host}_"));
+        let left = shm_left(&format!("adtat{}-{run}-{host}_", common::euid()));
         assert!(left.is_empty(), "{left:?}");
     }
 }
@@ -313,7 +313,7 @@ fn an_agent_crashing_on_one_host_stops_both_hosts_naming_it() {
             started.elapsed()
         );
         for host in ["alpha", "beta"] {
-            let left = shm_left(&format!("adtat{run}-{host}_"));
+            let left = shm_left(&format!("adtat{}-{run}-{host}_", common::euid()));
             assert!(left.is_empty(), "{transport}: {left:?}");
         }
     }
@@ -448,7 +448,7 @@ fn a_host_or_agent_whose_team_file_differs_is_refused_by_name_and_the_team_runs_
         let (hosts, agents) = wait_all(vec![alpha, beta], Duration::from_secs(90));
         all_succeeded(transport, &hosts, &agents);
         for host in ["alpha", "beta"] {
-            let left = shm_left(&format!("adtat{run}-{host}_"));
+            let left = shm_left(&format!("adtat{}-{run}-{host}_", common::euid()));
             assert!(left.is_empty(), "{transport}: {left:?}");
         }
     }

@@ -196,3 +196,65 @@ fn a_second_account_neither_blocks_nor_sees_another_accounts_runs() {
     use std::os::unix::fs::MetadataExt;
     assert_eq!((meta.uid(), meta.mode() & 0o777), (65534, 0o700));
 }
+
+#[test]
+fn two_accounts_run_teams_of_the_same_name_side_by_side() {
+    if euid() != 0 {
+        eprintln!("skipped: needs root to act as a second account (uid 65534)");
+        return;
+    }
+    let tmp = shared_tmp();
+    // One team file both accounts can read, results where both can write.
+    let run = format!("same{}", std::process::id());
+    let team = tmp.path().join("team.toml");
+    std::fs::write(
+        &team,
+        format!("run = \"{run}\"\nrobots = 2\ncosts = \"random\"\ntasks = 2\nresults = \"results\"\nstartup_timeout = 60.0\n"),
+    )
+    .unwrap();
+    let results = tmp.path().join("results");
+    std::fs::create_dir(&results).unwrap();
+    std::fs::set_permissions(&results, std::fs::Permissions::from_mode(0o1777)).unwrap();
+    let agent = |id: &str, uid: Option<u32>| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_admm-ta"));
+        command
+            .args(["agent", "--team", team.to_str().unwrap(), "--id", id])
+            .env("TMPDIR", tmp.path())
+            .env_remove("XDG_RUNTIME_DIR")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped());
+        if let Some(uid) = uid {
+            // SAFETY: only async-signal-safe calls between fork and exec.
+            unsafe {
+                command.pre_exec(move || {
+                    if libc::setgid(uid) != 0 || libc::setuid(uid) != 0 {
+                        return Err(std::io::Error::last_os_error());
+                    }
+                    Ok(())
+                });
+            }
+        }
+        command.spawn().unwrap()
+    };
+    // Root's agent 0 holds the name while uid 65534 starts its own whole team of that name.
+    let mut ours = agent("0", None);
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let theirs: Vec<_> = ["0", "1"].iter().map(|id| agent(id, Some(65534))).collect();
+    for (k, child) in theirs.into_iter().enumerate() {
+        let out = child.wait_with_output().unwrap();
+        assert!(
+            out.status.success(),
+            "uid 65534, agent {k}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    // Root's team completes too.
+    let last = agent("1", None).wait_with_output().unwrap();
+    assert!(
+        last.status.success(),
+        "{}",
+        String::from_utf8_lossy(&last.stderr)
+    );
+    let first = common::wait_with_deadline(&mut ours, std::time::Duration::from_secs(60));
+    assert!(first.success());
+}

@@ -271,7 +271,7 @@ fn a_signal_to_one_independently_started_agent_stops_its_team() {
     let sent = Instant::now();
     kill(agents[1].1.id() as i32, libc::SIGTERM);
     all_stop_with(agents, libc::SIGTERM, sent);
-    let left = shm_with_prefix(&format!("adtat{run}_"));
+    let left = shm_with_prefix(&format!("adtat{}-{run}_", common::euid()));
     assert!(left.is_empty(), "{left:?}");
 }
 

@@ -67,7 +67,7 @@ fn team_shm_left(run: &str) -> Vec<String> {
         .map(|d| {
             d.flatten()
                 .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| n.starts_with(&format!("adtat{run}_")))
+                .filter(|n| n.starts_with(&format!("adtat{}-{run}_", common::euid())))
                 .collect()
         })
         .unwrap_or_default()

@@ -161,3 +161,9 @@ pub fn loopback_port() -> u16 {
     }
     panic!("no free loopback port below the ephemeral range {ephemeral_low}");
 }
+
+/// The effective user id of the tests (team namespaces are per user).
+pub fn euid() -> u32 {
+    // SAFETY: geteuid cannot fail.
+    unsafe { libc::geteuid() }
+}

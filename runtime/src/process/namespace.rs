@@ -86,9 +86,13 @@ impl RunNamespace {
         private_dir::ensure_private_dir(&teams)?;
         let dir = teams.join(run);
         private_dir::ensure_private_dir(&dir)?;
+        // SAFETY: geteuid cannot fail.
+        let uid = unsafe { libc::geteuid() };
         Ok(Self {
-            // 't' is not a hex digit: no launcher run's prefix (`adta<hex>_`) starts so.
-            prefix: format!("adtat{run}_"),
+            // 't' is not a hex digit: no launcher run's prefix (`adta<hex>_`) starts so. The
+            // user's id keeps teams of the same name of two users apart (the digits end at
+            // the first dash, so no two users' prefixes coincide).
+            prefix: format!("adtat{uid}-{run}_"),
             id: format!("team-{run}"),
             dir,
             own_base: None,
