@@ -30,17 +30,22 @@ fn solve_in(tmp: &Path, uid: Option<u32>) -> Output {
         .env_remove("ADMM_TA_FAULT")
         .stdin(Stdio::null());
     if let Some(uid) = uid {
-        // SAFETY: only async-signal-safe calls between fork and exec.
-        unsafe {
-            command.pre_exec(move || {
-                if libc::setgid(uid) != 0 || libc::setuid(uid) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                Ok(())
-            });
-        }
+        as_user(&mut command, uid);
     }
     command.output().expect("the admm-ta binary runs")
+}
+
+/// Runs `command` as account `uid` (the tests run as root to use a second account).
+fn as_user(command: &mut Command, uid: u32) {
+    // SAFETY: only async-signal-safe calls between fork and exec.
+    unsafe {
+        command.pre_exec(move || {
+            if libc::setgid(uid) != 0 || libc::setuid(uid) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
 }
 
 fn euid() -> u32 {
@@ -224,15 +229,7 @@ fn two_accounts_run_teams_of_the_same_name_side_by_side() {
             .stdout(Stdio::null())
             .stderr(Stdio::piped());
         if let Some(uid) = uid {
-            // SAFETY: only async-signal-safe calls between fork and exec.
-            unsafe {
-                command.pre_exec(move || {
-                    if libc::setgid(uid) != 0 || libc::setuid(uid) != 0 {
-                        return Err(std::io::Error::last_os_error());
-                    }
-                    Ok(())
-                });
-            }
+            as_user(&mut command, uid);
         }
         command.spawn().unwrap()
     };

@@ -62,6 +62,18 @@ fn start(team: &Path, id: usize) -> Child {
         .unwrap()
 }
 
+/// Waits for every agent; each must succeed.
+fn all_succeed(agents: impl IntoIterator<Item = (usize, Child)>) {
+    for (id, child) in agents {
+        let out = child.wait_with_output().unwrap();
+        assert!(
+            out.status.success(),
+            "agent {id}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
 fn team_shm_left(run: &str) -> Vec<String> {
     std::fs::read_dir("/dev/shm")
         .map(|d| {
@@ -360,14 +372,7 @@ fn an_agent_of_another_team_is_refused_by_name_before_round_0_and_the_team_runs_
     }
     // The right agent 3 completes the team.
     let last = start(&team, 3);
-    for (id, child) in members.into_iter().chain([(3, last)]) {
-        let out = child.wait_with_output().unwrap();
-        assert!(
-            out.status.success(),
-            "agent {id}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
+    all_succeed(members.into_iter().chain([(3, last)]));
     assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
 }
 
@@ -514,13 +519,6 @@ fn a_second_copy_of_a_running_agent_is_refused_and_the_team_runs_on() {
         "{err}"
     );
     let last = start(&team, 3);
-    for (id, child) in members.into_iter().chain([(3, last)]) {
-        let out = child.wait_with_output().unwrap();
-        assert!(
-            out.status.success(),
-            "agent {id}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
+    all_succeed(members.into_iter().chain([(3, last)]));
     assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
 }
