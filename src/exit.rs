@@ -85,8 +85,11 @@ pub fn code_of(error: &anyhow::Error) -> u8 {
         }
         if let Some(e) = cause.downcast_ref::<SolveError>() {
             return match e {
-                // Refused before anything was spawned: the user's limits, not a failure.
-                SolveError::Run(RunError::Launch(LaunchError::Limits(_))) => 2,
+                // Refused before anything was spawned: the user's limits or temporary
+                // directory, not a failure.
+                SolveError::Run(RunError::Launch(
+                    LaunchError::Limits(_) | LaunchError::RunDirectory(_),
+                )) => 2,
                 SolveError::Run(_) | SolveError::CannotContinue { .. } => 4,
                 SolveError::Internal(_) => 1,
                 _ => 2,

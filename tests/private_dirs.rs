@@ -255,3 +255,16 @@ fn two_accounts_run_teams_of_the_same_name_side_by_side() {
     let first = common::wait_with_deadline(&mut ours, std::time::Duration::from_secs(60));
     assert!(first.success());
 }
+
+#[test]
+fn a_temporary_directory_that_does_not_exist_is_named_and_refused() {
+    let missing = tempfile::tempdir().unwrap().path().join("gone");
+    let out = solve_in(&missing, None);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    let last = stderr.trim_end().lines().last().unwrap_or_default();
+    assert!(
+        last.contains(&format!("in {}", missing.display())) && last.contains("set TMPDIR"),
+        "{stderr}"
+    );
+}

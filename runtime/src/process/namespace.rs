@@ -21,6 +21,16 @@ pub struct RunNamespace {
     pub own_base: Option<PathBuf>,
 }
 
+/// `e` naming the directory it happened in (`TMPDIR` pointing nowhere, a full disk).
+fn in_dir(dir: &Path, e: std::io::Error) -> std::io::Error {
+    let hint = if dir == std::env::temp_dir() {
+        " (the temporary directory: set TMPDIR to a writable directory)"
+    } else {
+        ""
+    };
+    std::io::Error::new(e.kind(), format!("in {}{hint}: {e}", dir.display()))
+}
+
 impl RunNamespace {
     /// A fresh namespace in the user's private runs directory
     /// ([`crate::process::private_dir`]); its name has a random part and is created
@@ -35,14 +45,15 @@ impl RunNamespace {
             }
             Err(why) => {
                 eprintln!("warning: {why}; this run uses a private directory of its own");
-                let (base, _) = create_unique_dir(
-                    &std::env::temp_dir(),
-                    &format!("admm-ta-{}-", private_dir::euid()),
-                )?;
+                let temp = std::env::temp_dir();
+                let (base, _) =
+                    create_unique_dir(&temp, &format!("admm-ta-{}-", private_dir::euid()))
+                        .map_err(|e| in_dir(&temp, e))?;
                 (base.clone(), Some(base))
             }
         };
-        let (dir, id) = create_unique_dir(&runs, &run_id_prefix(std::process::id()))?;
+        let (dir, id) = create_unique_dir(&runs, &run_id_prefix(std::process::id()))
+            .map_err(|e| in_dir(&runs, e))?;
         write_private_file(
             &dir.join(LAUNCHER_PID),
             std::process::id().to_string().as_bytes(),
