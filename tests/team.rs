@@ -453,6 +453,16 @@ fn a_team_takes_forbidden_pairs_and_profits_and_collect_ends_as_solve_does() {
         "{text}"
     );
 
+    // A result copied over another agent's is named as such.
+    let results = dir.path().join("results");
+    let saved = std::fs::read(results.join("result-0.json")).unwrap();
+    std::fs::copy(results.join("result-1.json"), results.join("result-0.json")).unwrap();
+    let out = collect(&team, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("is agent 1's result, not agent 0's"), "{err}");
+    std::fs::write(results.join("result-0.json"), saved).unwrap();
+
     // Results of another team in the same directory are refused (bad input, 2).
     let changed = std::fs::read_to_string(&team)
         .unwrap()

@@ -342,6 +342,17 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
             results.display()
         ));
     }
+    if let Some((id, report)) = reports
+        .iter()
+        .enumerate()
+        .find(|(id, r)| r.outcome.index != *id)
+    {
+        return Err(format!(
+            "{} is agent {}'s result, not agent {id}'s",
+            member_result(&results, id).display(),
+            report.outcome.index
+        ));
+    }
     if let Some(id) = reports
         .iter()
         .position(|r| r.team.as_deref() != Some(digest.as_str()))
