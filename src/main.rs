@@ -27,6 +27,10 @@ fn main() -> ExitCode {
     };
     match commands::run(args.command) {
         Ok(code) => ExitCode::from(code),
+        Err(error) if output::reader_closed(&error) => {
+            // `admm-ta topology | head -1`: the reader has what it wanted; end quietly.
+            ExitCode::SUCCESS
+        }
         Err(error) => {
             // One line naming the problem, with its causes; never a backtrace.
             eprintln!("error: {error:#}");

@@ -342,8 +342,79 @@ fn bad_input_gives_one_clear_line() {
 
 #[test]
 fn bad_options_of_every_other_command_exit_2_with_one_line() {
-    let cases: [(&[&str], &str); 9] = [
+    let max = "18446744073709551615";
+    let cases: [(&[&str], &str); 26] = [
         (&["bench", "rounds", "--agents", "0"], "--agents"),
+        (&["bench", "rounds", "--rounds", max], "--rounds"),
+        (&["bench", "rounds", "--warmup", max], "--warmup"),
+        (&["bench", "rounds", "--payloads", "0x0"], "--payloads"),
+        (&["bench", "rounds", "--out", "/proc/nope"], "/proc/nope"),
+        (&["bench", "rounds", "--topologies", "random:0"], "random:0"),
+        (
+            &[
+                "bench",
+                "rounds",
+                "--barriers",
+                "global",
+                "--transports",
+                "uds",
+            ],
+            "shm",
+        ),
+        (
+            &[
+                "experiment",
+                "compare",
+                "--robots",
+                "2",
+                "--seeds",
+                "1",
+                "--topology",
+                "random:0",
+            ],
+            "random:0",
+        ),
+        (
+            &[
+                "experiment",
+                "compare",
+                "--robots",
+                "2",
+                "--topology",
+                "/nonexistent/t.toml",
+            ],
+            "t.toml",
+        ),
+        (
+            &[
+                "experiment",
+                "compare",
+                "--methods",
+                "hungarian",
+                "--transports",
+                "ipc",
+            ],
+            "hungarian",
+        ),
+        (
+            &["experiment", "surveillance", "--scenario", "/etc/hostname"],
+            "/etc/hostname",
+        ),
+        (
+            &[
+                "experiment",
+                "surveillance",
+                "--scenario",
+                "/nonexistent.toml",
+            ],
+            "/nonexistent.toml",
+        ),
+        (&["stress", "--seed", max, "--runs", "2"], "--seed"),
+        (&["stress", "--robots", "0"], "zero robots"),
+        (&["stress", "--method", "hungarian"], "hungarian"),
+        (&["stress", "--topology", "random:0"], "random:0"),
+        (&["stress", "--startup-timeout", "0"], "--startup-timeout"),
+        (&["stress", "--round-timeout", "0"], "--round-timeout"),
         (&["bench", "rounds", "--repeat", "0"], "--repeat"),
         (&["bench", "rounds", "--rounds", "0"], "--rounds"),
         (&["experiment", "compare", "--robots", "0"], "--robots"),
@@ -358,6 +429,39 @@ fn bad_options_of_every_other_command_exit_2_with_one_line() {
         assert_clear_error(&output, needle);
         assert_eq!(output.status.code(), Some(2), "bad input exits 2: {args:?}");
     }
+}
+
+/// Output that cannot be written: a full device is one line and exit 1; a reader that
+/// closed the pipe ends the program quietly, as a Unix tool.
+#[test]
+fn output_errors_are_one_line_and_a_closed_pipe_ends_quietly() {
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .expect("/dev/full opens");
+    let output = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
+        .args(["topology", "--robots", "3"])
+        .stdout(full)
+        .output()
+        .expect("the admm-ta binary runs");
+    assert_clear_error(&output, "cannot write the output");
+    assert_eq!(output.status.code(), Some(1));
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
+        .args(["topology", "--robots", "300"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the admm-ta binary runs");
+    // Read one line, then close the pipe: the rest (far more than a pipe buffer) meets EPIPE.
+    let mut stdout = std::io::BufReader::new(child.stdout.take().expect("piped"));
+    let mut first = String::new();
+    std::io::BufRead::read_line(&mut stdout, &mut first).expect("a first line");
+    drop(stdout);
+    let output = child.wait_with_output().expect("admm-ta ends");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.is_empty(), "not quiet: {stderr}");
+    assert_eq!(output.status.code(), Some(0));
 }
 
 #[test]
