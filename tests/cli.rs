@@ -302,7 +302,7 @@ fn bad_input_gives_one_clear_line() {
                 "--robots 3 --tasks 3 --topology {}",
                 file("range.toml", "robots = 3\nedges = [[0, 1], [1, 5]]\n")
             ),
-            "numbered 0..3",
+            "names robot 5, but there are 3 robots, numbered from 0",
         ),
         (
             format!(
@@ -917,6 +917,66 @@ fn assert_clear_error_text(stderr: &str, needle: &str) {
         "not one line: {stderr}"
     );
     assert!(stderr.contains(needle), "'{needle}' not in: {stderr}");
+}
+
+#[test]
+fn a_byte_order_mark_before_costs_and_forbidden_pairs_is_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let costs = write(d, "bom.csv", "\u{feff}1,0\n0,1\n");
+    let pairs = write(d, "bom.txt", "\u{feff}0,1\n");
+    let report = json(&admm_ta(&[
+        "solve",
+        "--costs",
+        &costs,
+        "--forbidden",
+        &pairs,
+        "--method",
+        "hungarian",
+        "--transport",
+        "sim",
+        "--json",
+    ]));
+    // Robot 0 may not take task 1, so it takes task 0 at cost 1.
+    assert_eq!(report["assignment"], serde_json::json!([0, 1]));
+    assert_eq!(report["cost"], 2.0);
+}
+
+#[test]
+fn clap_errors_name_the_missing_arguments_and_timeouts_their_range() {
+    let cases: [(&[&str], &str); 4] = [
+        (&["solve", "--robots", "3"], "not provided: --tasks"),
+        (&["topology"], "not provided: --robots"),
+        (
+            &[
+                "solve",
+                "--robots",
+                "3",
+                "--tasks",
+                "3",
+                "--round-timeout",
+                "1e300",
+            ],
+            "below 1000000, got 1e300",
+        ),
+        (
+            &[
+                "solve",
+                "--robots",
+                "3",
+                "--tasks",
+                "3",
+                "--round-timeout",
+                "1e9",
+            ],
+            "below 1000000, got 1e9",
+        ),
+    ];
+    for (args, needle) in cases {
+        let output = admm_ta(args);
+        assert_clear_error(&output, needle);
+        assert_eq!(output.status.code(), Some(2), "{args:?}");
+    }
 }
 
 #[test]

@@ -13,7 +13,10 @@ pub enum ConfigError {
     Rho(f64),
     /// A timeout that is not a positive number of seconds (below 10⁶); `option` is the
     /// command line's flag or the team file's key.
-    #[error("{option} must be a positive number of seconds, got {seconds}")]
+    #[error(
+        "{option} must be a positive number of seconds below 1000000, got {}",
+        Compact(*seconds)
+    )]
     Timeout { option: &'static str, seconds: f64 },
     #[error(
         "--on-failure continue applies to agent processes: use --transport {}",
@@ -92,6 +95,21 @@ pub fn seconds(option: &'static str, seconds: f64) -> Result<Duration, ConfigErr
     }
 }
 
+/// A number as typed, or in scientific notation when that is far shorter (1e300, 1e-9).
+struct Compact(f64);
+
+impl std::fmt::Display for Compact {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let plain = self.0.to_string();
+        let scientific = format!("{:e}", self.0);
+        f.write_str(if scientific.len() < plain.len() {
+            &scientific
+        } else {
+            &plain
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -127,7 +145,15 @@ mod tests {
         );
         assert_eq!(
             seconds("round_timeout", -1.0).unwrap_err().to_string(),
-            "round_timeout must be a positive number of seconds, got -1"
+            "round_timeout must be a positive number of seconds below 1000000, got -1"
+        );
+        assert_eq!(
+            seconds("--round-timeout", 1e300).unwrap_err().to_string(),
+            "--round-timeout must be a positive number of seconds below 1000000, got 1e300"
+        );
+        assert_eq!(
+            seconds("--round-timeout", 1e9).unwrap_err().to_string(),
+            "--round-timeout must be a positive number of seconds below 1000000, got 1e9"
         );
     }
 }
