@@ -272,6 +272,22 @@ fn bad_input_gives_one_clear_line() {
         ("--robots 3 --tasks 3 --rho fast".into(), "auto"),
         ("--robots 3 --tasks 3 --method simplex".into(), "simplex"),
         (
+            "--robots 3 --tasks 3 --method market --adaptive-rho".into(),
+            "--adaptive-rho does not apply to --method market",
+        ),
+        (
+            "--robots 3 --tasks 3 --method dual --gamma-factor 0.3".into(),
+            "--gamma-factor does not apply to --method dual",
+        ),
+        (
+            "--robots 3 --tasks 3 --method dual --projection qp".into(),
+            "--projection qp does not apply to --method dual",
+        ),
+        (
+            "--robots 3 --tasks 3 --method cbaa --primal-variant paper".into(),
+            "--primal-variant paper does not apply to --method cbaa",
+        ),
+        (
             "--robots 3 --tasks 3 --method inexact-dual --gamma-factor 0".into(),
             "γ",
         ),
