@@ -3,8 +3,7 @@
 
 use crate::cli::{Bench, RoundsArgs};
 use crate::commands::experiment::report_written;
-use crate::commands::shared::writable_dir;
-use crate::commands::shared::{agent_program, progress_bar};
+use crate::commands::shared::{agent_program, progress_bar, writable_dir};
 use crate::exit::{RunsFailed, UsageError, usage_bail};
 use crate::output::{out, outln, progress_row};
 use admm_ta::TopologySpec;
