@@ -408,7 +408,7 @@ pub struct SolveArgs {
     pub transport: Transport,
     /// Primal method: fast (each robot reads the assignment from its certificate matrix by
     /// a local assignment problem, large ρ, over-relaxed and anchored steps, certificate
-    /// every round) or paper (Algorithm 1 as published).
+    /// every round) or paper (Algorithm 1 as published; refused with the other methods).
     #[arg(long, value_enum, default_value = "fast")]
     pub primal_variant: PrimalVariant,
     /// ADMM penalty ρ: auto (scale-free rule from the cost spread and the graph's mean
@@ -420,10 +420,12 @@ pub struct SolveArgs {
     /// Vary ρ by the method's schedule, computed by every agent from the round number
     /// (primal paper variant: 3ρ shrinking 2% per round to 0.6ρ; dual methods: ρ, then
     /// growing 1% per round to 10ρ). Cut the rounds to the certified stop by 10–69% wherever
-    /// the runs certified. Refused with the fast primal variant (ρ drops out of its iteration).
+    /// the runs certified. Refused with the fast primal variant (ρ drops out of its iteration)
+    /// and with the methods without ρ.
     #[arg(long)]
     pub adaptive_rho: bool,
-    /// Inexact dual: g of the proximal weight γ = g·(m+1)/(2·|N(i)|·ρ) (default 0.5).
+    /// Inexact dual: g of the proximal weight γ = g·(m+1)/(2·|N(i)|·ρ) (default 0.5);
+    /// refused with the other methods.
     #[arg(long, allow_negative_numbers = true)]
     pub gamma_factor: Option<f64>,
     #[arg(long, default_value_t = 5000)]
@@ -438,7 +440,8 @@ pub struct SolveArgs {
     pub stop: StopRule,
     #[arg(long, default_value_t = 10)]
     pub stop_rounds: usize,
-    /// x-update solver: fast (Newton projection) or qp (clarabel; slow cross-check).
+    /// Primal method's x-update solver: fast (Newton projection) or qp (clarabel; slow
+    /// cross-check; refused with the other methods).
     #[arg(long, value_enum, default_value = "fast")]
     pub projection: ProjectionPath,
     /// Tie-breaking cost perturbation: auto (only for lattice costs such as integers), off,

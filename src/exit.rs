@@ -3,7 +3,7 @@
 //! | code | meaning |
 //! | --- | --- |
 //! | 0 | success: a certified/optimal assignment, or a run that finished as asked |
-//! | 1 | unexpected internal error |
+//! | 1 | unexpected internal error, or the output cannot be written (a full disk) |
 //! | 2 | bad input or bad options, or a system limit the team does not fit (`ulimit -n`) |
 //! | 3 | infeasible problem (no assignment avoids the forbidden pairs) |
 //! | 4 | agent or transport failure (also `--on-failure continue` giving up) |

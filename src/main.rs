@@ -18,15 +18,29 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Err(error) => {
-            // clap's first line names the problem; the usage block after it is noise here.
+            // clap's first paragraph names the problem (with the missing arguments indented
+            // below it); the usage block after it is noise here. One line.
             let rendered = error.to_string();
-            let first = rendered.lines().next().unwrap_or("invalid arguments");
-            eprintln!("{first} (see admm-ta --help)");
+            let problem: Vec<&str> = rendered
+                .lines()
+                .take_while(|line| !line.trim().is_empty())
+                .map(str::trim)
+                .collect();
+            let problem = match problem.split_first() {
+                Some((first, [])) => first.to_string(),
+                Some((first, rest)) => format!("{first} {}", rest.join(", ")),
+                None => "invalid arguments".to_string(),
+            };
+            eprintln!("{problem} (see admm-ta --help)");
             return ExitCode::from(2);
         }
     };
     match commands::run(args.command) {
         Ok(code) => ExitCode::from(code),
+        Err(error) if output::reader_closed(&error) => {
+            // `admm-ta topology | head -1`: the reader has what it wanted; end quietly.
+            ExitCode::SUCCESS
+        }
         Err(error) => {
             // One line naming the problem, with its causes; never a backtrace.
             eprintln!("error: {error:#}");

@@ -5,20 +5,60 @@ use admm_ta::runtime::transport::Execution;
 use admm_ta::{Method, SolveReport, StopRule};
 use anyhow::Result;
 
+/// Standard output could not be written (a full disk, a closed pipe): exit 1, or quietly
+/// when the reader closed the pipe (`admm-ta topology | head -1`), as a Unix tool ends.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write the output: {0}")]
+pub struct WriteError(#[from] pub std::io::Error);
+
+/// `println!` that returns a [`WriteError`] from the enclosing function instead of panicking.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout(), $($arg)*).map_err($crate::output::WriteError)?
+    }};
+}
+pub(crate) use outln;
+
+/// `print!` that returns a [`WriteError`] from the enclosing function instead of panicking.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout(), $($arg)*).map_err($crate::output::WriteError)?
+    }};
+}
+pub(crate) use out;
+
+/// Whether `error` is standard output's reader having closed the pipe.
+pub fn reader_closed(error: &anyhow::Error) -> bool {
+    error.chain().any(|cause| {
+        cause
+            .downcast_ref::<WriteError>()
+            .is_some_and(|e| e.0.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// A row printed while a sweep runs: a write error is not fatal here (the sweep's report,
+/// printed with [`outln!`] at its end, reports it).
+pub fn progress_row(row: &str) {
+    use std::io::Write as _;
+    let _ = writeln!(std::io::stdout(), "{row}");
+}
+
 pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
     if json {
-        println!("{}", serde_json::to_string(report)?);
+        outln!("{}", serde_json::to_string(report)?);
         return Ok(());
     }
     if let Some(d) = &report.degraded {
-        println!(
+        outln!(
             "degraded: {}; the {} survivors re-solved without robot {} (robots below by their original numbers)",
             d.failure,
             d.survivors.len(),
             d.failed_robot
         );
     }
-    println!(
+    outln!(
         "method {}, transport {}: {} robots × {} tasks ({}{}), topology {}",
         report.method.name(),
         report.transport.name(),
@@ -44,7 +84,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
     } else {
         String::new()
     };
-    println!(
+    outln!(
         "{rho}{} after {} iterations ({:.1} ms{inner}); {} messages of {} bytes per agent",
         if report.converged {
             "converged"
@@ -57,7 +97,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         report.message_bytes,
     );
     if let Some(r) = report.certified_round {
-        println!(
+        outln!(
             "stop: {} — all robots certified the assignment of round {r}",
             match report.stop {
                 StopRule::Local => "local (decentralized)",
@@ -66,7 +106,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         );
     }
     if let Some(eps) = report.perturbation {
-        println!("tie-breaking perturbation ε = {eps:.3e} per robot");
+        outln!("tie-breaking perturbation ε = {eps:.3e} per robot");
     }
     let pairs: Vec<String> = report
         .assignment
@@ -80,14 +120,14 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
             }
         })
         .collect();
-    println!("assignment (robot→task): {}", pairs.join(" "));
+    outln!("assignment (robot→task): {}", pairs.join(" "));
     if !report.idle_robots.is_empty() {
-        println!("idle robots: {:?}", report.idle_robots);
+        outln!("idle robots: {:?}", report.idle_robots);
     }
     if !report.unserved_tasks.is_empty() {
-        println!("unserved tasks: {:?}", report.unserved_tasks);
+        outln!("unserved tasks: {:?}", report.unserved_tasks);
     }
-    println!(
+    outln!(
         "{} {:.6}{}{}",
         if report.maximize { "profit" } else { "cost" },
         report.cost,
@@ -105,13 +145,13 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         }
     );
     if let Some(startup) = report.startup_ms {
-        println!(
+        outln!(
             "{} agent processes connected in {startup:.1} ms",
             report.robots
         );
     }
     if let Some(l) = &report.round_latency_us {
-        println!(
+        outln!(
             "round latency (µs): p50 {:.1}, p90 {:.1}, p99 {:.1}, max {:.1} — wait p50 {:.1}, compute p50 {:.1}, publish p50 {:.1}{}",
             l.round.p50,
             l.round.p90,
@@ -129,7 +169,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
     }
     if let Some(check) = &report.check {
         let round = |r: Option<usize>| r.map_or("never".to_string(), |r| r.to_string());
-        println!(
+        outln!(
             "optimal cost {:.6} (centralized), gap {:.4}%: {}",
             check.optimal_cost,
             100.0 * check.gap,
@@ -142,7 +182,7 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         if report.transport.capabilities().execution != Execution::Lockstep {
             return Ok(());
         }
-        println!(
+        outln!(
             "rounds: within 0.1% first at {}, settled at {}; optimal assignment from {}",
             round(check.rounds_within_0_1pct),
             round(check.rounds_settled_0_1pct),

@@ -272,6 +272,22 @@ fn bad_input_gives_one_clear_line() {
         ("--robots 3 --tasks 3 --rho fast".into(), "auto"),
         ("--robots 3 --tasks 3 --method simplex".into(), "simplex"),
         (
+            "--robots 3 --tasks 3 --method market --adaptive-rho".into(),
+            "--adaptive-rho does not apply to --method market",
+        ),
+        (
+            "--robots 3 --tasks 3 --method dual --gamma-factor 0.3".into(),
+            "--gamma-factor does not apply to --method dual",
+        ),
+        (
+            "--robots 3 --tasks 3 --method dual --projection qp".into(),
+            "--projection qp does not apply to --method dual",
+        ),
+        (
+            "--robots 3 --tasks 3 --method cbaa --primal-variant paper".into(),
+            "--primal-variant paper does not apply to --method cbaa",
+        ),
+        (
             "--robots 3 --tasks 3 --method inexact-dual --gamma-factor 0".into(),
             "γ",
         ),
@@ -302,7 +318,7 @@ fn bad_input_gives_one_clear_line() {
                 "--robots 3 --tasks 3 --topology {}",
                 file("range.toml", "robots = 3\nedges = [[0, 1], [1, 5]]\n")
             ),
-            "numbered 0..3",
+            "names robot 5, but there are 3 robots, numbered from 0",
         ),
         (
             format!(
@@ -342,8 +358,79 @@ fn bad_input_gives_one_clear_line() {
 
 #[test]
 fn bad_options_of_every_other_command_exit_2_with_one_line() {
-    let cases: [(&[&str], &str); 9] = [
+    let max = "18446744073709551615";
+    let cases: [(&[&str], &str); 26] = [
         (&["bench", "rounds", "--agents", "0"], "--agents"),
+        (&["bench", "rounds", "--rounds", max], "--rounds"),
+        (&["bench", "rounds", "--warmup", max], "--warmup"),
+        (&["bench", "rounds", "--payloads", "0x0"], "--payloads"),
+        (&["bench", "rounds", "--out", "/proc/nope"], "/proc/nope"),
+        (&["bench", "rounds", "--topologies", "random:0"], "random:0"),
+        (
+            &[
+                "bench",
+                "rounds",
+                "--barriers",
+                "global",
+                "--transports",
+                "uds",
+            ],
+            "shm",
+        ),
+        (
+            &[
+                "experiment",
+                "compare",
+                "--robots",
+                "2",
+                "--seeds",
+                "1",
+                "--topology",
+                "random:0",
+            ],
+            "random:0",
+        ),
+        (
+            &[
+                "experiment",
+                "compare",
+                "--robots",
+                "2",
+                "--topology",
+                "/nonexistent/t.toml",
+            ],
+            "t.toml",
+        ),
+        (
+            &[
+                "experiment",
+                "compare",
+                "--methods",
+                "hungarian",
+                "--transports",
+                "ipc",
+            ],
+            "hungarian",
+        ),
+        (
+            &["experiment", "surveillance", "--scenario", "/etc/hostname"],
+            "/etc/hostname",
+        ),
+        (
+            &[
+                "experiment",
+                "surveillance",
+                "--scenario",
+                "/nonexistent.toml",
+            ],
+            "/nonexistent.toml",
+        ),
+        (&["stress", "--seed", max, "--runs", "2"], "--seed"),
+        (&["stress", "--robots", "0"], "zero robots"),
+        (&["stress", "--method", "hungarian"], "hungarian"),
+        (&["stress", "--topology", "random:0"], "random:0"),
+        (&["stress", "--startup-timeout", "0"], "--startup-timeout"),
+        (&["stress", "--round-timeout", "0"], "--round-timeout"),
         (&["bench", "rounds", "--repeat", "0"], "--repeat"),
         (&["bench", "rounds", "--rounds", "0"], "--rounds"),
         (&["experiment", "compare", "--robots", "0"], "--robots"),
@@ -358,6 +445,39 @@ fn bad_options_of_every_other_command_exit_2_with_one_line() {
         assert_clear_error(&output, needle);
         assert_eq!(output.status.code(), Some(2), "bad input exits 2: {args:?}");
     }
+}
+
+/// Output that cannot be written: a full device is one line and exit 1; a reader that
+/// closed the pipe ends the program quietly, as a Unix tool.
+#[test]
+fn output_errors_are_one_line_and_a_closed_pipe_ends_quietly() {
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .expect("/dev/full opens");
+    let output = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
+        .args(["topology", "--robots", "3"])
+        .stdout(full)
+        .output()
+        .expect("the admm-ta binary runs");
+    assert_clear_error(&output, "cannot write the output");
+    assert_eq!(output.status.code(), Some(1));
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
+        .args(["topology", "--robots", "300"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the admm-ta binary runs");
+    // Read one line, then close the pipe: the rest (far more than a pipe buffer) meets EPIPE.
+    let mut stdout = std::io::BufReader::new(child.stdout.take().expect("piped"));
+    let mut first = String::new();
+    std::io::BufRead::read_line(&mut stdout, &mut first).expect("a first line");
+    drop(stdout);
+    let output = child.wait_with_output().expect("admm-ta ends");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.is_empty(), "not quiet: {stderr}");
+    assert_eq!(output.status.code(), Some(0));
 }
 
 #[test]
@@ -813,6 +933,66 @@ fn assert_clear_error_text(stderr: &str, needle: &str) {
         "not one line: {stderr}"
     );
     assert!(stderr.contains(needle), "'{needle}' not in: {stderr}");
+}
+
+#[test]
+fn a_byte_order_mark_before_costs_and_forbidden_pairs_is_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let costs = write(d, "bom.csv", "\u{feff}1,0\n0,1\n");
+    let pairs = write(d, "bom.txt", "\u{feff}0,1\n");
+    let report = json(&admm_ta(&[
+        "solve",
+        "--costs",
+        &costs,
+        "--forbidden",
+        &pairs,
+        "--method",
+        "hungarian",
+        "--transport",
+        "sim",
+        "--json",
+    ]));
+    // Robot 0 may not take task 1, so it takes task 0 at cost 1.
+    assert_eq!(report["assignment"], serde_json::json!([0, 1]));
+    assert_eq!(report["cost"], 2.0);
+}
+
+#[test]
+fn clap_errors_name_the_missing_arguments_and_timeouts_their_range() {
+    let cases: [(&[&str], &str); 4] = [
+        (&["solve", "--robots", "3"], "not provided: --tasks"),
+        (&["topology"], "not provided: --robots"),
+        (
+            &[
+                "solve",
+                "--robots",
+                "3",
+                "--tasks",
+                "3",
+                "--round-timeout",
+                "1e300",
+            ],
+            "below 1000000, got 1e300",
+        ),
+        (
+            &[
+                "solve",
+                "--robots",
+                "3",
+                "--tasks",
+                "3",
+                "--round-timeout",
+                "1e9",
+            ],
+            "below 1000000, got 1e9",
+        ),
+    ];
+    for (args, needle) in cases {
+        let output = admm_ta(args);
+        assert_clear_error(&output, needle);
+        assert_eq!(output.status.code(), Some(2), "{args:?}");
+    }
 }
 
 #[test]

@@ -82,7 +82,7 @@ pub enum ProblemError {
     },
     #[error("assignment has {found} entries for {expected} robots")]
     WrongLength { expected: usize, found: usize },
-    #[error("robot {robot} is assigned task {task}, but tasks are numbered 0..{tasks}")]
+    #[error("robot {robot} is assigned task {task}, but there are {tasks} tasks, numbered from 0")]
     TaskOutOfRange {
         robot: usize,
         task: usize,
@@ -171,6 +171,8 @@ impl CostMatrix {
         let mut values = Vec::new();
         let mut tasks = None;
         let mut robots = 0;
+        // A UTF-8 byte-order mark (spreadsheets write one) is not part of the first number.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (index, raw) in text.lines().enumerate() {
             let line = raw.trim();
             if line.is_empty() || line.starts_with('#') {

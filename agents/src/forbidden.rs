@@ -10,6 +10,8 @@ pub const MAX_FORBIDDEN_BYTES: u64 = 1 << 30;
 /// Parses the pairs of a forbidden-pairs file for a `robots × tasks` problem.
 pub fn parse(text: &str, robots: usize, tasks: usize) -> Result<Vec<(usize, usize)>, ProblemError> {
     let mut pairs = Vec::new();
+    // A UTF-8 byte-order mark (spreadsheets write one) is not part of the first robot.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     for (index, raw) in text.lines().enumerate() {
         let line = raw.split('#').next().unwrap_or("").trim();
         if line.is_empty() {

@@ -105,7 +105,7 @@ pub fn run(
                     let graph = config
                         .topology
                         .build(n, seed)
-                        .expect("generated topologies are connected");
+                        .map_err(|e| SolveError::Unsupported(format!("topology: {e}")))?;
                     let options = SolveOptions::builder()
                         .method(method)
                         .transport(transport)

@@ -3,8 +3,9 @@
 
 use crate::cli::{Bench, RoundsArgs};
 use crate::commands::experiment::report_written;
-use crate::commands::shared::{agent_program, progress_bar};
-use crate::exit::{RunsFailed, usage_bail};
+use crate::commands::shared::{agent_program, progress_bar, writable_dir};
+use crate::exit::{RunsFailed, UsageError, usage_bail};
+use crate::output::{out, outln, progress_row};
 use admm_ta::TopologySpec;
 use admm_ta::runtime::transport::{Capabilities, Execution, Transport};
 use admm_ta_bench::experiment::{Experiment, write};
@@ -12,6 +13,10 @@ use admm_ta_bench::rounds;
 use admm_ta_bench::rounds::case::{RoundsConfig, SweepSpec, cases};
 use admm_ta_bench::rounds::report::{TABLE_HEADER, render_row};
 use anyhow::{Context, Result};
+
+/// The most rounds (recorded, or of warm-up) of a case: ten million rounds of a few
+/// microseconds each already take minutes per case.
+const MAX_ROUNDS: u64 = 10_000_000;
 
 pub fn run(bench: Bench) -> Result<()> {
     let Bench::Rounds(RoundsArgs {
@@ -33,17 +38,27 @@ pub fn run(bench: Bench) -> Result<()> {
         usage_bail!("--agents: every team needs at least 1 agent");
     }
     if let Some(t) = &topologies {
+        // Every team size of the sweep (or one of two agents): a generator's parameters are
+        // checked when it builds a graph.
+        let sizes = agents.as_deref().unwrap_or(&[2]);
         for topology in t {
-            topology
+            let spec = topology
                 .parse::<TopologySpec>()
                 .with_context(|| format!("--topologies '{topology}'"))?;
+            for &n in sizes {
+                spec.build(n, 0)
+                    .with_context(|| format!("--topologies '{topology}' with {n} agents"))?;
+            }
         }
     }
     let payloads = payloads
         .map(|list| {
             list.iter()
-                .map(|p| p.parse().map_err(anyhow::Error::msg))
-                .collect::<Result<Vec<_>>>()
+                .map(|p| {
+                    p.parse()
+                        .map_err(|e| UsageError(format!("--payloads: {e}")))
+                })
+                .collect::<Result<Vec<_>, _>>()
         })
         .transpose()?;
     let concurrent = |c: Capabilities| c.execution != Execution::Lockstep;
@@ -72,27 +87,35 @@ pub fn run(bench: Bench) -> Result<()> {
         usage_bail!("--repeat must be 1…100, got {repeat}");
     }
     config.repeat = repeat;
-    if config.rounds == 0 {
-        usage_bail!("--rounds must be at least 1");
+    if !(1..=MAX_ROUNDS).contains(&config.rounds) {
+        usage_bail!("--rounds must be 1…{MAX_ROUNDS}, got {}", config.rounds);
     }
+    if config.warmup > MAX_ROUNDS {
+        usage_bail!("--warmup must be 0…{MAX_ROUNDS}, got {}", config.warmup);
+    }
+    // Refused now, not after the whole sweep ran.
+    writable_dir(&out)?;
     config.agent_program = Some(agent_program()?);
     let cases = cases(&config);
     if cases.is_empty() {
-        usage_bail!("no case to measure (a global barrier needs threads or ipc)");
+        usage_bail!(
+            "no case to measure (a global barrier needs --transports {})",
+            Transport::names_where(|c| c.global_barrier && concurrent(c), "or")
+        );
     }
     let bar = progress_bar(
         cases.len() as u64,
         "{bar:30} {pos}/{len} cases, {elapsed} elapsed, ~{eta} left  {msg}",
     );
     if !json {
-        println!(
+        outln!(
             "{} recorded rounds per case after {} of warm-up, step {}; latencies in µs over all agents' rounds
 ",
             config.rounds,
             config.warmup,
             config.step.name()
         );
-        println!("{}", TABLE_HEADER);
+        outln!("{}", TABLE_HEADER);
     }
     let report = rounds::run(&config, &mut |case, result| {
         bar.inc(1);
@@ -107,16 +130,16 @@ pub fn run(bench: Bench) -> Result<()> {
             return;
         }
         bar.suspend(|| match result {
-            Ok(r) => println!("{}", render_row(r)),
-            Err(e) => println!("{} failed: {e} |", case.columns()),
+            Ok(r) => progress_row(&render_row(r)),
+            Err(e) => progress_row(&format!("{} failed: {e} |", case.columns())),
         });
     });
     bar.finish_and_clear();
     let written = write(&report, &out)?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print!("{}", report.render());
+        out!("{}", report.render());
     }
     report_written(&written);
     if !report.failures.is_empty() {

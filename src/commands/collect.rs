@@ -2,6 +2,7 @@
 
 use crate::cli::CollectArgs;
 use crate::exit::{NotOptimal, Outcome, UsageError};
+use crate::output::outln;
 use admm_ta::runtime::process::member;
 use anyhow::Result;
 
@@ -13,9 +14,9 @@ pub fn run(args: CollectArgs) -> Result<Outcome> {
     // A bad team file, missing results or results of another team: bad input (2).
     let result = member::collect(&args.team, args.check).map_err(UsageError)?;
     if args.json {
-        println!("{}", serde_json::to_string(&result)?);
+        outln!("{}", serde_json::to_string(&result)?);
     } else {
-        println!(
+        outln!(
             "team {}: assignment {:?}, {} {:.6}{}, {} rounds, {}{}",
             result.run,
             result.assignment,
@@ -39,9 +40,12 @@ pub fn run(args: CollectArgs) -> Result<Outcome> {
             }
         );
         let round = result.round_latency_us.round;
-        println!(
+        outln!(
             "round latency (µs, all agents): p50 {:.1}, p90 {:.1}, p99 {:.1}, max {:.1}",
-            round.p50, round.p90, round.p99, round.max
+            round.p50,
+            round.p90,
+            round.p99,
+            round.max
         );
     }
     match result.optimal {

@@ -3,6 +3,7 @@
 use crate::cli::DemoArgs;
 use crate::commands::shared::agent_program;
 use crate::output;
+use crate::output::outln;
 use admm_ta::{CaseChoice, CostMatrix, SolveOptions, TaskAssignmentProblem, generate};
 use anyhow::Result;
 
@@ -15,7 +16,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         .agent_program(agent_program()?)
         .build()?;
     if !args.json {
-        println!(
+        outln!(
             "demo: 20 robots, 20 tasks, uniform [0,1) costs (seed 2019), complete graph, transport {}\n",
             options.transport().name()
         );

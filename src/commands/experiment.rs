@@ -4,12 +4,13 @@
 
 use crate::cli::{Experiment as Command, FigureArgs};
 use crate::commands::shared::{agent_program, progress_bar};
-use crate::exit::{NotOptimal, usage_bail};
+use crate::exit::{NotOptimal, UsageError, usage_bail};
+use crate::output::{out, outln, progress_row};
 use admm_ta::Method;
 use admm_ta::agents::surveillance::SurveillanceScenario;
 use admm_ta::runtime::episodes::EpisodeRunConfig;
 use admm_ta::runtime::options::run::RunOptions;
-use admm_ta::runtime::transport::Execution;
+use admm_ta::runtime::transport::{Execution, Transport};
 use admm_ta_bench::experiment::{Experiment, write};
 use admm_ta_bench::figures::{FigureConfig, convergence, scaling};
 use admm_ta_bench::{compare, rounds_anatomy, size_sweep, surveillance, table1};
@@ -39,12 +40,32 @@ pub fn run(command: Command) -> Result<()> {
             } else {
                 methods
             };
+            let spec: admm_ta::TopologySpec = topology.parse()?;
+            // Every team's graph now: a bad generator or topology file exits 2 before a run.
+            for &n in &robots {
+                for seed in 0..seeds {
+                    spec.build(n, seed)
+                        .with_context(|| format!("--topology '{topology}' with {n} robots"))?;
+                }
+            }
+            let runs = |m: &Method, t: &Transport| {
+                m.agent_method().is_some() || t.capabilities().execution == Execution::Lockstep
+            };
+            if !methods
+                .iter()
+                .any(|m| transports.iter().any(|t| runs(m, t)))
+            {
+                usage_bail!(
+                    "no method of --methods runs on --transports: a centralized method (hungarian) runs on {} only",
+                    Transport::names_where(|c| c.execution == Execution::Lockstep, "or")
+                );
+            }
             let config = compare::CompareConfig {
                 robots,
                 seeds,
                 methods,
                 transports,
-                topology: topology.parse()?,
+                topology: spec,
                 cost_model,
                 primal_variant,
                 adaptive_rho,
@@ -52,9 +73,8 @@ pub fn run(command: Command) -> Result<()> {
                 agent_program: Some(agent_program()?),
             };
             // The rows are printed as they come; the whole table is the report's.
-            println!("{}", compare::TABLE_HEADER);
-            let comparison =
-                compare::run(&config, &|row| println!("{}", compare::render_row(row)))?;
+            outln!("{}", compare::TABLE_HEADER);
+            let comparison = compare::run(&config, &|row| progress_row(&compare::render_row(row)))?;
             if let Some(dir) = out {
                 report_written(&write(&comparison, &dir)?);
             }
@@ -123,10 +143,11 @@ pub fn run(command: Command) -> Result<()> {
             }
             let model = match &scenario {
                 Some(path) => {
+                    // A scenario that cannot be read or is not one: bad input (exit 2).
                     let text = std::fs::read_to_string(path)
-                        .with_context(|| format!("cannot read {}", path.display()))?;
+                        .map_err(|e| UsageError(format!("cannot read {}: {e}", path.display())))?;
                     SurveillanceScenario::from_toml(&text)
-                        .with_context(|| format!("{}", path.display()))?
+                        .map_err(|e| UsageError(format!("{}: {e:#}", path.display())))?
                 }
                 None => SurveillanceScenario::default(),
             };
@@ -157,9 +178,9 @@ pub fn run(command: Command) -> Result<()> {
                 if let Some(map) = value.as_object_mut() {
                     map.remove("per_episode");
                 }
-                println!("{value}");
+                outln!("{value}");
             } else {
-                print!("{}", report.render());
+                out!("{}", report.render());
             }
             report_written(&written);
             Ok(())
@@ -192,10 +213,10 @@ pub fn run(command: Command) -> Result<()> {
             let anatomy = rounds_anatomy::run(&config, &progress)?;
             let written = write(&anatomy, &out)?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&anatomy)?);
+                outln!("{}", serde_json::to_string_pretty(&anatomy)?);
             } else {
                 report_written(&written);
-                print!("{}", anatomy.render());
+                out!("{}", anatomy.render());
             }
             Ok(())
         }
@@ -234,7 +255,7 @@ pub fn run(command: Command) -> Result<()> {
             let sweep = size_sweep::run(&config, &progress)?;
             let written = write(&sweep, &out)?;
             report_written(&written);
-            print!("{}", sweep.render());
+            out!("{}", sweep.render());
             if !sweep.all_certified_optimal() {
                 return Err(
                     NotOptimal("some run did not certify the optimal assignment".into()).into(),
@@ -279,9 +300,9 @@ pub fn run(command: Command) -> Result<()> {
                 }
             }
             if json {
-                println!("{}", serde_json::to_string_pretty(&table)?);
+                outln!("{}", serde_json::to_string_pretty(&table)?);
             } else {
-                print!("{}", table.render());
+                out!("{}", table.render());
             }
             Ok(())
         }
@@ -331,9 +352,9 @@ fn run_figure<R: Experiment, E: std::error::Error + Send + Sync + 'static>(
     let report = result?;
     let written = write(&report, &args.out)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print!("{}", report.render());
+        out!("{}", report.render());
     }
     report_written(&written);
     Ok(())

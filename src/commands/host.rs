@@ -1,12 +1,14 @@
 //! `admm-ta host`: one machine of a team across machines (its Zenoh router and bridge).
 
 use crate::cli::HostArgs;
+#[cfg(feature = "zenoh")]
+use crate::output::outln;
 use anyhow::Result;
 
 #[cfg(feature = "zenoh")]
 pub fn run(args: HostArgs) -> Result<()> {
     let report = admm_ta::runtime::process::host::run_host(&args.team, &args.name)?;
-    println!("{}", serde_json::to_string(&report)?);
+    outln!("{}", serde_json::to_string(&report)?);
     Ok(())
 }
 

@@ -5,6 +5,7 @@ use crate::commands::shared::agent_program;
 use crate::exit::{Outcome, UsageError};
 use crate::output;
 use admm_ta::agents::forbidden;
+use admm_ta::runtime::options::error::{MethodOptions, method_options};
 use admm_ta::{CostMatrix, Perturbation, SolveOptions, TaskAssignmentProblem, TopologySpec};
 use anyhow::{Context, Result};
 
@@ -49,6 +50,16 @@ pub fn run(args: SolveArgs) -> Result<Outcome> {
             }
         },
     };
+    // An option the method never reads is refused, not silently ignored.
+    method_options(
+        args.method,
+        MethodOptions {
+            adaptive_rho: args.adaptive_rho,
+            gamma_factor: args.gamma_factor,
+            projection: args.projection,
+            primal_variant: args.primal_variant,
+        },
+    )?;
     let options = SolveOptions::builder()
         .method(args.method)
         .transport(args.transport)

@@ -7,6 +7,7 @@
 
 use crate::commands::shared::{agent_program, progress_bar};
 use crate::exit::{RunsFailed, usage_bail};
+use crate::output::outln;
 use admm_ta::runtime::process::namespace::{run_id_prefix, runs_dir, shm_named};
 use admm_ta::{CaseChoice, CostMatrix, Method, SolveOptions, TaskAssignmentProblem, Transport};
 use anyhow::{Context, Result, bail};
@@ -68,9 +69,19 @@ pub fn run(args: StressArgs) -> Result<()> {
     // For the whole test, not only while a run's launcher lives: a signal between two runs
     // stops it too.
     let _signals = admm_ta::runtime::signals::install();
+    if args.seed.checked_add(args.runs as u64 - 1).is_none() {
+        usage_bail!(
+            "--seed {} + --runs {} passes the largest seed, {}",
+            args.seed,
+            args.runs,
+            u64::MAX
+        );
+    }
     let tasks = args.tasks.unwrap_or(args.robots);
     let spec: admm_ta::TopologySpec = args.topology.parse()?;
     let program = agent_program()?;
+    // Bad options exit 2 here, before any team starts, not as every run's failure.
+    inputs(&args, tasks, &spec, &program, args.seed)?;
     let bar = progress_bar(
         args.runs as u64,
         "{elapsed_precise} [{bar:40}] {pos}/{len} runs {msg}",
@@ -118,13 +129,13 @@ pub fn run(args: StressArgs) -> Result<()> {
         .filter_map(|(k, (_, e))| e.as_ref().map(|e| (*k, e)))
         .collect();
     for (k, error) in &failures {
-        println!("run {k} (seed {}): {error}", args.seed + *k as u64);
+        outln!("run {k} (seed {}): {error}", args.seed + *k as u64);
     }
     let leftovers = leftovers();
     for left in &leftovers {
-        println!("left behind: {left}");
+        outln!("left behind: {left}");
     }
-    println!(
+    outln!(
         "{} runs of {} agents ({} transport, {} topology) at concurrency {}: {} failed, {} left behind; wall time {:.1?}, per run p50 {:.2?}, p99 {:.2?}, max {:.2?}",
         outcomes.len(),
         args.robots,
@@ -166,7 +177,19 @@ fn one_run(
     program: &std::path::Path,
     k: usize,
 ) -> Result<()> {
-    let seed = args.seed + k as u64;
+    let (problem, graph, options) = inputs(args, tasks, spec, program, args.seed + k as u64)?;
+    admm_ta::solve(&problem, &graph, &options)?;
+    Ok(())
+}
+
+/// The problem, graph and options of the run with `seed`.
+fn inputs(
+    args: &StressArgs,
+    tasks: usize,
+    spec: &admm_ta::TopologySpec,
+    program: &std::path::Path,
+    seed: u64,
+) -> Result<(TaskAssignmentProblem, admm_ta::Graph, SolveOptions)> {
     let costs = CostMatrix::uniform(args.robots, tasks, seed)?;
     let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto)?;
     let graph = spec
@@ -180,8 +203,7 @@ fn one_run(
         .startup_timeout_secs(args.startup_timeout)
         .agent_program(program.to_path_buf())
         .build()?;
-    admm_ta::solve(&problem, &graph, &options)?;
-    Ok(())
+    Ok((problem, graph, options))
 }
 
 /// What this process's runs left behind: shared memory and run directories named after

@@ -1,13 +1,14 @@
 //! `admm-ta topology`: a generated topology in the topology file format.
 
 use crate::cli::TopologyArgs;
+use crate::output::out;
 use admm_ta::TopologySpec;
 use admm_ta::topologies::file as topology_file;
 use anyhow::Result;
 
 pub fn run(args: TopologyArgs) -> Result<()> {
     let spec: TopologySpec = args.kind.parse()?;
-    print!(
+    out!(
         "{}",
         topology_file::to_toml(&spec.build(args.robots, args.seed)?)
     );

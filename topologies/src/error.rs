@@ -17,7 +17,7 @@ pub enum TopologyError {
     },
     #[error("too many robots: {robots} (the limit is {max})")]
     TooManyRobots { robots: usize, max: usize },
-    #[error("edge ({0}, {1}) names robot {2}, but robots are numbered 0..{3}")]
+    #[error("edge ({0}, {1}) names robot {2}, but there are {3} robots, numbered from 0")]
     OutOfRange(usize, usize, usize, usize),
     #[error("edge ({0}, {0}) is a self-loop")]
     SelfLoop(usize),

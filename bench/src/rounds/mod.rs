@@ -55,7 +55,10 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
         .map_err(|e| bad(&e))?
         .build(case.agents, 0)
         .map_err(|e| bad(&e))?;
-    let total_rounds = config.rounds + config.warmup;
+    let total_rounds = config
+        .rounds
+        .checked_add(config.warmup)
+        .ok_or_else(|| MeasureError::Case("recorded plus warm-up rounds overflow".into()))?;
     let options = RunOptions::builder()
         .transport(case.transport)
         .wait(case.wait)
