@@ -2,6 +2,7 @@
 
 use crate::cli::AgentArgs;
 use crate::exit::{Outcome, usage_bail};
+use crate::output::outln;
 use admm_ta::runtime::process::{agent, member};
 use anyhow::Result;
 
@@ -21,7 +22,7 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
                 if !r.outcome.converged {
                     outcome = Outcome::Uncertified;
                 }
-                println!(
+                outln!(
                     "{}",
                     serde_json::json!({
                         "id": id,
