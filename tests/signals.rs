@@ -162,7 +162,12 @@ fn a_signal_during_start_up_stops_the_team() {
 
 #[test]
 fn a_signal_to_one_agent_stops_the_team_naming_it() {
-    for transport in ["shm", "ipc", "uds"] {
+    let transports: &[&str] = if cfg!(feature = "zenoh") {
+        &["shm", "ipc", "uds", "zenoh"]
+    } else {
+        &["shm", "ipc", "uds"]
+    };
+    for &transport in transports {
         let (_, line) = stop_with(
             8,
             transport,

@@ -126,7 +126,13 @@ pub fn run_scenario(
     let (outcome, episodes) = ran.map_err(|e| {
         if let ExchangeError::Stopped { signal, .. } = e {
             if crate::signals::received().is_some() {
-                // Our own signal: the rest of the team stops too (nobody failed).
+                // Our own signal: the rest of the team stops too (nobody failed). The board
+                // first, where a launcher reads who got it (Zenoh agents otherwise only
+                // announce it over Zenoh, and the launcher would name whichever agent it
+                // reaped first); a team without a board on this machine skips it.
+                if let Ok(board) = crate::board::Board::open(&scenario.board_shm, scenario.robots) {
+                    let _ = board.request_stop(signal, Some(index));
+                }
                 endpoint.request_stop(signal);
             }
             // Not a failure: the process ends as if it had got the signal itself.
