@@ -21,10 +21,15 @@ use crate::process::scenario::Scenario;
 use crate::process::stop::{stop_children, stopped_agent, stopped_by_signal};
 use crate::process::team_digest::TeamDigest;
 use crate::signals;
+use crate::transport::Transport;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
+
+/// How long the launcher lets a failed agent end by itself before it kills it (one that
+/// was killed from outside may still be closing its files when its neighbours notice).
+const CULPRIT_EXIT_WAIT: Duration = Duration::from_millis(100);
 
 /// Failures of a multi-process run.
 #[derive(Debug, thiserror::Error)]
@@ -46,20 +51,24 @@ pub enum LaunchError {
         source: std::io::Error,
     },
     #[error(
-        "agent {index} failed ({status}) after publishing round {round}: {message}; {survivors} other agent(s) stopped cleanly, {killed} had to be killed; {dead_nodes} dead iceoryx2 node(s) cleaned up"
+        "agent {index} failed ({status}){}: {message}; {survivors} other agent(s) stopped cleanly, {killed} had to be killed{}",
+        round.map_or(String::new(), |r| format!(" after publishing round {r}")),
+        dead_nodes.map_or(String::new(), |d| format!("; {d} dead iceoryx2 node(s) cleaned up"))
     )]
     AgentFailed {
         index: usize,
         status: String,
-        /// Last round the failed agent published.
-        round: u64,
+        /// Last round the failed agent published (`None`: its transport does not record
+        /// rounds on the board, as Zenoh's agents).
+        round: Option<u64>,
         message: String,
         /// Agents that stopped by themselves after the failure.
         survivors: usize,
         /// Agents killed after the grace period.
         killed: usize,
-        /// Dead iceoryx2 nodes removed by the dead-node cleanup.
-        dead_nodes: usize,
+        /// Dead iceoryx2 nodes removed by the dead-node cleanup (`None`: the run has no
+        /// iceoryx2 nodes).
+        dead_nodes: Option<usize>,
     },
     /// A termination signal stopped the run (to the launcher, or to agent `by`): nobody
     /// failed.
@@ -379,12 +388,23 @@ pub fn launch(
         if let Some(culprit) = failed
             && let Some(mut child) = guard.children[culprit].take()
         {
-            // It may have ended already (a neighbour saw it first): its own exit says how.
-            failures[culprit] = match child.try_wait() {
-                Ok(Some(status)) => {
-                    describe_exit(status).or_else(|| Some("exited with code 0".into()))
+            // It may be ending already (a neighbour saw its sockets close before the kernel
+            // made it a zombie): its own exit says how, if it comes within a moment.
+            let exited = {
+                let until = std::time::Instant::now() + CULPRIT_EXIT_WAIT;
+                loop {
+                    match child.try_wait() {
+                        Ok(None) if std::time::Instant::now() < until => {
+                            std::thread::sleep(Duration::from_millis(1));
+                        }
+                        Ok(status) => break status,
+                        Err(_) => break None,
+                    }
                 }
-                _ => {
+            };
+            failures[culprit] = match exited {
+                Some(status) => describe_exit(status).or_else(|| Some("exited with code 0".into())),
+                None => {
                     let _ = child.kill();
                     let _ = child.wait();
                     Some("killed by the launcher".into())
@@ -424,13 +444,16 @@ pub fn launch(
         };
         // `killed` never counts the failed agent itself.
         let survivors = scenario.robots - 1 - killed;
-        let dead_nodes = run_config(&namespace.prefix, &namespace.iceoryx_root())
-            .map(|config| cleanup_dead_nodes(&config))
-            .unwrap_or(0);
+        // Only iceoryx2's agents have nodes; Zenoh's do not publish rounds on the board.
+        let dead_nodes = (scenario.transport == Transport::Ipc).then(|| {
+            run_config(&namespace.prefix, &namespace.iceoryx_root())
+                .map(|config| cleanup_dead_nodes(&config))
+                .unwrap_or(0)
+        });
         return Err(LaunchError::AgentFailed {
             index,
             status,
-            round: board.published_round(index),
+            round: (scenario.transport != Transport::Zenoh).then(|| board.published_round(index)),
             message: last_log_line(&run_dir, reporter)
                 .trim_start_matches("error: ")
                 .to_string(),

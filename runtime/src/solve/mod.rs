@@ -58,7 +58,7 @@ pub fn solve(
             // The transposed problem's agents are tasks: no robot to drop.
             && problem.internal().robots() == problem.robots() =>
         {
-            (first, index, round)
+            (first, index, round.unwrap_or(0))
         }
         other => return other,
     };
