@@ -15,7 +15,11 @@
 //!
 //! Every process only touches it through atomics. The `ipc` and `uds` transports, the
 //! launcher and the team members all use it, so it sits below all of them.
+//!
+//! Size: one shared-memory layout and every accessor of it (the byte offsets stay in one
+//! file), plus the waits built on its words (rendezvous, global barrier, the team check).
 
+use crate::exchange::ExchangeError;
 use crate::liveness::process_alive;
 use crate::wait::CountingBarrier;
 use iceoryx2::prelude::*;
@@ -276,6 +280,30 @@ impl Board {
             .word(LINE * (self.agents + 1) + 32)
             .load(Ordering::Acquire);
         (word != 0).then(|| decode_stop(word))
+    }
+
+    /// Why agent `agent`, waiting in round `round`, must stop, if it must: a termination
+    /// signal or a stop request ([`Board::stop_signal`]: nobody to blame), or an agent marked
+    /// failed (itself, by a neighbour that found it misbehaving). The check every process
+    /// transport that reads the board makes in its waits.
+    pub fn check_team(&self, agent: usize, round: u64) -> Result<(), ExchangeError> {
+        if let Some(signal) = self.stop_signal() {
+            return Err(ExchangeError::Stopped { agent, signal });
+        }
+        if let Some(failed) = self.failed() {
+            let how = if failed == agent {
+                "was reported failed by a neighbour"
+            } else {
+                "failed"
+            };
+            return Err(ExchangeError::PeerFailed {
+                agent,
+                failed,
+                round,
+                how: how.into(),
+            });
+        }
+        Ok(())
     }
 
     /// Why an agent must stop now, if it must: a termination signal to this process, or a

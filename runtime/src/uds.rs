@@ -347,24 +347,6 @@ impl UdsExchange {
         let _ = self.board.request_stop(signal, Some(self.index));
     }
 
-    fn check_failure(&self, round: u64) -> Result<(), ExchangeError> {
-        if let Some(signal) = self.board.stop_signal() {
-            return Err(ExchangeError::Stopped {
-                agent: self.index,
-                signal,
-            });
-        }
-        match self.board.failed() {
-            Some(failed) => Err(ExchangeError::PeerFailed {
-                agent: self.index,
-                failed,
-                round,
-                how: "failed".into(),
-            }),
-            None => Ok(()),
-        }
-    }
-
     fn send(&mut self, header: RoundHeader) -> Result<(), ExchangeError> {
         header.write_words(&mut self.outbox[..HEADER_WORDS]);
         for link in &mut self.links {
@@ -440,7 +422,7 @@ impl Exchange for UdsExchange {
 
     fn gather(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError> {
         let started = Instant::now();
-        self.check_failure(round)?;
+        self.board.check_team(self.index, round)?;
         for link in &mut self.links {
             link.received = 0;
         }
@@ -450,7 +432,7 @@ impl Exchange for UdsExchange {
             |s| s.progress(round),
             |s, deadline| {
                 s.sleep(deadline.min(Instant::now() + FAILURE_CHECK_SLICE));
-                s.check_failure(round)
+                s.board.check_team(s.index, round)
             },
         )?;
         if held {

@@ -706,26 +706,7 @@ impl PeerWatch {
     /// peer), or found dead among the run's iceoryx2 nodes (scanned at most every
     /// [`DEAD_NODE_SCAN_EVERY`]; a dead node's stale resources are removed on the way).
     fn check(&mut self, board: &Board, round: u64, waited: Duration) -> Result<(), ExchangeError> {
-        let failed = |failed, how: &str| ExchangeError::PeerFailed {
-            agent: self.index,
-            failed,
-            round,
-            how: how.into(),
-        };
-        if let Some(signal) = board.stop_signal() {
-            return Err(ExchangeError::Stopped {
-                agent: self.index,
-                signal,
-            });
-        }
-        if let Some(agent) = board.failed() {
-            let how = if agent == self.index {
-                "was reported failed by a neighbour"
-            } else {
-                "failed"
-            };
-            return Err(failed(agent, how));
-        }
+        board.check_team(self.index, round)?;
         // A system call: every 64 rounds and in long waits, not in every round.
         let look_for_launcher = round.is_multiple_of(64) || !waited.is_zero();
         if let Some(launcher) = self.launcher
@@ -746,7 +727,12 @@ impl PeerWatch {
         {
             self.last_dead_node_scan = Instant::now();
             if let Some(agent) = scan_dead_agents(&self.config, self.index, board) {
-                return Err(failed(agent, "died (its iceoryx2 node is dead)"));
+                return Err(ExchangeError::PeerFailed {
+                    agent: self.index,
+                    failed: agent,
+                    round,
+                    how: "died (its iceoryx2 node is dead)".into(),
+                });
             }
         }
         Ok(())

@@ -160,25 +160,7 @@ impl ShmExchange {
     /// Stops this agent on a stop request, a failure mark, or (looked at every 64 rounds
     /// and after a whole sleep slice, `slept`) a launcher that is gone.
     fn check_peers(&self, round: u64, slept: bool) -> Result<(), ExchangeError> {
-        if let Some(signal) = self.board.stop_signal() {
-            return Err(ExchangeError::Stopped {
-                agent: self.index,
-                signal,
-            });
-        }
-        if let Some(failed) = self.board.failed() {
-            let how = if failed == self.index {
-                "was reported failed by a neighbour"
-            } else {
-                "failed"
-            };
-            return Err(ExchangeError::PeerFailed {
-                agent: self.index,
-                failed,
-                round,
-                how: how.into(),
-            });
-        }
+        self.board.check_team(self.index, round)?;
         if let Some(launcher) = self.launcher
             && (slept || round.is_multiple_of(64))
             && std::os::unix::process::parent_id() != launcher
