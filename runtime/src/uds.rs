@@ -342,11 +342,6 @@ impl UdsExchange {
         self.board.laggard().unwrap_or(self.index)
     }
 
-    /// Asks the team to stop: this agent got termination signal `signal` (first request wins).
-    pub fn request_stop(&self, signal: i32) {
-        let _ = self.board.request_stop(signal, Some(self.index));
-    }
-
     fn send(&mut self, header: RoundHeader) -> Result<(), ExchangeError> {
         header.write_words(&mut self.outbox[..HEADER_WORDS]);
         for link in &mut self.links {

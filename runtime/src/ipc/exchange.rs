@@ -349,11 +349,6 @@ impl IpcExchange {
         let _ = self.board.mark_failed(agent);
     }
 
-    /// Asks the team to stop: this agent got termination signal `signal` (first request wins).
-    pub fn request_stop(&self, signal: i32) {
-        let _ = self.board.request_stop(signal, Some(self.index));
-    }
-
     /// The agent that published the fewest rounds: after a timeout, the one everybody is
     /// waiting for, directly or through a chain of blocked neighbours.
     pub fn laggard(&self) -> usize {

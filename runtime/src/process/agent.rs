@@ -126,14 +126,14 @@ pub fn run_scenario(
     let (outcome, episodes) = ran.map_err(|e| {
         if let ExchangeError::Stopped { signal, .. } = e {
             if crate::signals::received().is_some() {
-                // Our own signal: the rest of the team stops too (nobody failed). The board
-                // first, where a launcher reads who got it (Zenoh agents otherwise only
-                // announce it over Zenoh, and the launcher would name whichever agent it
-                // reaped first); a team without a board on this machine skips it.
+                // Our own signal: the rest of the team stops too (nobody failed). The stop
+                // request goes on the board first (the first request wins), where the other
+                // agents and a launcher read who got it, then to agents that do not read the
+                // board; a team without a board on this machine skips it.
                 if let Ok(board) = crate::board::Board::open(&scenario.board_shm, scenario.robots) {
                     let _ = board.request_stop(signal, Some(index));
                 }
-                endpoint.request_stop(signal);
+                endpoint.announce_stop(signal);
             }
             // Not a failure: the process ends as if it had got the signal itself.
             crate::signals::record(signal);

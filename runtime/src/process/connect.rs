@@ -205,12 +205,12 @@ impl Endpoint {
         }
     }
 
-    /// Asks the rest of the team to stop: this agent got termination signal `signal`.
-    pub(crate) fn request_stop(&self, signal: i32) {
+    /// Tells agents that do not read the board (Zenoh's) that this agent got termination
+    /// signal `signal`: the others learn it from the stop request on the board.
+    #[cfg_attr(not(feature = "zenoh"), allow(unused_variables))]
+    pub(crate) fn announce_stop(&self, signal: i32) {
         match self {
-            Self::Ipc(exchange) => exchange.request_stop(signal),
-            Self::Shm(exchange) => exchange.request_stop(signal),
-            Self::Uds(exchange) => exchange.request_stop(signal),
+            Self::Ipc(_) | Self::Shm(_) | Self::Uds(_) => {}
             #[cfg(feature = "zenoh")]
             Self::Zenoh(exchange) => exchange.request_stop(signal),
         }

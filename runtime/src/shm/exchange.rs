@@ -152,11 +152,6 @@ impl ShmExchange {
         self.board.laggard().unwrap_or(self.index)
     }
 
-    /// Asks the team to stop: this agent got termination signal `signal` (first request wins).
-    pub fn request_stop(&self, signal: i32) {
-        let _ = self.board.request_stop(signal, Some(self.index));
-    }
-
     /// Stops this agent on a stop request, a failure mark, or (looked at every 64 rounds
     /// and after a whole sleep slice, `slept`) a launcher that is gone.
     fn check_peers(&self, round: u64, slept: bool) -> Result<(), ExchangeError> {
