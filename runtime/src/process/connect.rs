@@ -220,31 +220,20 @@ impl Endpoint {
     pub(crate) fn blame_for(&self, error: &ExchangeError) {
         match self {
             Self::Ipc(exchange) => {
-                let culprit = match error {
-                    // Blocked neighbours time out too: blame the agent everybody waits for.
-                    ExchangeError::Timeout { .. } => Some(exchange.laggard()),
-                    e => culprit(e),
-                };
-                if let Some(culprit) = culprit {
+                if let Some(culprit) = board_culprit(error, || exchange.laggard()) {
                     exchange.blame(culprit);
                 }
             }
             Self::Shm(exchange) => {
-                let culprit = match error {
-                    // Blocked neighbours time out too: blame the agent everybody waits for.
-                    ExchangeError::Timeout { .. } => Some(exchange.laggard()),
-                    e => culprit(e),
-                };
-                if let Some(culprit) = culprit {
+                if let Some(culprit) = board_culprit(error, || exchange.laggard()) {
                     exchange.blame(culprit);
                 }
             }
             Self::Uds(exchange) => {
                 let culprit = match error {
-                    ExchangeError::Timeout { .. } => Some(exchange.laggard()),
                     // A neighbour that closed or reset its socket is gone.
                     ExchangeError::PeerFailed { failed, .. } => Some(*failed),
-                    e => culprit(e),
+                    e => board_culprit(e, || exchange.laggard()),
                 };
                 if let Some(culprit) = culprit {
                     exchange.blame(culprit);
@@ -263,6 +252,16 @@ impl Endpoint {
                 exchange.blame(culprit.unwrap_or(error.agent()));
             }
         }
+    }
+}
+
+/// The agent a transport that reads the board blames for `error`: after a timeout the one
+/// everybody waits for, directly or through blocked neighbours (`laggard`); else the
+/// error's own culprit.
+fn board_culprit(error: &ExchangeError, laggard: impl FnOnce() -> usize) -> Option<usize> {
+    match error {
+        ExchangeError::Timeout { .. } => Some(laggard()),
+        e => culprit(e),
     }
 }
 
