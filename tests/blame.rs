@@ -123,6 +123,11 @@ fn table(transport: &str, faults: &[Fault]) {
         );
         if matches!(fault, Fault::Stop) {
             assert!(line.contains("state T in /proc"), "{line}");
+            // A stopped agent reports nothing: it is never named as its own reporter.
+            assert!(
+                !line.contains(&format!("reported by agent {VICTIM}")),
+                "{transport}: the stopped agent named as its own reporter: {line}"
+            );
         }
         if matches!(fault, Fault::NeverStarts) {
             assert!(

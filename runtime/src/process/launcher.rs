@@ -18,7 +18,7 @@ use crate::process::connect::{LauncherSupport, SupportError};
 use crate::process::namespace::RunNamespace;
 use crate::process::private_dir::{create_private_file, sha256_hex, write_private_file};
 use crate::process::scenario::Scenario;
-use crate::process::stop::{stop_children, stopped_agent, stopped_by_signal};
+use crate::process::stop::{reporter, stop_children, stopped_agent, stopped_by_signal};
 use crate::process::team_digest::TeamDigest;
 use crate::signals;
 use crate::transport::Transport;
@@ -429,13 +429,15 @@ pub fn launch(
     }
     if let Some(index) = failed {
         let board = guard.board.as_ref().expect("the board exists");
-        // The reporter whose message says what went wrong (not "stopped because …").
-        let reporter = failure_order
+        let lines: Vec<(usize, String)> = failure_order
             .iter()
-            .copied()
-            .find(|&i| !last_log_line(&run_dir, i).contains("because agent"))
-            .unwrap_or(index);
+            .map(|&i| (i, last_log_line(&run_dir, i)))
+            .collect();
+        let reporter = reporter(index, &lines, stopped_evidence == Some(index));
         let status = match failures[index].take() {
+            _ if stopped_evidence == Some(index) && reporter == index => {
+                "stopped: state T in /proc".to_string()
+            }
             _ if stopped_evidence == Some(index) => {
                 format!("stopped: state T in /proc, reported by agent {reporter}")
             }

@@ -1,7 +1,8 @@
 //! How a launcher's run ends without a failure, and the evidence it reads from its
 //! children: a termination signal stops the team (the stop request on the board, the signal
 //! forwarded to each agent, a grace period, then SIGKILL and reaping), an agent's exit code
-//! says whether a signal stopped it, and `/proc` says whether one is stopped (SIGSTOP).
+//! says whether a signal stopped it, `/proc` says whether one is stopped (SIGSTOP), and the
+//! other agents' last lines say who saw the failure best.
 
 use crate::board::Board;
 use crate::liveness::process_state;
@@ -78,4 +79,69 @@ pub(crate) fn stopped_by_signal(how: &str) -> Option<i32> {
     how.strip_prefix("exit code ")
         .and_then(|c| c.parse().ok())
         .and_then(signals::stopped_by_exit_code)
+}
+
+/// The agent whose error line best says what happened to `culprit`, among the agents that
+/// failed (`lines`: index and last log line, in the order they failed): the first that says
+/// what went wrong (not "stopped … because agent …"), else the first; `culprit` when nobody
+/// failed. A `stopped` culprit (SIGSTOP) says nothing: it is never its own reporter, and an
+/// agent that timed out waiting for it (the line of
+/// [`crate::exchange::ExchangeError::Timeout`]) comes first, before agents that timed out
+/// on a neighbour that was itself waiting.
+pub(crate) fn reporter(culprit: usize, lines: &[(usize, String)], stopped: bool) -> usize {
+    let others = || {
+        lines
+            .iter()
+            .filter(move |(i, _)| !(stopped && *i == culprit))
+    };
+    others()
+        .find(|(_, line)| stopped && waited_for(line, culprit))
+        .or_else(|| others().find(|(_, line)| !line.contains("because agent")))
+        .or_else(|| others().next())
+        .map_or(culprit, |(i, _)| *i)
+}
+
+/// Whether an error line is a round timeout waiting for `culprit`: "… message from
+/// neighbour(s) [3, 5] …".
+fn waited_for(line: &str, culprit: usize) -> bool {
+    line.split_once("from neighbour(s) [")
+        .and_then(|(_, rest)| rest.split_once(']'))
+        .is_some_and(|(list, _)| list.split(", ").any(|n| n.parse() == Ok(culprit)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lines(v: &[(usize, &str)]) -> Vec<(usize, String)> {
+        v.iter().map(|&(i, l)| (i, l.to_string())).collect()
+    }
+
+    #[test]
+    fn the_reporter_is_who_saw_the_culprit() {
+        let timeout = |agent: usize, missing: &str| {
+            format!("agent {agent}: no round-9 message from neighbour(s) {missing} within 2s")
+        };
+        // Agent 0 timed out on 7 (itself waiting), agent 4 on the stopped agent 5.
+        let seen = lines(&[(0, &timeout(0, "[7]")), (4, &timeout(4, "[3, 5]")), (5, "")]);
+        assert_eq!(reporter(5, &seen, true), 4);
+        // Nobody waited for it: the first line that says what went wrong, never the culprit.
+        let cascade = lines(&[
+            (5, "no message"),
+            (2, "agent 2: stopped at round 9 because agent 5 failed"),
+            (0, &timeout(0, "[15]")),
+        ]);
+        assert_eq!(reporter(5, &cascade, true), 0);
+        assert_eq!(
+            reporter(5, &lines(&[(5, "x"), (2, "because agent 5")]), true),
+            2
+        );
+        // A stopped culprit alone, or a culprit that reported its own failure.
+        assert_eq!(reporter(5, &lines(&[(5, "x")]), true), 5);
+        // A culprit that ended by itself first is its own best reporter.
+        let own = lines(&[(5, "agent 5: bad input"), (4, &timeout(4, "[5]"))]);
+        assert_eq!(reporter(5, &own, false), 5);
+        assert_eq!(reporter(5, &own, true), 4);
+        assert!(!waited_for(&timeout(1, "[15, 25]"), 5));
+    }
 }
