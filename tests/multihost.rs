@@ -3,8 +3,9 @@
 //! over 127.0.0.1 only. Two hosts × five agents reach the oracle's optimum with exactly the
 //! iterates of the lockstep simulation, in both multi-host modes (every agent on Zenoh, and
 //! iceoryx2 on each host with a bridge between hosts); an agent that crashes on one host
-//! stops the whole team, on both hosts, with errors naming it; a host or agent whose team
-//! file differs from the running team's is refused by name before round 0.
+//! stops the whole team, on both hosts, with errors naming it; a host killed without a
+//! goodbye is named by the others, which stop their agents at once; a host or agent whose
+//! team file differs from the running team's is refused by name before round 0.
 
 #![cfg(feature = "zenoh")]
 
@@ -315,6 +316,69 @@ fn an_agent_crashing_on_one_host_stops_both_hosts_naming_it() {
         for host in ["alpha", "beta"] {
             let left = shm_left(&format!("adtat{}-{run}-{host}_", common::euid()));
             assert!(left.is_empty(), "{transport}: {left:?}");
+        }
+    }
+}
+
+#[test]
+fn a_host_killed_without_a_goodbye_is_named_and_the_team_stops() {
+    for transport in ["zenoh", "mixed"] {
+        let dir = tempfile::tempdir().unwrap();
+        let costs = costs_10x10(dir.path());
+        let run = format!("l{}{}", &transport[..1], std::process::id());
+        let team = team_file(dir.path(), &run, transport, &costs, "ring");
+        let beta_port: u16 = Team::read(&team).unwrap().file.hosts[1]
+            .endpoint
+            .rsplit(':')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let alpha = start_host(&team, "alpha", &[0, 1, 2, 3, 4], &[]);
+        let mut beta = start_host(&team, "beta", &[], &[]);
+        // Beta's router is up (its token follows within a moment); then beta dies, its agents
+        // never started: alpha's agents wait for them, and must not wait out the start-up
+        // deadline (30 s) or blame one of their own.
+        let up = Instant::now();
+        while std::net::TcpStream::connect(("127.0.0.1", beta_port)).is_err() {
+            assert!(
+                up.elapsed() < Duration::from_secs(30),
+                "beta never listened"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        std::thread::sleep(Duration::from_secs(1));
+        beta.host.kill().unwrap();
+        let killed = Instant::now();
+        let _ = beta.host.wait();
+        let (hosts, agents) = wait_all(vec![alpha], Duration::from_secs(60));
+        let took = killed.elapsed();
+        let host = text(&hosts[0]);
+        assert!(!hosts[0].status.success(), "{transport}: {host}");
+        assert!(
+            host.contains("host beta left the team during the run without a goodbye"),
+            "{transport}: {host}"
+        );
+        for (id, out) in &agents {
+            let message = text(out);
+            assert_eq!(
+                out.status.code(),
+                Some(4),
+                "{transport}: agent {id}: {message}"
+            );
+            assert!(
+                (5..10).any(|b| message.contains(&format!("agent {b} failed"))),
+                "{transport}: agent {id} blamed an agent of its own host: {message}"
+            );
+        }
+        assert!(took < Duration::from_secs(20), "{transport}: {took:?}");
+        let left = shm_left(&format!("adtat{}-{run}-alpha_", common::euid()));
+        assert!(left.is_empty(), "{transport}: {left:?}");
+        // A killed host cannot clean up: the next start of its team on that machine does
+        // (the first member sweeps a team's stale files); this test removes them itself.
+        for name in shm_left(&format!("adtat{}-{run}-beta_", common::euid())) {
+            let path = Path::new("/dev/shm").join(name);
+            let _ = std::fs::remove_dir_all(&path).or_else(|_| std::fs::remove_file(&path));
         }
     }
 }

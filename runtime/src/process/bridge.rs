@@ -214,6 +214,12 @@ impl Bridge {
         }
     }
 
+    /// The agent marked failed on this host's board, if any (a local failure, or one
+    /// announced by another host).
+    pub fn failed(&self) -> Option<usize> {
+        self.membership.as_ref().and_then(|m| m.board().failed())
+    }
+
     /// Stops the threads (after a last forwarding pass), leaves the board; returns the
     /// messages forwarded out and in.
     pub fn finish(mut self) -> (u64, u64) {
@@ -297,7 +303,11 @@ impl Forwarder {
             if missing.is_empty() {
                 break;
             }
-            if self.shared.stop.load(Ordering::Acquire) {
+            // Stopping, or a failure announced (a host lost before the team was up): the
+            // board has it (`forward_in` marks it), nothing will be forwarded.
+            if self.shared.stop.load(Ordering::Acquire)
+                || self.shared.announced.load(Ordering::Acquire) != NONE
+            {
                 return Ok(());
             }
             if Instant::now() >= deadline {

@@ -20,8 +20,11 @@ use crate::process::team_digest::TeamDigest;
 use crate::process::team_file::Team;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
-use crate::zenoh_net::session::{alive_keys, announce_stop, watch_failures, watch_stops};
+use crate::zenoh_net::session::{
+    alive_keys, announce_failure, announce_stop, watch_failures, watch_stops,
+};
 use serde::Serialize;
+use std::collections::HashSet;
 use std::path::Path;
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -47,6 +50,10 @@ struct Presence {
     failed: Option<usize>,
     /// A stop request (termination signal) announced by an agent or another host.
     stopped: Option<i32>,
+    /// Hosts that said goodbye (they left after the run, or stopped on purpose).
+    goodbyes: HashSet<String>,
+    /// The first host whose token vanished without a goodbye: killed, crashed or cut off.
+    lost_host: Option<String>,
 }
 
 struct TeamWatch {
@@ -62,6 +69,10 @@ impl TeamWatch {
         self.changed.notify_all();
     }
 }
+
+/// How long a host that lost another host keeps announcing it (every loop pass, 20 ms), so
+/// that its agents still starting hear it.
+const LOST_HOST_LINGER: Duration = Duration::from_secs(2);
 
 /// How long a host stopped by a signal waits for the team's agents to leave.
 const STOP_GRACE: Duration = Duration::from_secs(2);
@@ -96,6 +107,8 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             alive: vec![false; n],
             failed: None,
             stopped: None,
+            goodbyes: HashSet::new(),
+            lost_host: None,
         }),
         changed: Condvar::new(),
     });
@@ -131,6 +144,49 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             });
         })?
     };
+    // The other hosts: one whose token vanishes without a goodbye is lost. Both are
+    // liveliness declarations of its router's session, so they arrive in order.
+    let _goodbyes = {
+        let watch = Arc::clone(&watch);
+        let links = links.clone();
+        session
+            .liveliness()
+            .declare_subscriber(links.goodbye_all())
+            .history(true)
+            .callback(move |sample: Sample| {
+                if let Some(h) = links.host_of_goodbye(sample.key_expr().as_str()) {
+                    let h = h.to_string();
+                    watch.update(|p| {
+                        p.goodbyes.insert(h);
+                    });
+                }
+            })
+            .wait()
+            .map_err(|e| format!("cannot watch the other hosts' goodbyes: {e}"))?
+    };
+    let _hosts = {
+        let watch = Arc::clone(&watch);
+        let links = links.clone();
+        let me = host.name.clone();
+        session
+            .liveliness()
+            .declare_subscriber(links.host_all())
+            .callback(move |sample: Sample| {
+                let Some(h) = links.host_of_key(sample.key_expr().as_str()) else {
+                    return;
+                };
+                if sample.kind() == SampleKind::Delete && h != me {
+                    let h = h.to_string();
+                    watch.update(|p| {
+                        if !p.goodbyes.contains(&h) {
+                            p.lost_host.get_or_insert(h);
+                        }
+                    });
+                }
+            })
+            .wait()
+            .map_err(|e| format!("cannot watch the other hosts: {e}"))?
+    };
     let _failures = {
         let watch = Arc::clone(&watch);
         watch_failures(session, &links, move |failed| {
@@ -157,10 +213,18 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         .declare_token(links.host_key(&host.name))
         .wait()
         .map_err(|e| format!("cannot declare the host's liveliness token: {e}"))?;
+    // Dropped before the token (whatever way this function returns): the other hosts then
+    // know this host left on purpose.
+    let _goodbye = Goodbye {
+        session,
+        key: links.goodbye_key(&host.name),
+    };
     let run_deadline = startup_deadline
         + Duration::from_secs_f64(team.file.round_timeout) * (team.file.max_iters as u32 + 2);
     let mut presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
     let mut stop: Option<(i32, Instant)> = None;
+    // The agent announced failed for a lost host, and when.
+    let mut lost_announced: Option<(usize, Instant)> = None;
     loop {
         let signal = crate::signals::received().or(presence.stopped);
         if let Some(signal) = signal
@@ -193,8 +257,34 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         }
         let all_seen = presence.seen.iter().all(|&s| s);
         let none_alive = presence.alive.iter().all(|&a| !a);
-        if none_alive && (all_seen || presence.failed.is_some()) {
+        let lingered = lost_announced.is_none_or(|(_, at)| at.elapsed() >= LOST_HOST_LINGER);
+        if none_alive && (all_seen || presence.failed.is_some()) && lingered {
             break;
+        }
+        if presence.failed.is_none()
+            && let Some(lost) = presence.lost_host.clone()
+        {
+            // Its agents are out of reach: the team stops now, as for a failed agent,
+            // rather than after every waiting agent's round deadline.
+            let first = team
+                .file
+                .hosts
+                .iter()
+                .find(|h| h.name == lost)
+                .and_then(|h| h.agents.iter().min().copied());
+            if let Some(first) = first {
+                presence.failed = Some(first);
+                lost_announced = Some((first, Instant::now()));
+            }
+        }
+        if let Some((first, _)) = lost_announced
+            && !lingered
+        {
+            // Again and again for a while: an announcement reaches only the agents already
+            // subscribed, and some may still be starting.
+            drop(presence);
+            announce_failure(session, &links, first);
+            presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
         }
         let now = Instant::now();
         if !all_seen && presence.failed.is_none() && now >= startup_deadline {
@@ -218,10 +308,27 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             .unwrap_or_else(|e| e.into_inner())
             .0;
     }
-    let failed = presence.failed;
+    let lost_host = presence.lost_host.clone();
+    // A failure marked on this host's board (mixed) may not have been announced yet.
+    let failed = presence
+        .failed
+        .or_else(|| bridge.as_ref().and_then(|b| b.failed()));
     let agents_seen = presence.seen.iter().filter(|&&s| s).count();
     drop(presence);
     let (forwarded_out, forwarded_in) = bridge.map_or((0, 0), |b| b.finish());
+    if let Some(lost) = lost_host
+        && failed.is_none_or(|f| {
+            team.file
+                .hosts
+                .iter()
+                .any(|h| h.name == lost && h.agents.contains(&f))
+        })
+    {
+        return Err(MemberError::Failed(format!(
+            "host {}: host {lost} left the team during the run without a goodbye (killed, crashed or cut off): its agents were out of reach, the team stopped",
+            host.name
+        )));
+    }
     if let Some(failed) = failed {
         return Err(MemberError::Failed(format!(
             "host {}: the team's run failed: agent {failed} failed (see its output)",
@@ -234,6 +341,20 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         forwarded_out,
         forwarded_in,
     })
+}
+
+/// Says this host's goodbye (a liveliness token, declared and withdrawn) when dropped.
+struct Goodbye<'s> {
+    session: &'s zenoh::Session,
+    key: String,
+}
+
+impl Drop for Goodbye<'_> {
+    fn drop(&mut self) {
+        if let Ok(token) = self.session.liveliness().declare_token(&self.key).wait() {
+            let _ = token.undeclare().wait();
+        }
+    }
 }
 
 /// How often a host asks for the other hosts' team-digest tokens while it waits for them.

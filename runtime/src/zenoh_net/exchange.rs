@@ -315,8 +315,21 @@ impl ZenohExchange {
             if missing.is_empty() {
                 break;
             }
-            if let Some(signal) = crate::signals::received() {
+            // A stop or a failure announced meanwhile (a host lost before the team was up).
+            let (stopped, failed) = {
+                let inbound = shared.lock();
+                (inbound.stopped, inbound.failed)
+            };
+            if let Some(signal) = stopped.or_else(crate::signals::received) {
                 return Err(ExchangeError::Stopped { agent: i, signal });
+            }
+            if let Some(failed) = failed {
+                return Err(ExchangeError::PeerFailed {
+                    agent: i,
+                    failed,
+                    round: 0,
+                    how: "failed during start-up".into(),
+                });
             }
             if Instant::now() >= deadline {
                 return Err(err(format!(

@@ -77,6 +77,28 @@ impl ZenohLinks {
     pub fn host_key(&self, name: &str) -> String {
         format!("{}/host/{name}", self.key_prefix)
     }
+
+    /// The host of host token `key`.
+    pub fn host_of_key<'k>(&self, key: &'k str) -> Option<&'k str> {
+        key.strip_prefix(&self.key_prefix)?.strip_prefix("/host/")
+    }
+
+    /// Key on which host `name` says goodbye before its token goes: a token that vanishes
+    /// without it is a host lost (killed, crashed, cut off).
+    pub fn goodbye_key(&self, name: &str) -> String {
+        format!("{}/goodbye/{name}", self.key_prefix)
+    }
+
+    /// Every host's goodbye key.
+    pub fn goodbye_all(&self) -> String {
+        format!("{}/goodbye/*", self.key_prefix)
+    }
+
+    /// The host of goodbye key `key`.
+    pub fn host_of_goodbye<'k>(&self, key: &'k str) -> Option<&'k str> {
+        key.strip_prefix(&self.key_prefix)?
+            .strip_prefix("/goodbye/")
+    }
 }
 
 /// Where an agent listens: any free port on loopback. Agents of one host link directly;
