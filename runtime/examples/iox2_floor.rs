@@ -19,7 +19,10 @@
 //! * `send ns/round`: loan, write and send of its own sample (which reclaims returned ones);
 //! * `CPU µs/agent-round` and `CPU µs/sample` (`CLOCK_THREAD_CPUTIME_ID` over the measured
 //!   rounds, over agent-rounds × `N − 1`: what `bench rounds` prints as CPU per received
-//!   sample, so the two are comparable).
+//!   sample, so the two are comparable);
+//! * `start ms`: from the first spawn until every child has opened its ports (iceoryx2's
+//!   port and connection set-up, with the runtime's configuration: services created up
+//!   front, no dead-node scans).
 //!
 //! The parent prints the medians over the agents, and the floor they put under a round: the
 //! part of iceoryx2's cost that no waiting strategy removes. Every delivered sample needs a
@@ -85,6 +88,10 @@ fn config(prefix: &str) -> Result<Config, String> {
         .global
         .set_root_path(&Path::new(root.as_bytes()).map_err(|e| format!("{e:?}"))?);
     config.global.creation_timeout = std::time::Duration::from_secs(30);
+    // As the runtime's runs (`ipc::nodes::run_config`): no dead-node scans.
+    config.global.node.cleanup_dead_nodes_on_creation = false;
+    config.global.node.cleanup_dead_nodes_on_destruction = false;
+    config.global.service.cleanup_dead_nodes_on_open = false;
     config
         .defaults
         .publish_subscribe
