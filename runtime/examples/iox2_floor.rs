@@ -29,6 +29,7 @@
 //! receive and every agent a send, so on `C` cores a round takes at least
 //! `(N (N − 1) · recv + N · send) / C` (`recv+send floor`), whatever the wake-ups cost.
 
+use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use std::io::{BufRead, BufReader, Write};
 use std::process::{Child, Command, Stdio};
@@ -166,6 +167,12 @@ fn child(index: usize, agents: usize, options: &Options, prefix: &str) -> Result
         .initial_max_slice_len(options.values)
         .create()
         .map_err(|e| format!("publisher: {e:?}"))?;
+    // Connections: every subscriber of the team exists once all children are ready, so the
+    // publisher connects in the first round; the subscribers connect to the publishers that
+    // exist now, the rest on their first receive (as in the `ipc` transport's start-up).
+    for subscriber in &subscribers {
+        let _ = subscriber.update_connections();
+    }
     // Ready; wait for the parent's go (every subscriber of the team exists by then).
     println!("ready");
     std::io::stdout().flush().map_err(|e| e.to_string())?;
