@@ -83,11 +83,11 @@ pub(crate) fn stopped_by_signal(how: &str) -> Option<i32> {
 
 /// The agent whose error line best says what happened to `culprit`, among the agents that
 /// failed (`lines`: index and last log line, in the order they failed): the first that says
-/// what went wrong (not "stopped … because agent …"), else the first; `culprit` when nobody
-/// failed. A `stopped` culprit (SIGSTOP) says nothing: it is never its own reporter, and an
-/// agent that timed out waiting for it (the line of
-/// [`crate::exchange::ExchangeError::Timeout`]) comes first, before agents that timed out
-/// on a neighbour that was itself waiting.
+/// what went wrong (not "stopped … because agent …"), else `culprit` itself (its exit says
+/// how it ended). A `stopped` culprit (SIGSTOP) says nothing: it is never its own reporter
+/// while another agent failed, and an agent that timed out waiting for it (the line of
+/// [`crate::exchange::ExchangeError::Timeout`]) comes first, before agents that timed out on
+/// a neighbour that was itself waiting.
 pub(crate) fn reporter(culprit: usize, lines: &[(usize, String)], stopped: bool) -> usize {
     let others = || {
         lines
@@ -97,7 +97,7 @@ pub(crate) fn reporter(culprit: usize, lines: &[(usize, String)], stopped: bool)
     others()
         .find(|(_, line)| stopped && waited_for(line, culprit))
         .or_else(|| others().find(|(_, line)| !line.contains("because agent")))
-        .or_else(|| others().next())
+        .or_else(|| others().next().filter(|_| stopped))
         .map_or(culprit, |(i, _)| *i)
 }
 
@@ -142,6 +142,10 @@ mod tests {
         let own = lines(&[(5, "agent 5: bad input"), (4, &timeout(4, "[5]"))]);
         assert_eq!(reporter(5, &own, false), 5);
         assert_eq!(reporter(5, &own, true), 4);
+        // Everybody else only stopped because of it: the culprit's own exit tells most.
+        let echoes = lines(&[(2, "agent 2: stopped at round 9 because agent 5 failed")]);
+        assert_eq!(reporter(5, &echoes, false), 5);
+        assert_eq!(reporter(5, &echoes, true), 2);
         assert!(!waited_for(&timeout(1, "[15, 25]"), 5));
     }
 }
