@@ -1153,3 +1153,45 @@ fn one_robot_with_many_tasks_is_solved_or_refused_without_quadratic_memory() {
         }
     }
 }
+
+/// A size refusal names the user's robots × tasks and says what is too large, also when the
+/// method solves the problem transposed (one agent per task) or the centralized solver
+/// holds a larger normalised matrix.
+#[test]
+fn size_refusals_name_the_users_shape() {
+    for (args, shape, detail) in [
+        (
+            "--robots 1 --tasks 300000",
+            "1 robots × 300000 tasks is too large for the primal method",
+            "solved transposed, as 300000 × 2",
+        ),
+        (
+            "--robots 1 --tasks 300000 --method market",
+            "1 robots × 300000 tasks is too large for the market method",
+            "one row per task",
+        ),
+        (
+            "--robots 1 --tasks 300000 --method hungarian",
+            "1 robots × 300000 tasks is too large for the hungarian method",
+            "GiB of working memory",
+        ),
+        (
+            "--robots 5000 --tasks 5000",
+            "5000 robots × 5000 tasks is too large for the primal method",
+            "GiB of agent state",
+        ),
+        (
+            "--robots 1 --tasks 3000000000",
+            "1 robots × 3000000000 tasks is too large",
+            "50000000",
+        ),
+    ] {
+        let all: Vec<&str> = std::iter::once("solve")
+            .chain(args.split_whitespace())
+            .collect();
+        let output = admm_ta(&all);
+        assert_clear_error(&output, shape);
+        assert_clear_error(&output, detail);
+        assert_eq!(output.status.code(), Some(2), "{args}");
+    }
+}
