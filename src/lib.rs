@@ -105,7 +105,7 @@ impl Solver {
         Self {
             problem,
             graph: None,
-            options: SolveOptions::builder(),
+            options: SolveOptions::builder().refuse_unread(true),
         }
     }
 

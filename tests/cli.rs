@@ -277,7 +277,7 @@ fn bad_input_gives_one_clear_line() {
         ),
         (
             "--robots 3 --tasks 3 --method dual --gamma-factor 0.3".into(),
-            "--gamma-factor does not apply to --method dual",
+            "--gamma-factor 0.3 does not apply to --method dual",
         ),
         (
             "--robots 3 --tasks 3 --method dual --projection qp".into(),
@@ -1193,5 +1193,86 @@ fn size_refusals_name_the_users_shape() {
         assert_clear_error(&output, shape);
         assert_clear_error(&output, detail);
         assert_eq!(output.status.code(), Some(2), "{args}");
+    }
+}
+
+/// An option the run never reads is refused (exit 2, one line naming it), never silently
+/// ignored; the same options where they are read, and every default, still run.
+#[test]
+fn options_the_run_never_reads_are_refused_and_the_same_options_where_read_run() {
+    let refused = [
+        (
+            "--method market --rho 3",
+            "--rho 3 does not apply to --method market",
+        ),
+        (
+            "--method cbaa --rho 3",
+            "--rho 3 does not apply to --method cbaa",
+        ),
+        (
+            "--method dist-hungarian --rho 3",
+            "--rho 3 does not apply to --method dist-hungarian",
+        ),
+        (
+            "--method hungarian --rho 3",
+            "--rho 3 does not apply to --method hungarian",
+        ),
+        (
+            "--stop-rounds 5",
+            "--stop-rounds 5 does not apply to --stop local",
+        ),
+        (
+            "--check --trace --transport threads",
+            "--trace does not apply to --transport threads",
+        ),
+        (
+            "--check --trace --method hungarian",
+            "--trace does not apply to --method hungarian",
+        ),
+        (
+            "--method hungarian --perturb 0.1",
+            "--perturb 0.1 does not apply to --method hungarian",
+        ),
+        (
+            "--method hungarian --max-iters 10",
+            "--max-iters 10 does not apply to --method hungarian",
+        ),
+        (
+            "--round-timeout 5",
+            "--round-timeout 5 does not apply to --transport sim",
+        ),
+        (
+            "--wait spin",
+            "--wait spin does not apply to --transport sim",
+        ),
+        (
+            "--transport threads --startup-timeout 5",
+            "--startup-timeout 5 does not apply to --transport threads",
+        ),
+    ];
+    for (args, needle) in refused {
+        let all: Vec<&str> = ["solve", "--robots", "5", "--tasks", "5"]
+            .into_iter()
+            .chain(args.split_whitespace())
+            .collect();
+        let output = admm_ta(&all);
+        assert_clear_error(&output, needle);
+        assert_eq!(output.status.code(), Some(2), "{args}");
+    }
+    for args in [
+        "--method primal --rho 3",
+        "--method dual --rho 3 --adaptive-rho",
+        "--method market",
+        "--method hungarian",
+        "--primal-variant paper --stop agreement --stop-rounds 3",
+        "--check --trace",
+        "--transport threads --round-timeout 5 --wait block",
+        "--transport uds --startup-timeout 20 --round-timeout 20",
+    ] {
+        let all: Vec<&str> = ["solve", "--robots", "5", "--tasks", "5", "--json"]
+            .into_iter()
+            .chain(args.split_whitespace())
+            .collect();
+        json(&admm_ta(&all));
     }
 }
