@@ -1042,6 +1042,16 @@ fn forbidden_pairs_maximize_and_idle_robots_from_the_command_line() {
     assert_eq!(report["cost"], 9.0);
     assert_eq!(report["maximize"], true);
     assert_eq!(report["check"]["optimal"], true);
+    // The optimum is a profit, and says so (the key of earlier reports stays).
+    assert_eq!(report["check"]["optimal_profit"], 9.0);
+    assert_eq!(report["check"]["optimal_cost"], 9.0);
+    let text = admm_ta(&["solve", "--costs", &profits, "--maximize", "--check"]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(
+        text.contains("optimal profit 9.000000 (centralized)"),
+        "{text}"
+    );
+    assert!(!text.contains("cost"), "{text}");
     // Idle robots: scipy's rectangular meaning, null in the JSON.
     let tall = write(d, "tall.csv", "1,9\n9,1\n0.5,0.5\n");
     let report = json(&admm_ta(&[
