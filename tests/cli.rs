@@ -1172,17 +1172,17 @@ fn size_refusals_name_the_users_shape() {
     for (args, shape, detail) in [
         (
             "--robots 1 --tasks 300000",
-            "1 robots × 300000 tasks is too large for the primal method",
+            "1 robot × 300000 tasks is too large for the primal method",
             "solved transposed, as 300000 × 2",
         ),
         (
             "--robots 1 --tasks 300000 --method market",
-            "1 robots × 300000 tasks is too large for the market method",
+            "1 robot × 300000 tasks is too large for the market method",
             "one row per task",
         ),
         (
             "--robots 1 --tasks 300000 --method hungarian",
-            "1 robots × 300000 tasks is too large for the hungarian method",
+            "1 robot × 300000 tasks is too large for the hungarian method",
             "GiB of working memory",
         ),
         (
@@ -1192,7 +1192,7 @@ fn size_refusals_name_the_users_shape() {
         ),
         (
             "--robots 1 --tasks 3000000000",
-            "1 robots × 3000000000 tasks is too large",
+            "1 robot × 3000000000 tasks is too large",
             "50000000",
         ),
     ] {

@@ -67,7 +67,9 @@ pub enum ProblemError {
     )]
     NotSquare { robots: usize, tasks: usize },
     #[error(
-        "{robots} robots × {tasks} tasks is too large: {} costs, more than the limit of {limit}",
+        "a problem of {robots} robot{} × {tasks} task{} is too large: {} costs, more than the limit of {limit}",
+        if *robots == 1 { "" } else { "s" },
+        if *tasks == 1 { "" } else { "s" },
         (*robots as u128) * (*tasks as u128)
     )]
     TooLarge {

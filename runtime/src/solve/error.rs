@@ -43,7 +43,9 @@ pub enum SolveError {
     /// when it differs (`solved_as`: a problem with fewer robots than tasks is solved
     /// transposed, one agent per task).
     #[error(
-        "{robots} robots × {tasks} tasks is too large for the {method} method: it would need about {gib:.1} GiB of {of} ({because}{}); the limit is 8 GiB",
+        "a problem of {robots} robot{} × {tasks} task{} is too large for the {method} method: it would need about {gib:.1} GiB of {of} ({because}{}); the limit is 8 GiB",
+        if *robots == 1 { "" } else { "s" },
+        if *tasks == 1 { "" } else { "s" },
         solved_as.map_or(String::new(), |(rows, columns)| format!(
             "; this problem is solved transposed, as {rows} × {columns}: one row per task"
         ))
