@@ -46,14 +46,14 @@ pub enum ConfigError {
     NotForMethod {
         option: Setting,
         method: &'static str,
-        applies: String,
+        applies: Vec<&'static str>,
     },
     /// An option the caller gave that the transport never reads; `applies`: the transports
     /// that read it.
     NotForTransport {
         option: Setting,
         transport: &'static str,
-        applies: String,
+        applies: Vec<&'static str>,
     },
     /// An option of the agreement stop with another stop rule.
     NotForStop {
@@ -134,20 +134,20 @@ impl ConfigError {
                 method,
                 applies,
             } => format!(
-                "{} does not apply to {}: it works with {} {applies}",
+                "{} does not apply to {}: it works with {}",
                 front.setting(*option),
                 front.setting(Setting::new(OptionId::Method, Value::Name(method))),
-                name(OptionId::Method)
+                front.choices(OptionId::Method, applies)
             ),
             Self::NotForTransport {
                 option,
                 transport,
                 applies,
             } => format!(
-                "{} does not apply to {}: it works with {} {applies}",
+                "{} does not apply to {}: it works with {}",
                 front.setting(*option),
                 front.setting(Setting::new(OptionId::Transport, Value::Name(transport))),
-                name(OptionId::Transport)
+                front.choices(OptionId::Transport, applies)
             ),
             Self::NotForStop { option, stop } => format!(
                 "{} does not apply to {}: it counts the rounds of {}",

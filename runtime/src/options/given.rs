@@ -127,6 +127,19 @@ impl FrontEnd {
         }
     }
 
+    /// The option with any of `values`: `--method primal or dual`, or
+    /// `method = "primal" or "dual"`.
+    pub fn choices(self, id: OptionId, values: &[&str]) -> String {
+        let name = self.name(id);
+        if self == Self::TeamFile && id.key().is_some() {
+            let quoted: Vec<String> = values.iter().map(|v| format!("\"{v}\"")).collect();
+            format!("{name} = {}", join(&quoted))
+        } else {
+            let plain: Vec<String> = values.iter().map(|v| v.to_string()).collect();
+            format!("{name} {}", join(&plain))
+        }
+    }
+
     /// The option with its value: `--method market` or `method = "market"`.
     pub fn setting(self, setting: Setting) -> String {
         let name = self.name(setting.id);
@@ -139,6 +152,15 @@ impl FrontEnd {
             (Value::Number(value), false) => format!("{name} {}", Compact(value)),
             (Value::Number(value), true) => format!("{name} = {}", Compact(value)),
         }
+    }
+}
+
+/// `first, second or last`.
+fn join(names: &[String]) -> String {
+    match names.split_last() {
+        None => String::new(),
+        Some((last, [])) => last.clone(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
     }
 }
 
@@ -178,6 +200,14 @@ mod tests {
         let rho = Setting::new(OptionId::Rho, Value::Number(3.0));
         assert_eq!(FrontEnd::CommandLine.setting(rho), "--rho 3");
         assert_eq!(FrontEnd::TeamFile.name(OptionId::MaxIters), "max_iters");
+        assert_eq!(
+            FrontEnd::TeamFile.choices(OptionId::Method, &["primal", "dual"]),
+            "method = \"primal\" or \"dual\""
+        );
+        assert_eq!(
+            FrontEnd::CommandLine.choices(OptionId::Method, &["a", "b", "c"]),
+            "--method a, b or c"
+        );
         let given = Given::default().with(OptionId::Rho);
         assert!(given.contains(OptionId::Rho) && !given.contains(OptionId::Wait));
     }

@@ -133,14 +133,13 @@ fn has_rho(method: Method) -> bool {
     method.rho_rule().is_some()
 }
 
-/// The methods `reads` holds for: `primal, dual or inexact-dual`.
-fn method_names(reads: fn(Method) -> bool) -> String {
-    let names: Vec<&str> = Method::ALL
+/// The methods `reads` holds for, in the registry's order.
+fn method_names(reads: fn(Method) -> bool) -> Vec<&'static str> {
+    Method::ALL
         .into_iter()
         .filter(|m| reads(*m))
         .map(Method::name)
-        .collect();
-    join(&names)
+        .collect()
 }
 
 /// Refuses `option` unless the transport's execution is one `reads` holds for.
@@ -153,24 +152,15 @@ fn for_transport(
     if reads(transport.capabilities().execution) {
         return Ok(());
     }
-    let names: Vec<&str> = Transport::ALL
-        .into_iter()
-        .filter(|t| reads(t.capabilities().execution))
-        .map(Transport::name)
-        .collect();
     Err(ConfigError::NotForTransport {
         option,
         transport: transport.name(),
-        applies: join(&names),
+        applies: Transport::ALL
+            .into_iter()
+            .filter(|t| reads(t.capabilities().execution))
+            .map(Transport::name)
+            .collect(),
     })
-}
-
-fn join(names: &[&str]) -> String {
-    match names.split_last() {
-        None => String::new(),
-        Some((last, [])) => (*last).to_string(),
-        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
-    }
 }
 
 #[cfg(test)]
@@ -259,7 +249,7 @@ mod tests {
             .unwrap_err();
         assert_eq!(
             error.in_terms_of(FrontEnd::TeamFile),
-            "primal_variant = \"paper\" does not apply to method = \"market\": it works with method primal"
+            "primal_variant = \"paper\" does not apply to method = \"market\": it works with method = \"primal\""
         );
         let zero = SolveOptions::builder().max_iters(0).build().unwrap_err();
         assert_eq!(
