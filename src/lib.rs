@@ -92,7 +92,10 @@ pub enum Error {
 /// A solve of one problem: the graph and the options around it, then [`Solver::solve`].
 ///
 /// Defaults: the complete graph, and [`SolveOptions::default`] (primal consensus ADMM, the
-/// decentralized certified stop, the lockstep simulation).
+/// decentralized certified stop, the lockstep simulation). An option set that the run never
+/// reads (ρ with the market method, a round timeout on the simulation) is refused by
+/// [`Solver::solve`], as on the command line
+/// ([`SolveOptionsBuilder::refuse_unread`]).
 #[derive(Debug, Clone)]
 pub struct Solver {
     problem: TaskAssignmentProblem,
@@ -105,7 +108,7 @@ impl Solver {
         Self {
             problem,
             graph: None,
-            options: SolveOptions::builder(),
+            options: SolveOptions::builder().refuse_unread(true),
         }
     }
 

@@ -6,12 +6,15 @@ mod commands;
 mod exit;
 mod output;
 
-use clap::Parser;
+use clap::{CommandFactory, FromArgMatches};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    let args = match cli::Cli::try_parse() {
-        Ok(args) => args,
+    let parsed = cli::Cli::command()
+        .try_get_matches()
+        .and_then(|matches| cli::Cli::from_arg_matches(&matches).map(|args| (args, matches)));
+    let (args, matches) = match parsed {
+        Ok(parsed) => parsed,
         Err(error) if !error.use_stderr() => {
             // --help and --version.
             let _ = error.print();
@@ -35,7 +38,7 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    match commands::run(args.command) {
+    match commands::run(args.command, &matches) {
         Ok(code) => ExitCode::from(code),
         Err(error) if output::reader_closed(&error) => {
             // `admm-ta topology | head -1`: the reader has what it wanted; end quietly.

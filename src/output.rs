@@ -170,7 +170,8 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
     if let Some(check) = &report.check {
         let round = |r: Option<usize>| r.map_or("never".to_string(), |r| r.to_string());
         outln!(
-            "optimal cost {:.6} (centralized), gap {:.4}%: {}",
+            "optimal {} {:.6} (centralized), gap {:.4}%: {}",
+            if report.maximize { "profit" } else { "cost" },
             check.optimal_cost,
             100.0 * check.gap,
             if check.optimal {

@@ -277,7 +277,7 @@ fn bad_input_gives_one_clear_line() {
         ),
         (
             "--robots 3 --tasks 3 --method dual --gamma-factor 0.3".into(),
-            "--gamma-factor does not apply to --method dual",
+            "--gamma-factor 0.3 does not apply to --method dual",
         ),
         (
             "--robots 3 --tasks 3 --method dual --projection qp".into(),
@@ -1042,6 +1042,16 @@ fn forbidden_pairs_maximize_and_idle_robots_from_the_command_line() {
     assert_eq!(report["cost"], 9.0);
     assert_eq!(report["maximize"], true);
     assert_eq!(report["check"]["optimal"], true);
+    // The optimum is a profit, and says so (the key of earlier reports stays).
+    assert_eq!(report["check"]["optimal_profit"], 9.0);
+    assert_eq!(report["check"]["optimal_cost"], 9.0);
+    let text = admm_ta(&["solve", "--costs", &profits, "--maximize", "--check"]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(
+        text.contains("optimal profit 9.000000 (centralized)"),
+        "{text}"
+    );
+    assert!(!text.contains("cost"), "{text}");
     // Idle robots: scipy's rectangular meaning, null in the JSON.
     let tall = write(d, "tall.csv", "1,9\n9,1\n0.5,0.5\n");
     let report = json(&admm_ta(&[
@@ -1151,5 +1161,128 @@ fn one_robot_with_many_tasks_is_solved_or_refused_without_quadratic_memory() {
         } else {
             assert!(err.contains("GiB of"), "{method}: {err}");
         }
+    }
+}
+
+/// A size refusal names the user's robots × tasks and says what is too large, also when the
+/// method solves the problem transposed (one agent per task) or the centralized solver
+/// holds a larger normalised matrix.
+#[test]
+fn size_refusals_name_the_users_shape() {
+    for (args, shape, detail) in [
+        (
+            "--robots 1 --tasks 300000",
+            "1 robot × 300000 tasks is too large for the primal method",
+            "solved transposed, as 300000 × 2",
+        ),
+        (
+            "--robots 1 --tasks 300000 --method market",
+            "1 robot × 300000 tasks is too large for the market method",
+            "one row per task",
+        ),
+        (
+            "--robots 1 --tasks 300000 --method hungarian",
+            "1 robot × 300000 tasks is too large for the hungarian method",
+            "GiB of working memory",
+        ),
+        (
+            "--robots 5000 --tasks 5000",
+            "5000 robots × 5000 tasks is too large for the primal method",
+            "GiB of agent state",
+        ),
+        (
+            "--robots 1 --tasks 3000000000",
+            "1 robot × 3000000000 tasks is too large",
+            "50000000",
+        ),
+    ] {
+        let all: Vec<&str> = std::iter::once("solve")
+            .chain(args.split_whitespace())
+            .collect();
+        let output = admm_ta(&all);
+        assert_clear_error(&output, shape);
+        assert_clear_error(&output, detail);
+        assert_eq!(output.status.code(), Some(2), "{args}");
+    }
+}
+
+/// An option the run never reads is refused (exit 2, one line naming it), never silently
+/// ignored; the same options where they are read, and every default, still run.
+#[test]
+fn options_the_run_never_reads_are_refused_and_the_same_options_where_read_run() {
+    let refused = [
+        (
+            "--method market --rho 3",
+            "--rho 3 does not apply to --method market",
+        ),
+        (
+            "--method cbaa --rho 3",
+            "--rho 3 does not apply to --method cbaa",
+        ),
+        (
+            "--method dist-hungarian --rho 3",
+            "--rho 3 does not apply to --method dist-hungarian",
+        ),
+        (
+            "--method hungarian --rho 3",
+            "--rho 3 does not apply to --method hungarian",
+        ),
+        (
+            "--stop-rounds 5",
+            "--stop-rounds 5 does not apply to --stop local",
+        ),
+        (
+            "--check --trace --transport threads",
+            "--trace does not apply to --transport threads",
+        ),
+        (
+            "--check --trace --method hungarian",
+            "--trace does not apply to --method hungarian",
+        ),
+        (
+            "--method hungarian --perturb 0.1",
+            "--perturb 0.1 does not apply to --method hungarian",
+        ),
+        (
+            "--method hungarian --max-iters 10",
+            "--max-iters 10 does not apply to --method hungarian",
+        ),
+        (
+            "--round-timeout 5",
+            "--round-timeout 5 does not apply to --transport sim",
+        ),
+        (
+            "--wait spin",
+            "--wait spin does not apply to --transport sim",
+        ),
+        (
+            "--transport threads --startup-timeout 5",
+            "--startup-timeout 5 does not apply to --transport threads",
+        ),
+    ];
+    for (args, needle) in refused {
+        let all: Vec<&str> = ["solve", "--robots", "5", "--tasks", "5"]
+            .into_iter()
+            .chain(args.split_whitespace())
+            .collect();
+        let output = admm_ta(&all);
+        assert_clear_error(&output, needle);
+        assert_eq!(output.status.code(), Some(2), "{args}");
+    }
+    for args in [
+        "--method primal --rho 3",
+        "--method dual --rho 3 --adaptive-rho",
+        "--method market",
+        "--method hungarian",
+        "--primal-variant paper --stop agreement --stop-rounds 3",
+        "--check --trace",
+        "--transport threads --round-timeout 5 --wait block",
+        "--transport uds --startup-timeout 20 --round-timeout 20",
+    ] {
+        let all: Vec<&str> = ["solve", "--robots", "5", "--tasks", "5", "--json"]
+            .into_iter()
+            .chain(args.split_whitespace())
+            .collect();
+        json(&admm_ta(&all));
     }
 }

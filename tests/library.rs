@@ -43,6 +43,18 @@ fn invalid_options_are_refused_before_anything_runs() {
         .unwrap_err();
     assert!(matches!(refused, Error::Solve(SolveError::Config(_))));
     assert_eq!(refused.to_string(), "--max-iters must be at least 1");
+    // An option the method never reads is refused as on the command line, not ignored.
+    let unread = Solver::new(problem())
+        .method(admm_ta::Method::Market)
+        .configure(|o| o.rho(Some(3.0)))
+        .solve()
+        .unwrap_err();
+    assert!(matches!(
+        unread,
+        Error::Solve(SolveError::Config(
+            admm_ta::ConfigError::NotForMethod { .. }
+        ))
+    ));
 }
 
 #[test]

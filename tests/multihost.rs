@@ -160,6 +160,8 @@ fn sim_report(team: &Path) -> SolveReport {
         .solve_options()
         .unwrap()
         .to_builder()
+        // The same settings on the simulation, which reads no timeouts: not refused.
+        .refuse_unread(false)
         .transport(Transport::Sim)
         .build()
         .unwrap();

@@ -532,3 +532,66 @@ fn a_second_copy_of_a_running_agent_is_refused_and_the_team_runs_on() {
     all_succeed(members.into_iter().chain([(3, last)]));
     assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
 }
+
+/// A team file's settings go through the command line's rule: a key the team never reads,
+/// or a value no run can take, is refused by `agent`, `collect` and `host` alike, with exit
+/// 2 and one line naming the file and the key (not a command-line flag).
+#[test]
+fn team_file_settings_are_refused_by_the_command_lines_rule_naming_file_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = "robots = 3\ncosts = \"random\"\ntasks = 3\n";
+    // With Zenoh built, a team across hosts, so that `host` reads the file too.
+    let zenoh_hosts = if cfg!(feature = "zenoh") {
+        "transport = \"zenoh\"\n[[hosts]]\nname = \"a\"\nagents = [0, 1, 2]\nendpoint = \"tcp/127.0.0.1:7447\"\n"
+    } else {
+        ""
+    };
+    for (run, keys, needle) in [
+        (
+            "k1",
+            "method = \"market\"\nadaptive_rho = true\n",
+            "adaptive_rho = true does not apply to method = \"market\"",
+        ),
+        (
+            "k2",
+            "method = \"cbaa\"\nprimal_variant = \"fast\"\n",
+            "primal_variant = \"fast\" does not apply to method = \"cbaa\"",
+        ),
+        ("k3", "max_iters = 0\n", "max_iters must be at least 1"),
+        (
+            "k4",
+            "adaptive_rho = true\n",
+            "adaptive_rho = true applies to the paper's primal variant, not the fast one: add primal_variant = \"paper\"",
+        ),
+        (
+            "k5",
+            "round_timeout = -1\n",
+            "round_timeout must be a positive",
+        ),
+        (
+            "k6",
+            "method = \"hungarian\"\n",
+            "method = \"hungarian\" is the centralized solver",
+        ),
+    ] {
+        let path = dir.path().join(format!("{run}.toml"));
+        std::fs::write(&path, format!("run = \"{run}\"\n{base}{keys}{zenoh_hosts}")).unwrap();
+        let team = path.to_str().unwrap();
+        let mut commands = vec![
+            vec!["agent", "--team", team, "--id", "0"],
+            vec!["collect", "--team", team],
+        ];
+        if cfg!(feature = "zenoh") {
+            commands.push(vec!["host", "--team", team, "--name", "a"]);
+        }
+        for args in commands {
+            let out = admm_ta().args(&args).output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{args:?} {keys}: {err}");
+            assert_eq!(err.trim().lines().count(), 1, "{err}");
+            assert!(err.contains(needle), "{args:?} {keys}: {err}");
+            assert!(err.contains(&format!("{run}.toml")), "the file: {err}");
+            assert!(!err.contains("--"), "a command-line flag: {err}");
+        }
+    }
+}

@@ -66,7 +66,12 @@ pub enum ProblemError {
         "Case 1 needs as many robots as tasks, got {robots} robots and {tasks} tasks (use --case idle for scipy's rectangular meaning)"
     )]
     NotSquare { robots: usize, tasks: usize },
-    #[error("the problem is too large: {robots} × {tasks} costs (limit {limit} entries)")]
+    #[error(
+        "a problem of {robots} robot{} × {tasks} task{} is too large: {} costs, more than the limit of {limit}",
+        if *robots == 1 { "" } else { "s" },
+        if *tasks == 1 { "" } else { "s" },
+        (*robots as u128) * (*tasks as u128)
+    )]
     TooLarge {
         robots: usize,
         tasks: usize,

@@ -15,9 +15,12 @@ use crate::cli::Command;
 use anyhow::Result;
 
 /// Runs the subcommand; its exit code (see [`crate::exit`]).
-pub fn run(command: Command) -> Result<u8> {
+/// `matches`: the whole command line's, which tell options given from defaults.
+pub fn run(command: Command, matches: &clap::ArgMatches) -> Result<u8> {
     match command {
-        Command::Solve(args) => solve::run(args).map(|outcome| outcome.code()),
+        Command::Solve(args) => {
+            solve::run(args, matches.subcommand_matches("solve")).map(|outcome| outcome.code())
+        }
         Command::Demo(args) => demo::run(args).map(|()| 0),
         Command::Agent(args) => agent::run(args).map(|outcome| outcome.code()),
         Command::Collect(args) => collect::run(args).map(|outcome| outcome.code()),

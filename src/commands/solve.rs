@@ -5,11 +5,13 @@ use crate::commands::shared::agent_program;
 use crate::exit::{Outcome, UsageError};
 use crate::output;
 use admm_ta::agents::forbidden;
-use admm_ta::runtime::options::error::{MethodOptions, method_options};
 use admm_ta::{CostMatrix, Perturbation, SolveOptions, TaskAssignmentProblem, TopologySpec};
 use anyhow::{Context, Result};
+use clap::ArgMatches;
+use clap::parser::ValueSource;
 
-pub fn run(args: SolveArgs) -> Result<Outcome> {
+/// Solves as `args` say; `matches` (the command line's) tells which options the user gave.
+pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
     let costs = match (&args.costs, args.robots, args.tasks) {
         (Some(path), _, _) => CostMatrix::read_csv(path)?,
         (None, Some(robots), Some(tasks)) => args.cost_model.costs(robots, tasks, args.seed)?,
@@ -37,55 +39,82 @@ pub fn run(args: SolveArgs) -> Result<Outcome> {
     let graph = spec
         .build(problem.robots(), args.seed)
         .with_context(|| format!("topology '{}'", args.topology))?;
-    let perturbation = match args.perturb.as_str() {
-        "auto" => Perturbation::Auto,
-        "off" | "0" => Perturbation::Off,
-        value => match value.parse::<f64>() {
-            Ok(eps) if eps > 0.0 && eps.is_finite() => Perturbation::Fixed(eps),
-            _ => {
-                return Err(UsageError(format!(
-                    "--perturb must be auto, off or a positive number, got '{value}'"
-                ))
-                .into());
-            }
-        },
-    };
-    // An option the method never reads is refused, not silently ignored.
-    method_options(
-        args.method,
-        MethodOptions {
-            adaptive_rho: args.adaptive_rho,
-            gamma_factor: args.gamma_factor,
-            projection: args.projection,
-            primal_variant: args.primal_variant,
-        },
-    )?;
-    let options = SolveOptions::builder()
+    // Only the options the user gave are set: an option given that the run never reads
+    // is refused by the options' own rule (`refuse_unread`), as for team files.
+    let given =
+        |id: &str| matches.is_some_and(|m| m.value_source(id) == Some(ValueSource::CommandLine));
+    let mut options = SolveOptions::builder()
+        .refuse_unread(true)
         .method(args.method)
         .transport(args.transport)
-        .rho(parse_rho(&args.rho)?)
-        .adaptive_rho(args.adaptive_rho)
-        .primal_variant(args.primal_variant)
-        .gamma_factor(args.gamma_factor)
-        .max_iters(args.max_iters)
-        .stop(args.stop)
-        .stop_rounds(args.stop_rounds)
         .seed(args.seed)
-        .perturbation(perturbation)
-        .projection(args.projection)
         .check(args.check)
-        .trace(args.trace)
-        .global_barrier(args.global_barrier)
-        .round_timeout_secs(args.round_timeout)
-        .startup_timeout_secs(args.startup_timeout)
         .agent_program(agent_program()?)
-        .on_failure(args.on_failure)
-        .fault_injection(true)
-        .wait(args.wait)
-        .build()?;
+        .fault_injection(true);
+    if given("rho") {
+        options = options.rho(parse_rho(&args.rho)?);
+    }
+    if given("adaptive_rho") {
+        options = options.adaptive_rho(args.adaptive_rho);
+    }
+    if given("primal_variant") {
+        options = options.primal_variant(args.primal_variant);
+    }
+    if given("gamma_factor") {
+        options = options.gamma_factor(args.gamma_factor);
+    }
+    if given("max_iters") {
+        options = options.max_iters(args.max_iters);
+    }
+    if given("stop") {
+        options = options.stop(args.stop);
+    }
+    if given("stop_rounds") {
+        options = options.stop_rounds(args.stop_rounds);
+    }
+    if given("perturb") {
+        options = options.perturbation(parse_perturb(&args.perturb)?);
+    }
+    if given("projection") {
+        options = options.projection(args.projection);
+    }
+    if given("trace") {
+        options = options.trace(args.trace);
+    }
+    if given("global_barrier") {
+        options = options.global_barrier(args.global_barrier);
+    }
+    if given("round_timeout") {
+        options = options.round_timeout_secs(args.round_timeout);
+    }
+    if given("startup_timeout") {
+        options = options.startup_timeout_secs(args.startup_timeout);
+    }
+    if given("on_failure") {
+        options = options.on_failure(args.on_failure);
+    }
+    if given("wait") {
+        options = options.wait(args.wait);
+    }
+    let options = options.build()?;
     let report = admm_ta::solve(&problem, &graph, &options)?;
     output::print_report(&report, args.json)?;
     Ok(Outcome::of(&report))
+}
+
+/// `auto`, `off` (or 0) or a positive number ε.
+fn parse_perturb(text: &str) -> Result<Perturbation> {
+    match text {
+        "auto" => Ok(Perturbation::Auto),
+        "off" | "0" => Ok(Perturbation::Off),
+        value => match value.parse::<f64>() {
+            Ok(eps) if eps > 0.0 && eps.is_finite() => Ok(Perturbation::Fixed(eps)),
+            _ => Err(UsageError(format!(
+                "--perturb must be auto, off or a positive number, got '{value}'"
+            ))
+            .into()),
+        },
+    }
 }
 
 /// `auto` (None) or a number (the options check that it is a positive one).

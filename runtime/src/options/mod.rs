@@ -1,14 +1,23 @@
 //! Validated settings: what a solve does ([`SolveOptions`]) and how a team runs
 //! ([`run::RunOptions`], shared by solves, latency probes and surveillance episodes). Both are
 //! built by a builder whose `build` refuses every combination no run could honour, for every
-//! caller (the command line only maps its flags onto the builder), with the errors of
-//! [`error::ConfigError`], whose messages name the command line's flags. Checks that depend
-//! on the problem (sizes, memory, the ρ rule's value) are the solve's.
+//! caller (the command line and team files only map their flags and keys onto the builder),
+//! with the errors of [`error::ConfigError`], which name options by [`given::OptionId`]: each
+//! front end renders them in its own terms (a flag, a team file's key). With
+//! [`SolveOptionsBuilder::refuse_unread`] (the command line, team files, `admm_ta::Solver`),
+//! `build` also refuses every option given that the run never reads ([`unread`]). Checks
+//! that depend on the problem (sizes, memory, the ρ rule's value) are the solve's.
+//!
+//! Size: the two option sets, a setter and a getter per option, and the test of the
+//! builder's refusals; splitting them would scatter one option's handling over files.
 
 pub mod error;
+pub mod given;
 pub mod run;
+mod unread;
 
 use crate::options::error::ConfigError;
+use crate::options::given::{Given, OptionId};
 use crate::options::run::{RunOptions, RunOptionsBuilder};
 use crate::transport::{Execution, Transport};
 use crate::wait::WaitStrategy;
@@ -67,6 +76,8 @@ pub struct SolveOptions {
     check: bool,
     trace: bool,
     on_failure: OnFailure,
+    given: Given,
+    refuse_unread: bool,
 }
 
 impl Default for SolveOptions {
@@ -89,6 +100,8 @@ impl Default for SolveOptions {
             check: false,
             trace: false,
             on_failure: OnFailure::Abort,
+            given: Given::default(),
+            refuse_unread: false,
         }
     }
 }
@@ -117,6 +130,8 @@ impl SolveOptions {
             check: self.check,
             trace: self.trace,
             on_failure: self.on_failure,
+            given: self.given,
+            refuse_unread: self.refuse_unread,
         }
     }
 
@@ -218,40 +233,45 @@ pub struct SolveOptionsBuilder {
     check: bool,
     trace: bool,
     on_failure: OnFailure,
+    given: Given,
+    refuse_unread: bool,
 }
 
 impl SolveOptionsBuilder {
     pub fn transport(mut self, transport: Transport) -> Self {
+        self.given = self.given.with(OptionId::Transport);
         self.run = self.run.transport(transport);
         self
     }
 
     pub fn wait(mut self, wait: WaitStrategy) -> Self {
+        self.given = self.given.with(OptionId::Wait);
         self.run = self.run.wait(wait);
         self
     }
 
     pub fn global_barrier(mut self, on: bool) -> Self {
+        self.given = self.given.with(OptionId::GlobalBarrier);
         self.run = self.run.global_barrier(on);
         self
     }
 
-    pub fn round_timeout(mut self, timeout: Duration) -> Self {
-        self.run = self.run.round_timeout(timeout);
-        self
+    pub fn round_timeout(self, timeout: Duration) -> Self {
+        self.round_timeout_secs(timeout.as_secs_f64())
     }
 
     pub fn round_timeout_secs(mut self, seconds: f64) -> Self {
+        self.given = self.given.with(OptionId::RoundTimeout);
         self.run = self.run.round_timeout_secs(seconds);
         self
     }
 
-    pub fn startup_timeout(mut self, timeout: Duration) -> Self {
-        self.run = self.run.startup_timeout(timeout);
-        self
+    pub fn startup_timeout(self, timeout: Duration) -> Self {
+        self.startup_timeout_secs(timeout.as_secs_f64())
     }
 
     pub fn startup_timeout_secs(mut self, seconds: f64) -> Self {
+        self.given = self.given.with(OptionId::StartupTimeout);
         self.run = self.run.startup_timeout_secs(seconds);
         self
     }
@@ -272,38 +292,45 @@ impl SolveOptionsBuilder {
     }
 
     pub fn method(mut self, method: Method) -> Self {
+        self.given = self.given.with(OptionId::Method);
         self.method = method;
         self
     }
 
     /// `None`: the method's default rule.
     pub fn rho(mut self, rho: Option<f64>) -> Self {
+        self.given = self.given.with(OptionId::Rho);
         self.rho = rho;
         self
     }
 
     pub fn adaptive_rho(mut self, on: bool) -> Self {
+        self.given = self.given.with(OptionId::AdaptiveRho);
         self.adaptive_rho = on;
         self
     }
 
     /// `None`: the default factor.
     pub fn gamma_factor(mut self, factor: Option<f64>) -> Self {
+        self.given = self.given.with(OptionId::GammaFactor);
         self.gamma_factor = factor;
         self
     }
 
     pub fn max_iters(mut self, rounds: usize) -> Self {
+        self.given = self.given.with(OptionId::MaxIters);
         self.max_iters = rounds;
         self
     }
 
     pub fn stop(mut self, stop: StopRule) -> Self {
+        self.given = self.given.with(OptionId::Stop);
         self.stop = stop;
         self
     }
 
     pub fn stop_rounds(mut self, rounds: usize) -> Self {
+        self.given = self.given.with(OptionId::StopRounds);
         self.stop_rounds = rounds;
         self
     }
@@ -314,16 +341,19 @@ impl SolveOptionsBuilder {
     }
 
     pub fn perturbation(mut self, perturbation: Perturbation) -> Self {
+        self.given = self.given.with(OptionId::Perturb);
         self.perturbation = perturbation;
         self
     }
 
     pub fn projection(mut self, projection: ProjectionPath) -> Self {
+        self.given = self.given.with(OptionId::Projection);
         self.projection = projection;
         self
     }
 
     pub fn primal_variant(mut self, variant: PrimalVariant) -> Self {
+        self.given = self.given.with(OptionId::PrimalVariant);
         self.primal_variant = variant;
         self
     }
@@ -334,12 +364,25 @@ impl SolveOptionsBuilder {
     }
 
     pub fn trace(mut self, on: bool) -> Self {
+        self.given = self.given.with(OptionId::Trace);
         self.trace = on;
         self
     }
 
     pub fn on_failure(mut self, on_failure: OnFailure) -> Self {
+        self.given = self.given.with(OptionId::OnFailure);
         self.on_failure = on_failure;
+        self
+    }
+
+    /// Refuse, in [`SolveOptionsBuilder::build`], every option given by a setter that this
+    /// method or transport never reads ([`unread`]'s rule: `rho` with market, a
+    /// `stop_rounds` without the agreement stop, a round timeout on the lockstep
+    /// simulation, …) instead of ignoring it. The command line, team files and
+    /// `admm_ta::Solver` turn it on; it is off by default for sweeps that set one value
+    /// for every method (the experiments).
+    pub fn refuse_unread(mut self, on: bool) -> Self {
+        self.refuse_unread = on;
         self
     }
 
@@ -349,7 +392,8 @@ impl SolveOptionsBuilder {
     /// the lockstep simulation, γ out of range, a global barrier the transport has not, a
     /// transport this build lacks, a central stop rule off the lockstep simulation, a stop
     /// rule the method does not honour (the method registry says which), a trace without a
-    /// check, `--adaptive-rho` or `--stop agreement` with the fast primal variant.
+    /// check, `--adaptive-rho` or `--stop agreement` with the fast primal variant; with
+    /// [`SolveOptionsBuilder::refuse_unread`], an option given that the run never reads.
     pub fn build(self) -> Result<SolveOptions, ConfigError> {
         if let Some(rho) = self.rho.filter(|r| !(*r > 0.0 && r.is_finite())) {
             return Err(ConfigError::Rho(rho));
@@ -371,6 +415,25 @@ impl SolveOptionsBuilder {
         if let Some(gamma) = self.gamma_factor.filter(|g| !(*g > 0.0 && g.is_finite())) {
             return Err(ConfigError::Gamma(gamma));
         }
+        // What the rule against unread options looks at (checked last).
+        let chosen = self.refuse_unread.then_some(unread::Chosen {
+            given: self.given,
+            method: self.method,
+            transport: self.run.transport,
+            rho: self.rho,
+            adaptive_rho: self.adaptive_rho,
+            gamma_factor: self.gamma_factor,
+            projection: self.projection,
+            primal_variant: self.primal_variant,
+            max_iters: self.max_iters,
+            perturbation: self.perturbation,
+            stop: self.stop,
+            stop_rounds: self.stop_rounds,
+            trace: self.trace,
+            wait: self.run.wait,
+            round_timeout: self.run.round_timeout,
+            startup_timeout: self.run.startup_timeout,
+        });
         let run = self.run.build()?;
         if self.stop.is_central() && !lockstep {
             return Err(ConfigError::CentralStop {
@@ -385,6 +448,9 @@ impl SolveOptionsBuilder {
         }
         if self.trace && !self.check {
             return Err(ConfigError::TraceNeedsCheck);
+        }
+        if let Some(chosen) = chosen {
+            chosen.refuse_unread()?;
         }
         error::paper_only(
             self.method,
@@ -408,6 +474,8 @@ impl SolveOptionsBuilder {
             check: self.check,
             trace: self.trace,
             on_failure: self.on_failure,
+            given: self.given,
+            refuse_unread: self.refuse_unread,
         })
     }
 }
@@ -426,14 +494,14 @@ mod tests {
         assert!(matches!(
             refused(b().round_timeout_secs(f64::NAN)),
             ConfigError::Timeout {
-                option: "--round-timeout",
+                option: OptionId::RoundTimeout,
                 ..
             }
         ));
         assert_eq!(
             refused(b().startup_timeout(Duration::ZERO)),
             ConfigError::Timeout {
-                option: "--startup-timeout",
+                option: OptionId::StartupTimeout,
                 seconds: 0.0
             }
         );
@@ -473,7 +541,7 @@ mod tests {
         assert_eq!(refused(b().trace(true)), ConfigError::TraceNeedsCheck);
         assert_eq!(
             refused(b().adaptive_rho(true)),
-            ConfigError::PaperOnly("--adaptive-rho")
+            ConfigError::PaperOnly(given::Setting::new(OptionId::AdaptiveRho, given::Value::On))
         );
         assert_eq!(
             b().transport(Transport::Zenoh).build().is_ok(),

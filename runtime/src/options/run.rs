@@ -2,6 +2,7 @@
 //! solves, latency probes and surveillance episodes.
 
 use crate::options::error::{ConfigError, seconds};
+use crate::options::given::OptionId;
 use crate::transport::{Transport, ZenohNotBuilt};
 use crate::wait::WaitStrategy;
 use std::path::{Path, PathBuf};
@@ -112,10 +113,10 @@ impl RunOptions {
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunOptionsBuilder {
     pub(super) transport: Transport,
-    wait: WaitStrategy,
+    pub(super) wait: WaitStrategy,
     global_barrier: bool,
-    round_timeout: f64,
-    startup_timeout: f64,
+    pub(super) round_timeout: f64,
+    pub(super) startup_timeout: f64,
     agent_program: Option<PathBuf>,
     fault_injection: bool,
     warmup_rounds: u64,
@@ -176,8 +177,8 @@ impl RunOptionsBuilder {
     /// The timeouts, checked.
     pub(super) fn timeouts(&self) -> Result<(Duration, Duration), ConfigError> {
         Ok((
-            seconds("--round-timeout", self.round_timeout)?,
-            seconds("--startup-timeout", self.startup_timeout)?,
+            seconds(OptionId::RoundTimeout, self.round_timeout)?,
+            seconds(OptionId::StartupTimeout, self.startup_timeout)?,
         ))
     }
 

@@ -17,6 +17,7 @@ use crate::error_text::one_line;
 use crate::exchange::round_loop::{AgentStop, merge_outcomes};
 use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::latency::LatencySummary;
+use crate::options::given::FrontEnd;
 use crate::process::agent::{AgentReport, run_scenario};
 use crate::process::connect::RunResources;
 use crate::process::member_error::MemberError;
@@ -77,7 +78,9 @@ impl Drop for FileLock {
 /// one machine's run (what the team's digest is over).
 pub(crate) fn team_scenario(team: &Team) -> Result<Scenario, String> {
     let (problem, graph) = team.problem_and_graph()?;
-    let options = team.solve_options().map_err(|e| e.to_string())?;
+    let options = team
+        .solve_options()
+        .map_err(|e| e.in_terms_of(FrontEnd::TeamFile))?;
     // The options refused a centralized method on the team's process transport.
     let method = options.method().agent_method().ok_or_else(|| {
         format!(

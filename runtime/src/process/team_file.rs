@@ -32,7 +32,8 @@
 //! endpoint = "tcp/192.168.1.11:7447"
 //! ```
 
-use crate::options::error::{ConfigError, seconds};
+use crate::options::error::ConfigError;
+use crate::options::given::FrontEnd;
 use crate::options::{SolveOptions, StopRule};
 use crate::process::namespace::RunNamespace;
 use crate::transport::Transport;
@@ -78,9 +79,10 @@ pub struct TeamFile {
     pub max_iters: usize,
     #[serde(default)]
     pub adaptive_rho: bool,
-    /// The primal method's variant (`fast` or `paper`; default `fast`).
-    #[serde(default)]
-    pub primal_variant: PrimalVariant,
+    /// The primal method's variant (`fast` or `paper`; default `fast`); refused with the
+    /// other methods.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub primal_variant: Option<PrimalVariant>,
     /// How the team is deployed and what carries its messages.
     #[serde(default)]
     pub transport: Deployment,
@@ -183,10 +185,17 @@ impl Team {
             .map_err(|e| format!("team file {}: {}", path.display(), e.message()))?;
         let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         RunNamespace::check_team_name(&file.run)?;
-        seconds("startup_timeout", file.startup_timeout).map_err(|e| e.to_string())?;
-        seconds("round_timeout", file.round_timeout).map_err(|e| e.to_string())?;
         check_hosts(&file)?;
-        Ok(Self { file, base })
+        let team = Self { file, base };
+        // The settings' checks, named by the file's keys.
+        team.solve_options().map_err(|e| {
+            format!(
+                "team file {}: {}",
+                path.display(),
+                e.in_terms_of(FrontEnd::TeamFile)
+            )
+        })?;
+        Ok(team)
     }
 
     /// The host agent `id` runs on (zenoh and mixed teams).
@@ -292,20 +301,27 @@ impl Team {
     }
 
     /// The settings every agent runs with, on its deployment's transport (a test may run
-    /// the same problem on another).
+    /// the same problem on another), checked as the command line's are: a key the team
+    /// never reads (`primal_variant` with market, `adaptive_rho = true` without ρ) is
+    /// refused ([`crate::options::SolveOptionsBuilder::refuse_unread`]); [`ConfigError::in_terms_of`]
+    /// names the file's keys.
     pub fn solve_options(&self) -> Result<SolveOptions, ConfigError> {
         let f = &self.file;
-        SolveOptions::builder()
+        let options = SolveOptions::builder()
+            .refuse_unread(true)
             .method(f.method)
             .transport(f.transport.agent_transport())
             .adaptive_rho(f.adaptive_rho)
-            .primal_variant(f.primal_variant)
             .max_iters(f.max_iters)
             .stop(StopRule::Local)
             .seed(f.seed)
-            .round_timeout(seconds("round_timeout", f.round_timeout)?)
-            .startup_timeout(seconds("startup_timeout", f.startup_timeout)?)
-            .build()
+            .round_timeout_secs(f.round_timeout)
+            .startup_timeout_secs(f.startup_timeout);
+        match f.primal_variant {
+            Some(variant) => options.primal_variant(variant),
+            None => options,
+        }
+        .build()
     }
 }
 

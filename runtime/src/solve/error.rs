@@ -38,13 +38,23 @@ pub enum SolveError {
     Internal(String),
     #[error("the topology has {graph} robots but the costs have {problem}")]
     SizeMismatch { graph: usize, problem: usize },
-    /// The method's memory estimate ([`admm_ta_agents::method::Memory`]) is above the limit.
+    /// The method's memory estimate ([`admm_ta_agents::method::Memory`]) is above the limit:
+    /// named by the user's shape (`robots × tasks`), with the shape the method would solve
+    /// when it differs (`solved_as`: a problem with fewer robots than tasks is solved
+    /// transposed, one agent per task).
     #[error(
-        "{robots} robots × {tasks} tasks need about {gib:.1} GiB of {of} ({because}); the limit is 8 GiB"
+        "a problem of {robots} robot{} × {tasks} task{} is too large for the {method} method: it would need about {gib:.1} GiB of {of} ({because}{}); the limit is 8 GiB",
+        if *robots == 1 { "" } else { "s" },
+        if *tasks == 1 { "" } else { "s" },
+        solved_as.map_or(String::new(), |(rows, columns)| format!(
+            "; this problem is solved transposed, as {rows} × {columns}: one row per task"
+        ))
     )]
     TooLarge {
         robots: usize,
         tasks: usize,
+        method: &'static str,
+        solved_as: Option<(usize, usize)>,
         gib: f64,
         of: &'static str,
         because: &'static str,

@@ -233,15 +233,23 @@ fn solve_user(
     Ok(report)
 }
 
-/// Refuses a solve whose method would need more than [`MEMORY_LIMIT_BYTES`] on an
-/// `n × m` problem, plus `extra` bytes (the team's graph).
-fn refuse_beyond_memory(method: Method, n: usize, m: usize, extra: f64) -> Result<(), SolveError> {
+/// Refuses a solve whose method would need more than [`MEMORY_LIMIT_BYTES`] on the
+/// `solved` shape (`robots × tasks` of the problem it runs), plus `extra` bytes (the team's
+/// graph); the error names the user's shape `user`.
+fn refuse_beyond_memory(
+    method: Method,
+    user: (usize, usize),
+    solved: (usize, usize),
+    extra: f64,
+) -> Result<(), SolveError> {
     let memory = &method.info().memory;
-    let bytes = (memory.bytes)(n, m) + extra;
+    let bytes = (memory.bytes)(solved.0, solved.1) + extra;
     if bytes > MEMORY_LIMIT_BYTES {
         return Err(SolveError::TooLarge {
-            robots: n,
-            tasks: m,
+            robots: user.0,
+            tasks: user.1,
+            method: method.name(),
+            solved_as: (solved != user).then_some(solved),
             gib: bytes / (1u64 << 30) as f64,
             of: memory.of,
             because: memory.because,
@@ -250,20 +258,26 @@ fn refuse_beyond_memory(method: Method, n: usize, m: usize, extra: f64) -> Resul
     Ok(())
 }
 
-/// The memory check of [`solve_once`], done on the user's problem before anything large is
-/// built: the centralized solvers on the user's shape; a team on the shape its agents solve
-/// (the tasks are the agents when `n < m` is transposed), with the edges of the graph they
-/// then run on (counted, not built: each pair of hosts that are the same or neighbours
+/// The memory check of a solve, done on the user's problem before anything large is
+/// built: the distributed Hungarian method on the user's shape (it solves the user's own
+/// numbers); the centralized solver and a team on the normalised shape they solve (the
+/// tasks are the agents when `n < m` is transposed), a team with the edges of the graph it
+/// then runs on (counted, not built: each pair of hosts that are the same or neighbours
 /// links every task of one with every task of the other).
 fn check_size(
     problem: &TaskAssignmentProblem,
     graph: &Graph,
     method: Method,
 ) -> Result<(), SolveError> {
-    if method.agent_method().is_none() || method == Method::DistHungarian {
-        return refuse_beyond_memory(method, problem.robots(), problem.tasks(), 0.0);
+    let user = (problem.robots(), problem.tasks());
+    if method == Method::DistHungarian {
+        return refuse_beyond_memory(method, user, user, 0.0);
     }
     let internal = problem.internal();
+    let solved = (internal.robots(), internal.tasks());
+    if method.agent_method().is_none() {
+        return refuse_beyond_memory(method, user, solved, 0.0);
+    }
     let (agents, hosts) = (internal.robots(), graph.robots());
     let mut edges = 0.0;
     if agents != hosts && problem.robots() == hosts {
@@ -278,7 +292,7 @@ fn check_size(
         }
     }
     // Two adjacency entries per edge, and the edge list they are built from.
-    refuse_beyond_memory(method, agents, internal.tasks(), 32.0 * edges)
+    refuse_beyond_memory(method, user, solved, 32.0 * edges)
 }
 
 fn solve_once(
@@ -296,7 +310,7 @@ fn solve_once(
             problem: n,
         });
     }
-    refuse_beyond_memory(options.method(), n, m, 0.0)?;
+    // The user's problem passed [`check_size`] on the shape solved here.
     // A team method's plan (ρ, tolerance, agents); `None`: the centralized solver.
     let plan = match options.method().agent_method() {
         Some(method) => Some(prepare(problem, graph, options, method)?),

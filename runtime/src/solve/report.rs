@@ -23,7 +23,12 @@ pub struct Degraded {
 /// Comparison with the centralized optimum, and how fast the run got there.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OracleCheck {
+    /// The optimum's total: a profit with `maximize` (then also in `optimal_profit`).
     pub optimal_cost: f64,
+    /// With `maximize`: the optimum's profit (the same number as `optimal_cost`, named for
+    /// what it is; `optimal_cost` stays for readers of earlier reports).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub optimal_profit: Option<f64>,
     /// `(cost − optimal) / |optimal|` (absolute gap when the optimum is 0).
     pub gap: f64,
     pub optimal: bool,

@@ -150,6 +150,7 @@ impl<'p> Tracer<'p> {
     pub(crate) fn finish(self, cost: f64) -> OracleCheck {
         let gap = self.relative_gap(self.affine.apply(cost));
         OracleCheck {
+            optimal_profit: None,
             optimal_cost: self.optimal_cost,
             gap,
             optimal: gap <= 1e-9,

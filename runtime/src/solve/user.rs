@@ -146,6 +146,7 @@ pub(crate) fn to_user(
     report.maximize = problem.maximize();
     if let (Some(check), Some(exact)) = (report.check.as_mut(), exact) {
         check.optimal_cost = exact.cost;
+        check.optimal_profit = problem.maximize().then_some(exact.cost);
         let sign = if problem.maximize() { -1.0 } else { 1.0 };
         // `+ 0.0`: no "-0" gap for profits.
         let diff = sign * (report.cost - exact.cost) + 0.0;
