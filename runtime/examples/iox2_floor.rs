@@ -29,6 +29,7 @@
 //! receive and every agent a send, so on `C` cores a round takes at least
 //! `(N (N − 1) · recv + N · send) / C` (`recv+send floor`), whatever the wake-ups cost.
 
+use admm_ta_runtime::ipc::nodes::run_config;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use std::io::{BufRead, BufReader, Write};
@@ -79,25 +80,13 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
     Ok(options)
 }
 
-/// The iceoryx2 configuration of one measurement: its own prefix, root on the tmpfs.
+/// The iceoryx2 configuration of one measurement: the runtime's own (`run_config`: no
+/// dead-node scans, small expired-connection buffers), with its prefix and a root on the
+/// tmpfs.
 fn config(prefix: &str) -> Result<Config, String> {
-    let mut config = Config::default();
-    config.global.prefix = FileName::new(prefix.as_bytes()).map_err(|e| format!("{e:?}"))?;
-    let root = format!("/dev/shm/{prefix}root/");
-    std::fs::create_dir_all(&root).map_err(|e| format!("{root}: {e}"))?;
-    config
-        .global
-        .set_root_path(&Path::new(root.as_bytes()).map_err(|e| format!("{e:?}"))?);
-    config.global.creation_timeout = std::time::Duration::from_secs(30);
-    // As the runtime's runs (`ipc::nodes::run_config`): no dead-node scans.
-    config.global.node.cleanup_dead_nodes_on_creation = false;
-    config.global.node.cleanup_dead_nodes_on_destruction = false;
-    config.global.service.cleanup_dead_nodes_on_open = false;
-    config
-        .defaults
-        .publish_subscribe
-        .subscriber_expired_connection_buffer = 2;
-    Ok(config)
+    let root = std::path::PathBuf::from(format!("/dev/shm/{prefix}root"));
+    std::fs::create_dir_all(&root).map_err(|e| format!("{}: {e}", root.display()))?;
+    run_config(prefix, &root)
 }
 
 fn service_name(i: usize) -> Result<ServiceName, String> {
