@@ -911,12 +911,12 @@ fn exit_codes_follow_the_documented_outcomes() {
     let (code, _, stderr) = solve_code(&format!("--costs {infeasible} --method hungarian"));
     assert_eq!(code, Some(3), "{stderr}");
     // 5: the round limit without a certificate: the best assignment, marked.
-    let (code, stdout, _) = solve_code("--robots 12 --tasks 12 --max-iters 3 --json");
+    let (code, stdout, _) = solve_code("--robots 12 --tasks 12 --max-iters 2 --json");
     assert_eq!(code, Some(5));
     let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(report["certified"], false);
     assert_eq!(report["converged"], false);
-    let (code, stdout, _) = solve_code("--robots 12 --tasks 12 --max-iters 3");
+    let (code, stdout, _) = solve_code("--robots 12 --tasks 12 --max-iters 2");
     assert_eq!(code, Some(5));
     assert!(stdout.contains("NOT certified"), "{stdout}");
     // 6: --check found the result not optimal (CBAA on a seed where it is not).

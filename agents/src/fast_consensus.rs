@@ -32,6 +32,8 @@
 use crate::primal_settings::{FastSettings, FastTuning};
 use crate::problem::AssignmentCase;
 use crate::readout::GReadout;
+use crate::readout_filter::{ReadoutFilter, WEIGHT_BITS};
+use std::sync::Arc;
 
 /// `2^52`: the grid of the payloads and the unit of the integer multipliers.
 const GRID: f64 = (1u64 << 52) as f64;
@@ -51,6 +53,22 @@ pub struct FastConsensus {
     exact: bool,
     /// The readout (the team's assignment as this robot reads it).
     pub readout: GReadout,
+    /// The extrapolated readout's weights and history ([`crate::readout_filter`]).
+    filter: Option<Filtered>,
+}
+
+/// A robot's side of the extrapolated readout.
+#[derive(Debug, Clone)]
+struct Filtered {
+    weights: Arc<ReadoutFilter>,
+    /// The last `W − 1` increments of `K_i` (slot `(u − 1) mod (W − 1)` for update `u`).
+    increments: Vec<i64>,
+    /// Updates since the start (or the last reset).
+    updates: u64,
+    /// `Q̂_i`, the certificate multipliers of this round.
+    q: Vec<f64>,
+    /// `2^B Q̂_i / scale`, exact.
+    sums: Vec<i128>,
 }
 
 impl FastConsensus {
@@ -69,13 +87,56 @@ impl FastConsensus {
             neighbour_units: vec![0; tasks * robots],
             exact: degree <= MAX_EXACT_DEGREE,
             readout: GReadout::new(tasks, robots, case, settings.tie_break),
+            filter: None,
         }
+    }
+
+    /// Reads the assignment from `Σ_l γ_l G_i(k − l)` with `filter`'s weights from the next
+    /// step on (every robot of the team must use the same filter).
+    pub fn set_filter(&mut self, filter: Arc<ReadoutFilter>) {
+        let len = self.units.len();
+        self.filter = Some(Filtered {
+            increments: vec![0; (filter.window() - 1) * len],
+            weights: filter,
+            updates: 0,
+            q: vec![0.0; len],
+            sums: vec![0; len],
+        });
+        self.readout.invalidate();
+    }
+
+    /// The digest of the filter's weights (0 without one).
+    pub fn filter_digest(&self) -> u64 {
+        self.filter.as_ref().map_or(0, |f| f.weights.digest())
+    }
+
+    /// The multipliers of the certificate matrix `Ĝ_i = Q̂_i + α_i e_iᵀ` this round: `Q_i`
+    /// itself, or its filtered combination.
+    pub fn certificate_multipliers<'a>(&'a self, q: &'a [f64]) -> &'a [f64] {
+        match &self.filter {
+            Some(f) => &f.q,
+            None => q,
+        }
+    }
+
+    /// Reads robot `index`'s assignment from its certificate matrix into `out`
+    /// ([`GReadout::read`] on [`FastConsensus::certificate_multipliers`]).
+    pub fn read(&mut self, q: &[f64], costs: &[f64], index: usize, out: &mut [usize]) {
+        let q = match &self.filter {
+            Some(f) => &f.q,
+            None => q,
+        };
+        self.readout.read(q, costs, index, out);
     }
 
     /// Forgets the multipliers and the edge variables (a cold start).
     pub fn reset(&mut self) {
         self.zbar.fill(0.0);
         self.units.fill(0);
+        if let Some(f) = &mut self.filter {
+            f.updates = 0;
+            f.q.fill(0.0);
+        }
         self.readout.invalidate();
     }
 
@@ -124,6 +185,14 @@ impl FastConsensus {
         let half_scaled = 0.5 / (rho * degree);
         let (keep, centre) = ((1.0 - c) / degree, c / tasks as f64);
         let own_weight = neighbours as i64;
+        let len = self.units.len();
+        let slot = self.filter.as_mut().and_then(|f| {
+            f.updates += 1;
+            let slots = f.weights.window() - 1;
+            let start = ((f.updates - 1) % slots as u64) as usize * len;
+            f.increments.get_mut(start..start + len)
+        });
+        let mut increments = slot.into_iter().flatten();
         for (((((s, q), k), zb), &mine), &theirs) in z
             .iter_mut()
             .zip(q.iter_mut())
@@ -138,12 +207,45 @@ impl FastConsensus {
                 .wrapping_mul((mine * GRID) as i64)
                 .wrapping_sub(theirs);
             *k += i128::from(difference);
+            if let Some(slot) = increments.next() {
+                *slot = difference;
+            }
             // `i64 → f64` is one instruction, `i128 → f64` a library call; both round to
             // nearest, so the value is the same.
             let units = i64::try_from(*k).map_or(*k as f64, |k| k as f64);
             *q = scale * units;
             *zb = alpha * 0.5 * (degree * mine + neighbour_sum) + (1.0 - alpha) * *zb;
             *s = keep * *zb + centre - *q * half_scaled;
+        }
+        self.filter_multipliers(scale);
+    }
+
+    /// `Q̂_i = scale · 2^-B Σ_l g_l K_i(k − l)`, from `K_i(k − l) = K_i(k) − Σ_{s<l} ΔK_i(k − s)`:
+    /// `Σ_l g_l K_i(k − l) = 2^B K_i(k) − Σ_s ΔK_i(k − s) Σ_{l>s} g_l`, exact in `i128`
+    /// (`|g| ≤ 2^36`, increments below `2^63`, multipliers below `2^83` for 2^20 rounds).
+    fn filter_multipliers(&mut self, scale: f64) {
+        let Some(f) = &mut self.filter else {
+            return;
+        };
+        let weights = f.weights.weights(f.updates);
+        let slots = (f.weights.window() - 1) as u64;
+        let len = self.units.len();
+        for (acc, &k) in f.sums.iter_mut().zip(&self.units) {
+            *acc = k << WEIGHT_BITS;
+        }
+        let mut tail: i64 = weights.iter().skip(1).sum();
+        for (s, g) in weights.iter().enumerate().skip(1) {
+            // The increment of update `updates − (s − 1)`.
+            let slot = ((f.updates - s as u64) % slots) as usize * len;
+            let tail_wide = i128::from(tail);
+            for (acc, &inc) in f.sums.iter_mut().zip(&f.increments[slot..slot + len]) {
+                *acc -= tail_wide * i128::from(inc);
+            }
+            tail -= g;
+        }
+        let unit_scale = scale / f64::from(1u32 << WEIGHT_BITS);
+        for (out, &acc) in f.q.iter_mut().zip(&f.sums) {
+            *out = unit_scale * acc as f64;
         }
     }
 

@@ -29,6 +29,7 @@ pub mod probe;
 pub mod problem;
 pub mod projection;
 pub mod readout;
+pub mod readout_filter;
 pub mod rho;
 pub mod rounding;
 pub mod stopping;

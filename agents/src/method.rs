@@ -31,6 +31,7 @@ use crate::market::MarketAgent;
 use crate::primal::{PrimalAgent, PrimalSettings, ProjectionPath};
 use crate::primal_settings::PrimalVariant;
 use crate::problem::{AssignmentCase, CostMatrix};
+use crate::readout_filter;
 use crate::rho::{DUAL_RHO_FACTOR, INEXACT_DUAL_RHO_FACTOR, RhoRule, RhoSchedule};
 use crate::stopping::StopRule;
 use serde::{Deserialize, Serialize};
@@ -219,9 +220,15 @@ const PRIMAL: MethodInfo = MethodInfo {
     stops: ALL_STOPS,
     // X, Q, Z, the projection's workspace and two round buffers: six m×n matrices; the fast
     // variant's integer multipliers, edge sums and tie-break matrix: three more; the
-    // certificate's minimiser of `G_i`: one more.
+    // certificate's minimiser of `G_i`: one more; the readout filter's `Q̂` and exact sums
+    // (three) and its history (at most `MAX_WINDOW − 1` matrices and `HISTORY_BUDGET`).
     memory: Memory {
-        bytes: |n, m| per_agent(n, 10.0 * (m * n) as f64),
+        bytes: |n, m| {
+            let values = (m * n) as f64;
+            let history = (values * (readout_filter::MAX_WINDOW - 1) as f64)
+                .min(readout_filter::HISTORY_BUDGET as f64);
+            per_agent(n, 13.0 * values + history)
+        },
         of: TEAM_STATE,
         because: "each robot holds an m×n matrix",
     },

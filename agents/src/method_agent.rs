@@ -16,7 +16,9 @@ use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
 use crate::method::{AgentInit, AgentSettings};
 use crate::primal::PrimalAgent;
 use crate::problem::AssignmentCase;
+use crate::readout_filter::ReadoutFilter;
 use crate::rho::RhoSchedule;
+use std::sync::Arc;
 
 /// An agent of any team method, optionally following a ρ schedule (applied by the agent
 /// itself before each step, so every transport changes ρ at the same round).
@@ -68,6 +70,18 @@ impl MethodAgent {
     /// current iterates or (`warm = false`) from zero; primal consensus ADMM only.
     pub fn set_costs(&mut self, costs: &[f64], warm: bool) -> Result<(), String> {
         self.algorithm.set_costs(costs, warm)
+    }
+
+    /// Gives the fast primal variant's agent the team's readout filter (no effect on other
+    /// methods, on the paper's variant or with `None`).
+    pub fn with_readout_filter(mut self, filter: Option<Arc<ReadoutFilter>>) -> Self {
+        if let Some(filter) = filter {
+            let any: &mut dyn std::any::Any = self.algorithm.as_mut();
+            if let Some(primal) = any.downcast_mut::<PrimalAgent>() {
+                primal.set_readout_filter(filter);
+            }
+        }
+        self
     }
 
     /// The primal agent inside, if this is one.

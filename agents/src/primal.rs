@@ -32,9 +32,11 @@ pub use crate::primal_settings::{PrimalSettings, ProjectionPath};
 use crate::problem::AssignmentCase;
 use crate::projection::{ProjectionStats, QpProjector, TransportPolytopeProjector};
 use crate::readout::GReadout;
+use crate::readout_filter::ReadoutFilter;
 use crate::rounding;
 use faer::{MatMut, MatRef};
 use std::cell::RefCell;
+use std::sync::Arc;
 
 enum Projector {
     Fast(Box<TransportPolytopeProjector>),
@@ -186,6 +188,15 @@ impl PrimalAgent {
         self.certificate_slack_for(&self.rounded)
     }
 
+    /// From the next step on, the fast variant reads its assignment (and its certificate)
+    /// from the filtered certificate matrix of [`crate::readout_filter`]; every robot of the
+    /// team must be given the same filter. No effect on the paper's variant.
+    pub fn set_readout_filter(&mut self, filter: Arc<ReadoutFilter>) {
+        if let Some(fast) = &mut self.fast {
+            fast.set_filter(filter);
+        }
+    }
+
     /// The fast variant's multipliers `K_i` in integer units (`Q_i` is a fixed multiple of
     /// them; they sum to zero over the team exactly); `None` for Algorithm 1.
     pub fn exact_multipliers(&self) -> Option<&[i128]> {
@@ -213,15 +224,20 @@ impl PrimalAgent {
         {
             return f64::INFINITY;
         }
+        // The certificate matrix's multipliers: `Q_i`, or the fast variant's filtered `Q̂_i`
+        // (every robot of the team uses the same rule at every round).
+        let q = match &self.fast {
+            Some(fast) => fast.certificate_multipliers(&self.q),
+            None => &self.q,
+        };
         // The exact minimiser of `G_i` over the polytope (no tie-break: ε = 0).
-        readout.read(&self.q, &self.costs, self.index, best);
+        readout.read(q, &self.costs, self.index, best);
         if readout.slack_bound().is_none() {
             // A non-finite iterate: no certificate.
             return f64::INFINITY;
         }
-        let g = |t: usize, j: usize| {
-            self.q[j * m + t] + if j == self.index { self.costs[t] } else { 0.0 }
-        };
+        let g =
+            |t: usize, j: usize| q[j * m + t] + if j == self.index { self.costs[t] } else { 0.0 };
         let value = |a: &[usize]| a.iter().enumerate().map(|(j, &t)| g(t, j)).sum::<f64>();
         (value(assignment) - value(best)).max(0.0)
     }
@@ -289,13 +305,13 @@ impl PrimalAgent {
     /// the distance of the iterate (whole, own column) from that rounding and a digest of it.
     fn inspect_rounding(&mut self) -> (f64, f64, u64) {
         match &mut self.fast {
-            Some(fast) => fast
-                .readout
-                .read(&self.q, &self.costs, self.index, &mut self.rounded),
+            Some(fast) => fast.read(&self.q, &self.costs, self.index, &mut self.rounded),
             None => rounding::argmax_assignment(&self.x, self.tasks, &mut self.rounded),
         }
         let feasible = rounding::covers(&self.rounded, self.case, &mut self.load);
-        let mut digest: u64 = 0xcbf2_9ce4_8422_2325;
+        // Robots whose readout filters differ read different matrices: they must not agree.
+        let filter = self.fast.as_ref().map_or(0, |f| f.filter_digest());
+        let mut digest: u64 = 0xcbf2_9ce4_8422_2325 ^ filter;
         let (mut gap, mut own_gap) = (0.0f64, 0.0f64);
         for (j, &task) in self.rounded.iter().enumerate() {
             digest = (digest ^ task as u64).wrapping_mul(0x0100_0000_01b3);

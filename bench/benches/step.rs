@@ -43,6 +43,7 @@ fn agent_in_flight(method: AgentMethod, n: usize) -> (MethodAgent, Vec<Vec<Vec<f
         epsilon: None,
         seed: 0,
         schedule: None,
+        readout_filter: std::sync::OnceLock::new(),
     };
     let mut sim = LockstepSim::new(team.agents(), &graph);
     for _ in 0..30 {

@@ -346,6 +346,7 @@ impl Scenario {
                 .adaptive_rho
                 .then(|| self.method.schedule(f64::from_bits(self.rho_bits)))
                 .flatten(),
+            readout_filter: std::sync::OnceLock::new(),
         };
         Ok(team.agent(index))
     }

@@ -6,10 +6,13 @@ use crate::options::SolveOptions;
 use admm_ta_agents::method::{AgentMethod, AgentSettings};
 use admm_ta_agents::method_agent::MethodAgent;
 use admm_ta_agents::primal::PrimalSettings;
+use admm_ta_agents::primal_settings::{FastTuning, PrimalVariant, fast_rho};
 use admm_ta_agents::problem::TaskAssignmentProblem;
+use admm_ta_agents::readout_filter::ReadoutFilter;
 use admm_ta_agents::rho::RhoSchedule;
 use admm_ta_agents::ties;
 use admm_ta_topologies::Graph;
+use std::sync::{Arc, OnceLock};
 
 /// Every robot's agent, built the same way by every transport (and every independently
 /// started agent) so that they compute with exactly the same numbers: the problem, the
@@ -21,6 +24,9 @@ pub struct AgentFactory<'a> {
     pub epsilon: Option<f64>,
     pub seed: u64,
     pub schedule: Option<RhoSchedule>,
+    /// The fast primal variant's readout filter ([`readout_filter`]), designed on first use
+    /// and shared by every agent built here (`OnceLock::new()` when building a factory).
+    pub readout_filter: OnceLock<Option<Arc<ReadoutFilter>>>,
 }
 
 impl AgentFactory<'_> {
@@ -37,12 +43,39 @@ impl AgentFactory<'_> {
             self.settings,
         )
         .with_schedule(self.schedule)
+        .with_readout_filter(
+            self.readout_filter
+                .get_or_init(|| readout_filter(self.problem, self.graph, &self.settings))
+                .clone(),
+        )
     }
 
     /// Every robot's agent.
     pub fn agents(&self) -> Vec<MethodAgent> {
         (0..self.problem.robots()).map(|i| self.agent(i)).collect()
     }
+}
+
+/// The readout filter every robot of a fast primal team uses, designed from the graph
+/// (`admm_ta_agents::readout_filter`); `None` for the other methods and variants, below a
+/// tenth of the fast variant's ρ, on graphs without edges, and where no history window fits
+/// the robot's memory budget.
+pub fn readout_filter(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    settings: &AgentSettings,
+) -> Option<Arc<ReadoutFilter>> {
+    if settings.method != AgentMethod::Primal || settings.primal_variant != PrimalVariant::Fast {
+        return None;
+    }
+    // The weights fit the iteration's linear large-ρ regime (every factor from 10 up gives
+    // the same rounds); a much smaller `--rho` clips the iterates and the fit would not hold.
+    let linear = fast_rho(problem.costs().spread(), graph.mean_degree()) / 10.0;
+    if !(settings.rho >= linear) {
+        return None;
+    }
+    let window = ReadoutFilter::window_for(problem.tasks(), problem.robots(), settings.diameter);
+    ReadoutFilter::design(graph, FastTuning::for_diameter(settings.diameter), window).map(Arc::new)
 }
 
 /// The ρ a problem's costs give by the method's default rule is no penalty (the costs have
@@ -105,6 +138,7 @@ pub fn prepare<'a>(
         epsilon,
         seed: options.seed(),
         schedule,
+        readout_filter: OnceLock::new(),
     };
     Ok(Plan {
         rho,
@@ -134,6 +168,7 @@ pub fn primal_team(
         epsilon,
         seed,
         schedule: None,
+        readout_filter: OnceLock::new(),
     }
     .agents()
 }
