@@ -50,7 +50,7 @@ pub const MAX_GAIN: f64 = 65536.0;
 /// Random inputs of the design on graphs of more robots than this (unit inputs below).
 pub const PROBES: usize = 32;
 /// Stream of the probes (`"readout"`).
-const PROBE_STREAM: u64 = 0x7265_6164_6f75_74;
+const PROBE_STREAM: u64 = 0x0072_6561_646f_7574;
 /// Relative ridge of the least-squares design, raised ×100 while the gain is too large.
 const RIDGE: f64 = 1e-12;
 
@@ -190,7 +190,7 @@ fn cholesky_solve_ones(m: &mut [f64], w: usize) -> Option<Vec<f64>> {
         for p in 0..j {
             diag -= m[j * w + p] * m[j * w + p];
         }
-        if !(diag > 0.0) {
+        if diag.is_nan() || diag <= 0.0 {
             return None;
         }
         let diag = diag.sqrt();

@@ -71,7 +71,7 @@ pub fn readout_filter(
     // The weights fit the iteration's linear large-ρ regime (every factor from 10 up gives
     // the same rounds); a much smaller `--rho` clips the iterates and the fit would not hold.
     let linear = fast_rho(problem.costs().spread(), graph.mean_degree()) / 10.0;
-    if !(settings.rho >= linear) {
+    if settings.rho.is_nan() || settings.rho < linear {
         return None;
     }
     let window = ReadoutFilter::window_for(problem.tasks(), problem.robots(), settings.diameter);
