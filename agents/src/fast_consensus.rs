@@ -32,7 +32,7 @@
 use crate::primal_settings::{FastSettings, FastTuning};
 use crate::problem::AssignmentCase;
 use crate::readout::GReadout;
-use crate::readout_filter::{ReadoutFilter, WEIGHT_BITS};
+use crate::readout_filter::{MAX_WINDOW, ReadoutFilter, WEIGHT_BITS};
 use std::sync::Arc;
 
 /// `2^52`: the grid of the payloads and the unit of the integer multipliers.
@@ -57,18 +57,22 @@ pub struct FastConsensus {
     filter: Option<Filtered>,
 }
 
+/// `Q̂_i` when the robot filters its readout, else `q` (its `Q_i`).
+fn filtered_or<'a>(filter: &'a Option<Filtered>, q: &'a [f64]) -> &'a [f64] {
+    filter.as_ref().map_or(q, |f| &f.q)
+}
+
 /// A robot's side of the extrapolated readout.
 #[derive(Debug, Clone)]
 struct Filtered {
     weights: Arc<ReadoutFilter>,
-    /// The last `W − 1` increments of `K_i` (slot `(u − 1) mod (W − 1)` for update `u`).
+    /// The last `W − 1` increments of `K_i`, entry-major: entry `e`'s increment of update `u`
+    /// at `e (W − 1) + (u − 1) mod (W − 1)`, so that one entry's history is contiguous.
     increments: Vec<i64>,
     /// Updates since the start (or the last reset).
     updates: u64,
     /// `Q̂_i`, the certificate multipliers of this round.
     q: Vec<f64>,
-    /// `2^B Q̂_i / scale`, exact.
-    sums: Vec<i128>,
 }
 
 impl FastConsensus {
@@ -100,7 +104,6 @@ impl FastConsensus {
             weights: filter,
             updates: 0,
             q: vec![0.0; len],
-            sums: vec![0; len],
         });
         self.readout.invalidate();
     }
@@ -113,20 +116,14 @@ impl FastConsensus {
     /// The multipliers of the certificate matrix `Ĝ_i = Q̂_i + α_i e_iᵀ` this round: `Q_i`
     /// itself, or its filtered combination.
     pub fn certificate_multipliers<'a>(&'a self, q: &'a [f64]) -> &'a [f64] {
-        match &self.filter {
-            Some(f) => &f.q,
-            None => q,
-        }
+        filtered_or(&self.filter, q)
     }
 
     /// Reads robot `index`'s assignment from its certificate matrix into `out`
     /// ([`GReadout::read`] on [`FastConsensus::certificate_multipliers`]).
     pub fn read(&mut self, q: &[f64], costs: &[f64], index: usize, out: &mut [usize]) {
-        let q = match &self.filter {
-            Some(f) => &f.q,
-            None => q,
-        };
-        self.readout.read(q, costs, index, out);
+        self.readout
+            .read(filtered_or(&self.filter, q), costs, index, out);
     }
 
     /// Forgets the multipliers and the edge variables (a cold start).
@@ -185,14 +182,15 @@ impl FastConsensus {
         let half_scaled = 0.5 / (rho * degree);
         let (keep, centre) = ((1.0 - c) / degree, c / tasks as f64);
         let own_weight = neighbours as i64;
-        let len = self.units.len();
-        let slot = self.filter.as_mut().and_then(|f| {
+        let history = self.filter.as_mut().map(|f| {
             f.updates += 1;
             let slots = f.weights.window() - 1;
-            let start = ((f.updates - 1) % slots as u64) as usize * len;
-            f.increments.get_mut(start..start + len)
+            let slot = ((f.updates - 1) % slots as u64) as usize;
+            (&mut f.increments[slot..], slots)
         });
-        let mut increments = slot.into_iter().flatten();
+        let mut increments = history
+            .into_iter()
+            .flat_map(|(tail, slots)| tail.iter_mut().step_by(slots));
         for (((((s, q), k), zb), &mine), &theirs) in z
             .iter_mut()
             .zip(q.iter_mut())
@@ -228,24 +226,27 @@ impl FastConsensus {
             return;
         };
         let weights = f.weights.weights(f.updates);
-        let slots = (f.weights.window() - 1) as u64;
-        let len = self.units.len();
-        for (acc, &k) in f.sums.iter_mut().zip(&self.units) {
-            *acc = k << WEIGHT_BITS;
-        }
+        let slots = f.weights.window() - 1;
+        // `Σ_{l>s} g_l` by history slot (0 for slots the window does not reach).
+        let mut coefficients = [0i64; MAX_WINDOW];
         let mut tail: i64 = weights.iter().skip(1).sum();
         for (s, g) in weights.iter().enumerate().skip(1) {
             // The increment of update `updates − (s − 1)`.
-            let slot = ((f.updates - s as u64) % slots) as usize * len;
-            let tail_wide = i128::from(tail);
-            for (acc, &inc) in f.sums.iter_mut().zip(&f.increments[slot..slot + len]) {
-                *acc -= tail_wide * i128::from(inc);
-            }
+            coefficients[((f.updates - s as u64) % slots as u64) as usize] = tail;
             tail -= g;
         }
+        let coefficients = &coefficients[..slots];
         let unit_scale = scale / f64::from(1u32 << WEIGHT_BITS);
-        for (out, &acc) in f.q.iter_mut().zip(&f.sums) {
-            *out = unit_scale * acc as f64;
+        for ((out, &k), history) in
+            f.q.iter_mut()
+                .zip(&self.units)
+                .zip(f.increments.chunks_exact(slots))
+        {
+            let mut sum = k << WEIGHT_BITS;
+            for (&c, &inc) in coefficients.iter().zip(history) {
+                sum -= i128::from(c) * i128::from(inc);
+            }
+            *out = unit_scale * sum as f64;
         }
     }
 

@@ -85,15 +85,14 @@ impl ReadoutFilter {
         }
         let diameter = graph.diameter()?;
         let rounds = 3 * (diameter + 1) + window;
-        let model = Model::new(graph, tuning);
+        let mut model = Model::new(graph, tuning);
         let mut residuals = Residuals::new(window, model.len());
         // Inner products `⟨r(k), r(k − l)⟩`, `l < window`, per round.
         let mut products: Vec<Vec<f64>> = Vec::with_capacity(rounds);
         let mut weights = Vec::with_capacity(rounds);
-        let mut model = model;
         for k in 0..rounds {
             model.step();
-            residuals.push(&model.residual());
+            model.residual_into(residuals.next_slot());
             products.push(residuals.products());
             let w = window.min(k + 1);
             let gram = |a: usize, b: usize| {
@@ -301,10 +300,11 @@ impl<'a> Model<'a> {
         }
     }
 
-    fn residual(&self) -> Vec<f64> {
-        (0..self.len())
-            .map(|e| self.y[e] + self.a[e] - self.target[e])
-            .collect()
+    /// `r = y + a − target` into `out`.
+    fn residual_into(&self, out: &mut [f64]) {
+        for (e, r) in out.iter_mut().enumerate() {
+            *r = self.y[e] + self.a[e] - self.target[e];
+        }
     }
 }
 
@@ -325,10 +325,11 @@ impl Residuals {
         }
     }
 
-    fn push(&mut self, r: &[f64]) {
+    /// The slot of the next residual, which becomes the newest.
+    fn next_slot(&mut self) -> &mut [f64] {
         self.newest = (self.newest + 1) % self.ring.len();
-        self.ring[self.newest].copy_from_slice(r);
         self.count += 1;
+        &mut self.ring[self.newest]
     }
 
     /// `⟨r(k), r(k − l)⟩` for every lag held.
@@ -393,7 +394,9 @@ mod tests {
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
         for k in 1..=(n as u64 + 10) {
             model.step();
-            history.insert(0, model.residual());
+            let mut residual = vec![0.0; model.len()];
+            model.residual_into(&mut residual);
+            history.insert(0, residual);
             let w = filter.weights(k);
             let mut filtered = vec![0.0; model.len()];
             for (l, &g) in w.iter().enumerate() {
