@@ -280,7 +280,7 @@ pub enum Experiment {
     Surveillance {
         #[arg(long, default_value_t = 1000)]
         episodes: usize,
-        /// Scenario TOML file (default: the built-in one, `admm-ta-agents::surveillance`).
+        /// Scenario TOML file (default: the built-in one, `admm-ta-agents::problem::surveillance`).
         #[arg(long)]
         scenario: Option<PathBuf>,
         /// ipc (one process per robot for the whole run), threads or uds.

@@ -10,7 +10,7 @@
 //! | 5 | round limit reached without a certified assignment (the best one is printed) |
 //! | 6 | `--check` found the result not optimal |
 
-use admm_ta::agents::lsap::LsapError;
+use admm_ta::agents::numerics::lsap::LsapError;
 use admm_ta::agents::problem::ProblemError;
 use admm_ta::runtime::process::launcher::LaunchError;
 use admm_ta::runtime::process::member_error::MemberError;

@@ -58,15 +58,15 @@ pub use admm_ta_agents as agents;
 pub use admm_ta_runtime as runtime;
 pub use admm_ta_topologies as topologies;
 
-pub use admm_ta_agents::cost_model::CostModel;
-pub use admm_ta_agents::method::Method;
-pub use admm_ta_agents::primal::ProjectionPath;
-pub use admm_ta_agents::primal_settings::PrimalVariant;
+pub use admm_ta_agents::certify::stopping::StopRule;
+pub use admm_ta_agents::methods::Method;
+pub use admm_ta_agents::methods::primal::agent::ProjectionPath;
+pub use admm_ta_agents::methods::primal::settings::PrimalVariant;
+pub use admm_ta_agents::problem::cost_model::CostModel;
+pub use admm_ta_agents::problem::ties::Perturbation;
 pub use admm_ta_agents::problem::{
     AssignmentCase, CaseChoice, CostMatrix, ProblemError, TaskAssignmentProblem,
 };
-pub use admm_ta_agents::stopping::StopRule;
-pub use admm_ta_agents::ties::Perturbation;
 pub use admm_ta_runtime::options::error::ConfigError;
 pub use admm_ta_runtime::options::{OnFailure, SolveOptions, SolveOptionsBuilder};
 pub use admm_ta_runtime::solve::error::SolveError;

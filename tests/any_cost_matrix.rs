@@ -234,7 +234,7 @@ proptest! {
                 unreachable!()
             }
         };
-        let optimum = admm_ta::agents::oracle::solve(&problem).unwrap().cost;
+        let optimum = admm_ta::agents::certify::oracle::solve(&problem).unwrap().cost;
         for method in Method::ALL {
             check(&instance, &problem, optimum, method, Transport::Sim)?;
         }
@@ -248,7 +248,7 @@ proptest! {
     #[test]
     fn a_sample_on_threads(instance in instances()) {
         let Ok(problem) = build(&instance) else { return Ok(()) };
-        let optimum = admm_ta::agents::oracle::solve(&problem).unwrap().cost;
+        let optimum = admm_ta::agents::certify::oracle::solve(&problem).unwrap().cost;
         for method in [Method::Primal, Method::Dual, Method::Market] {
             check(&instance, &problem, optimum, method, Transport::Threads)?;
         }
@@ -366,7 +366,9 @@ fn generators_by_methods_table() {
                 }
                 Err(e) => panic!("{name}: {e}"),
             };
-            let optimum = admm_ta::agents::oracle::solve(&problem).unwrap().cost;
+            let optimum = admm_ta::agents::certify::oracle::solve(&problem)
+                .unwrap()
+                .cost;
             for (k, method) in Method::ALL.iter().enumerate() {
                 check(&instance, &problem, optimum, *method, Transport::Sim).unwrap();
                 match run(&problem, *method, Transport::Sim) {

@@ -4,8 +4,8 @@
 
 mod common;
 
-use admm_ta_agents::method::Method;
-use admm_ta_agents::oracle;
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::report::SolveReport;

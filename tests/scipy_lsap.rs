@@ -185,7 +185,7 @@ fn sparse_random_matrices_feasibility_agrees_with_the_exact_solver() {
                 }
             })
             .collect();
-        let exact = admm_ta::agents::lsap::solve(&values, 100, 100);
+        let exact = admm_ta::agents::numerics::lsap::solve(&values, 100, 100);
         let costs = CostMatrix::new(100, 100, values).unwrap();
         match TaskAssignmentProblem::new(costs, CaseChoice::Auto) {
             Err(ProblemError::Infeasible(line)) => {

@@ -3,7 +3,7 @@
 //! and uds runs use real agent processes (and real shared memory, or real sockets), each in
 //! its own namespace, and must leave nothing behind.
 
-use admm_ta_agents::method::Method;
+use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::error::ConfigError;
 use admm_ta_runtime::options::run::RunOptions;
@@ -415,7 +415,7 @@ fn every_wait_strategy_gives_the_same_iterates_on_every_distributed_transport() 
 fn the_socket_baseline_moves_payloads_larger_than_the_socket_buffers() {
     // 200×200 payload: 320 KB per message, more than a socket buffer holds: sends that the
     // kernel cannot take at once must not deadlock two agents sending to each other.
-    use admm_ta_agents::probe::ProbeStep;
+    use admm_ta_agents::methods::probe::ProbeStep;
     use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
     let g = graph("complete", 6, 0);
     for transport in [

@@ -1,4 +1,4 @@
-//! The generic two-block ADMM (`admm_ta_agents::two_block`) on a small lasso, Boyd et al.
+//! The generic two-block ADMM (`admm_ta_agents::numerics::two_block`) on a small lasso, Boyd et al.
 //! §6.4: `min ½‖D x − y‖² + κ‖z‖₁` subject to `x − z = 0`.
 //!
 //! `cargo run -p admm-ta-agents --example two_block_lasso`
@@ -7,7 +7,7 @@
 //! thresholding. Prints the recovered coefficients next to the sparse ground truth the
 //! measurements came from, the residuals, and the lasso's optimality conditions.
 
-use admm_ta_agents::two_block::{Multipliers, TwoBlockAdmm};
+use admm_ta_agents::numerics::two_block::{Multipliers, TwoBlockAdmm};
 use admm_ta_topologies::rng::SeededRng;
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};

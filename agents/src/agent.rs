@@ -89,9 +89,9 @@ pub trait ConsensusAgent {
     fn own_column(&self) -> &[f64];
 }
 
-/// A method's agent as its registration in [`crate::method`] builds it: a
+/// A method's agent as its registration in [`crate::methods`] builds it: a
 /// [`ConsensusAgent`] whose penalty and costs may change between steps. Runners hold it as
-/// `Box<dyn AgentAlgorithm>` inside a [`crate::method_agent::MethodAgent`], so a new method is
+/// `Box<dyn AgentAlgorithm>` inside a [`crate::method::agent::MethodAgent`], so a new method is
 /// one module implementing this trait plus one registration, and no runner matches on
 /// methods. The defaults suit a method without a penalty that solves one problem.
 pub trait AgentAlgorithm: ConsensusAgent + Send + std::any::Any {

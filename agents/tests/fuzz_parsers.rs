@@ -4,8 +4,8 @@
 //! --test fuzz_parsers`.)
 
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::method::{AgentMethod, AgentSettings};
-use admm_ta_agents::method_agent::MethodAgent;
+use admm_ta_agents::method::agent::MethodAgent;
+use admm_ta_agents::methods::{AgentMethod, AgentSettings};
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
 use proptest::prelude::*;
 

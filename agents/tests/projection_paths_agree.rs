@@ -1,8 +1,10 @@
 //! The fast projection against the clarabel QP, and against hand-checked cases.
 
-use admm_ta_agents::general::GeneralProblem;
+use admm_ta_agents::numerics::projection::{
+    QpProjector, TransportPolytopeProjector, polytope_violation,
+};
+use admm_ta_agents::problem::general::GeneralProblem;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_agents::projection::{QpProjector, TransportPolytopeProjector, polytope_violation};
 use admm_ta_topologies::rng::SeededRng;
 use faer::{Mat, MatRef};
 use proptest::prelude::*;

@@ -3,9 +3,9 @@
 //! inexact-dual step (multiplier update, x-update, certificate) allocate nothing.
 
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::method::{AgentMethod, AgentSettings};
-use admm_ta_agents::method_agent::MethodAgent;
-use admm_ta_agents::primal_settings::PrimalVariant;
+use admm_ta_agents::method::agent::MethodAgent;
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::methods::{AgentMethod, AgentSettings};
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;

@@ -3,7 +3,7 @@
 //! z-update soft thresholding. The answer is checked against the lasso's optimality
 //! conditions, not against another solver's output.
 
-use admm_ta_agents::two_block::{Multipliers, TwoBlockAdmm, TwoBlockError};
+use admm_ta_agents::numerics::two_block::{Multipliers, TwoBlockAdmm, TwoBlockError};
 use admm_ta_topologies::rng::SeededRng;
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};

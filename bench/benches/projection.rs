@@ -5,9 +5,9 @@
 //! comparison with clarabel is like for like, and warm (the ADMM situation: the previous
 //! round's multipliers, input perturbed slightly).
 
-use admm_ta_agents::general::GeneralProblem;
+use admm_ta_agents::numerics::projection::{QpProjector, TransportPolytopeProjector};
 use admm_ta_agents::problem::AssignmentCase;
-use admm_ta_agents::projection::{QpProjector, TransportPolytopeProjector};
+use admm_ta_agents::problem::general::GeneralProblem;
 use admm_ta_bench::inputs;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use faer::Mat;

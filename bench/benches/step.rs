@@ -11,10 +11,10 @@
 //!   scipy's `linear_sum_assignment` (86 µs at 50, 9.8 ms at 500 on a CI runner).
 
 use admm_ta_agents::agent::{ConsensusAgent, Inbox};
-use admm_ta_agents::method::{AgentMethod, AgentSettings};
-use admm_ta_agents::method_agent::MethodAgent;
-use admm_ta_agents::oracle;
-use admm_ta_agents::primal_settings::PrimalVariant;
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::method::agent::MethodAgent;
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::methods::{AgentMethod, AgentSettings};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::workload::plan::AgentFactory;

@@ -1,7 +1,7 @@
 //! Repeats cold projections of one input, for `perf record`:
 //! `cargo run --release -p admm-ta-bench --example projection_profile -- 50 2000`.
+use admm_ta_agents::numerics::projection::TransportPolytopeProjector;
 use admm_ta_agents::problem::AssignmentCase;
-use admm_ta_agents::projection::TransportPolytopeProjector;
 use admm_ta_bench::inputs;
 use faer::Mat;
 

@@ -9,9 +9,9 @@
 
 use crate::experiment::{Experiment, OutputFile};
 use crate::plot::{Chart, Scale, Series};
-use admm_ta_agents::cost_model::CostModel;
-use admm_ta_agents::method::Method;
-use admm_ta_agents::primal_settings::PrimalVariant;
+use admm_ta_agents::methods::Method;
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::problem::cost_model::CostModel;
 use admm_ta_agents::problem::{CaseChoice, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::error::SolveError;

@@ -3,7 +3,7 @@
 //!
 //! One team of agents (one process per robot over iceoryx2 by default) stays alive for all
 //! episodes; each episode every robot computes its own costs from its battery and position
-//! ([`admm_ta_agents::surveillance`]), the team solves the assignment warm-started from the
+//! ([`admm_ta_agents::problem::surveillance`]), the team solves the assignment warm-started from the
 //! previous episode, and every robot moves. Each episode's assignment is compared with the
 //! Hungarian optimum of the same costs, batteries are checked (a violation is a battery
 //! below 0), and the same cost matrix is solved again from a **cold** start (fresh agents,
@@ -12,10 +12,10 @@
 use crate::experiment::{Experiment, OutputFile, mean_of};
 use crate::figures::FigureError;
 use crate::plot::{Chart, Legend, Series};
-use admm_ta_agents::local_stop::LocalCertifiedStop;
-use admm_ta_agents::oracle;
+use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::problem::surveillance::SurveillanceScenario;
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
-use admm_ta_agents::surveillance::SurveillanceScenario;
 use admm_ta_runtime::episodes::{EpisodeRunConfig, run_episodes};
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::workload::episode::EpisodeSettings;

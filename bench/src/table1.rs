@@ -20,8 +20,8 @@
 //! the same costs shifted to [1, 2).
 
 use crate::experiment::Experiment;
-use admm_ta_agents::method::Method;
-use admm_ta_agents::primal_settings::PrimalVariant;
+use admm_ta_agents::methods::Method;
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::solve::error::SolveError;

@@ -4,8 +4,8 @@
 //! `cargo run --release -p admm-ta-runtime --example dual_tuning -- ROBOTS TASKS TOPOLOGY SEEDS exact|inexact RHO_FACTOR [GAMMA_FACTOR] [SHIFT]`.
 //! ρ = RHO_FACTOR / (spread · mean degree).
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::dual::{DualAgent, DualSettings, DualUpdate};
-use admm_ta_agents::oracle;
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::methods::dual::agent::{DualAgent, DualSettings, DualUpdate};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_topologies::TopologySpec;
@@ -18,11 +18,10 @@ fn main() {
     let seeds: u64 = args[4].parse().unwrap();
     let exact = args[5] == "exact";
     let factor: f64 = args[6].parse().unwrap();
-    let gamma: f64 = args
-        .get(7)
-        .map_or(admm_ta_agents::dual::DEFAULT_GAMMA_FACTOR, |a| {
-            a.parse().unwrap()
-        });
+    let gamma: f64 = args.get(7).map_or(
+        admm_ta_agents::methods::dual::agent::DEFAULT_GAMMA_FACTOR,
+        |a| a.parse().unwrap(),
+    );
     let shift: f64 = args.get(8).map_or(0.0, |a| a.parse().unwrap());
     let rel_tol: f64 = args.get(9).map_or(1e-9, |a| a.parse().unwrap());
     let max_rounds = 3000;

@@ -1,10 +1,10 @@
 //! Explores ρ schedules `ρ_k = ρ_0 · g^k`, bounded by `limit` (a cap when g > 1, a floor
 //! when g < 1), against the fixed default:
 //! `cargo run --release -p admm-ta-runtime --example rho_schedule -- ROBOTS TASKS TOPOLOGY SEEDS GROWTH LIMIT`.
-use admm_ta_agents::oracle;
-use admm_ta_agents::primal::PrimalSettings;
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::certify::rounding::argmax_assignment;
+use admm_ta_agents::methods::primal::agent::PrimalSettings;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_agents::rounding::argmax_assignment;
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::workload::plan::primal_team;
 use admm_ta_topologies::TopologySpec;
@@ -25,7 +25,7 @@ fn main() {
                 .unwrap();
         let graph = spec.build(n, seed).unwrap();
         let optimum = oracle::solve(&problem).unwrap();
-        let rho0 = admm_ta_agents::rho::default_rho(problem.costs(), graph.mean_degree());
+        let rho0 = admm_ta_agents::methods::rho::default_rho(problem.costs(), graph.mean_degree());
         let agents = primal_team(&problem, &graph, PrimalSettings::new(rho0), None, seed);
         let mut sim = LockstepSim::new(agents, &graph);
         let mut decisions = vec![0; n];

@@ -1,11 +1,11 @@
 //! Measures candidate stop rules against the oracle on many seeded instances:
 //! `cargo run --release -p admm-ta-runtime --example stop_rules -- ROBOTS TASKS TOPOLOGY SEEDS [RHO_MULTIPLIER] [MAX_ROUNDS]
 //! (the multiplier scales the default ρ rule)`.
-use admm_ta_agents::oracle;
-use admm_ta_agents::primal::PrimalSettings;
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::certify::rounding::argmax_assignment;
+use admm_ta_agents::certify::stopping::NeverStop;
+use admm_ta_agents::methods::primal::agent::PrimalSettings;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_agents::rounding::argmax_assignment;
-use admm_ta_agents::stopping::NeverStop;
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::workload::plan::primal_team;
 use admm_ta_topologies::TopologySpec;

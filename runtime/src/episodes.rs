@@ -1,12 +1,12 @@
 //! Repeated assignments: one team of agents, alive across many episodes (the persistent
-//! surveillance case study, [`admm_ta_agents::surveillance`]).
+//! surveillance case study, [`admm_ta_agents::problem::surveillance`]).
 //!
 //! Every episode each robot computes its own cost row from its own state, the team runs
 //! primal consensus ADMM to the decentralized certified stop, and each robot moves to its
 //! station, updating its position and battery. The agents are not restarted: after the
 //! stop (all robots stop at the same round), the next episode goes on from that round with
 //! the new costs, **warm-started** from the current iterates and multipliers
-//! ([`admm_ta_agents::method_agent::MethodAgent::set_costs`]) and a fresh stop rule. Threads and
+//! ([`admm_ta_agents::method::agent::MethodAgent::set_costs`]) and a fresh stop rule. Threads and
 //! processes (one per robot for the whole run) run the same agent function on the team
 //! runner ([`crate::runner`]),
 //! [`run_surveillance_agent`](crate::workload::episode::run_surveillance_agent).

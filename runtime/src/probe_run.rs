@@ -1,11 +1,11 @@
-//! A latency-benchmark run: a team of [`ProbeAgent`](admm_ta_agents::probe::ProbeAgent)s (payload of any length, a step of
+//! A latency-benchmark run: a team of [`ProbeAgent`](admm_ta_agents::methods::probe::ProbeAgent)s (payload of any length, a step of
 //! known cost) for a fixed number of rounds on one transport, with warm-up rounds excluded
 //! from the recorded latency and resource usage. The algorithmic counterpart is
 //! [`crate::solve::solve`] with `StopRule::MaxIters` and warm-up rounds. The team runs on
 //! the team runner ([`crate::runner`]), like a solve's.
 //!
 //! ```
-//! use admm_ta_agents::probe::ProbeStep;
+//! use admm_ta_agents::methods::probe::ProbeStep;
 //! use admm_ta_runtime::options::run::RunOptions;
 //! use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
 //! use admm_ta_runtime::transport::Transport;
@@ -22,7 +22,7 @@ use crate::options::run::RunOptions;
 use crate::runner::{RunError, run_team};
 use crate::usage::ThreadUsage;
 use crate::workload::Workload;
-use admm_ta_agents::probe::ProbeStep;
+use admm_ta_agents::methods::probe::ProbeStep;
 use admm_ta_topologies::Graph;
 use std::time::{Duration, Instant};
 

@@ -1,8 +1,8 @@
 //! Lockstep simulation of a team of agents in one thread.
 
 use admm_ta_agents::agent::{ConsensusAgent, Inbox, StepReport};
-use admm_ta_agents::local_stop::{LocalCertifiedStop, NeighbourState, Verdict};
-use admm_ta_agents::stopping::TeamStopRule;
+use admm_ta_agents::certify::local_stop::{LocalCertifiedStop, NeighbourState, Verdict};
+use admm_ta_agents::certify::stopping::TeamStopRule;
 use admm_ta_topologies::Graph;
 
 /// The neighbours' round-`k` payloads of one agent, read in place from the round buffer.

@@ -4,13 +4,13 @@
 //! consensus multipliers sum to zero exactly, however many rounds run.
 
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::cost_model::geometric;
-use admm_ta_agents::method::{AgentMethod, AgentSettings};
-use admm_ta_agents::method_agent::MethodAgent;
-use admm_ta_agents::oracle;
-use admm_ta_agents::primal_settings::PrimalVariant;
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::certify::stopping::NeverStop;
+use admm_ta_agents::method::agent::MethodAgent;
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::methods::{AgentMethod, AgentSettings};
+use admm_ta_agents::problem::cost_model::geometric;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_agents::stopping::NeverStop;
 use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::solve::solve;
@@ -101,7 +101,7 @@ fn fast_agents(problem: &TaskAssignmentProblem, spec: TopologySpec) -> (Vec<Meth
     let n = problem.robots();
     let graph = spec.build(n, 0).unwrap();
     let diameter = graph.diameter().unwrap();
-    let rho = admm_ta_agents::method::Method::Primal.default_rho(
+    let rho = admm_ta_agents::methods::Method::Primal.default_rho(
         problem.costs(),
         graph.mean_degree(),
         PrimalVariant::Fast,

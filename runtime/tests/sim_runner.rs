@@ -1,13 +1,13 @@
 //! The lockstep simulation: deterministic, worker-count independent, and its stop rule
 //! does not stop at wrong assignments.
 
-use admm_ta_agents::method_agent::MethodAgent;
-use admm_ta_agents::oracle;
-use admm_ta_agents::primal::{PrimalSettings, ProjectionPath};
-use admm_ta_agents::primal_settings::PrimalVariant;
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::certify::stopping::NeverStop;
+use admm_ta_agents::method::agent::MethodAgent;
+use admm_ta_agents::methods::primal::agent::{PrimalSettings, ProjectionPath};
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::methods::rho::default_rho;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_agents::rho::default_rho;
-use admm_ta_agents::stopping::NeverStop;
 use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::solve::solve;

@@ -7,7 +7,7 @@ use crate::commands::shared::{agent_program, progress_bar};
 use crate::exit::{NotOptimal, UsageError, usage_bail};
 use crate::output::{out, outln, progress_row};
 use admm_ta::Method;
-use admm_ta::agents::surveillance::SurveillanceScenario;
+use admm_ta::agents::problem::surveillance::SurveillanceScenario;
 use admm_ta::runtime::episodes::EpisodeRunConfig;
 use admm_ta::runtime::options::run::RunOptions;
 use admm_ta::runtime::transport::{Execution, Transport};

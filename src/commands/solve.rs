@@ -4,7 +4,7 @@ use crate::cli::SolveArgs;
 use crate::commands::shared::agent_program;
 use crate::exit::{Outcome, UsageError};
 use crate::output;
-use admm_ta::agents::forbidden;
+use admm_ta::agents::problem::forbidden;
 use admm_ta::{CostMatrix, Perturbation, SolveOptions, TaskAssignmentProblem, TopologySpec};
 use anyhow::{Context, Result};
 use clap::ArgMatches;

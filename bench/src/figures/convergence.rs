@@ -4,7 +4,7 @@
 use crate::experiment::{Experiment, OutputFile, mean_of};
 use crate::figures::{FigureConfig, FigureError, RANDOM_GRAPH, uniform};
 use crate::plot::{Chart, Legend, Scale, Series};
-use admm_ta_agents::method::Method;
+use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::TaskAssignmentProblem;
 use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::report::TracePoint;

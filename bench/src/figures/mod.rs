@@ -21,7 +21,7 @@
 pub mod convergence;
 pub mod scaling;
 
-use admm_ta_agents::primal_settings::PrimalVariant;
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptionsBuilder;
 use admm_ta_runtime::runner::RunError;

@@ -5,7 +5,7 @@
 use crate::experiment::{Experiment, OutputFile};
 use crate::figures::{FigureConfig, FigureError, RANDOM_GRAPH, uniform};
 use crate::plot::{Chart, Scale, Series};
-use admm_ta_agents::method::Method;
+use admm_ta_agents::methods::Method;
 use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::transport::Transport;
 use serde::Serialize;

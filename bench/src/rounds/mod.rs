@@ -21,7 +21,7 @@ pub mod report;
 
 use crate::rounds::case::{Case, RoundsConfig, StepKind, cases};
 use crate::rounds::report::{CaseFailure, CaseResult, RoundsReport};
-use admm_ta_agents::probe::ProbeStep;
+use admm_ta_agents::methods::probe::ProbeStep;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::error_text::one_line;
 use admm_ta_runtime::options::error::ConfigError;

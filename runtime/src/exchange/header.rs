@@ -1,6 +1,6 @@
 //! The fixed-size header every round message carries next to its payload.
 
-use admm_ta_agents::local_stop::{NeighbourState, Window};
+use admm_ta_agents::certify::local_stop::{NeighbourState, Window};
 use iceoryx2::prelude::ZeroCopySend;
 
 /// Header of one round message: who sent it, which round, and what the stop protocol needs
@@ -15,7 +15,7 @@ pub struct RoundHeader {
     pub flags: u32,
     /// Hash of the sender's rounded view of the team's assignment.
     pub digest: u64,
-    /// Agreement window of the decentralized stop ([`admm_ta_agents::local_stop`]).
+    /// Agreement window of the decentralized stop ([`admm_ta_agents::certify::local_stop`]).
     pub window: Window,
 }
 

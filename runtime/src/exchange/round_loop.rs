@@ -7,7 +7,7 @@ use crate::exchange::{Exchange, ExchangeError};
 use crate::latency::{BucketsMismatch, Component, LatencyBuckets, RoundLatency};
 use crate::usage::ThreadUsage;
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::local_stop::{LocalCertifiedStop, Verdict};
+use admm_ta_agents::certify::local_stop::{LocalCertifiedStop, Verdict};
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
 

@@ -2,9 +2,9 @@
 
 use crate::options::given::{Compact, FrontEnd, OptionId, Setting, Value};
 use crate::transport::{Execution, Transport, ZenohNotBuilt};
-use admm_ta_agents::method::Method;
-use admm_ta_agents::primal_settings::PrimalVariant;
-use admm_ta_agents::stopping::StopRule;
+use admm_ta_agents::certify::stopping::StopRule;
+use admm_ta_agents::methods::Method;
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
 use std::time::Duration;
 
 /// Settings no run can honour. Errors name options by [`OptionId`]: `Display` spells them

@@ -21,11 +21,11 @@ use crate::options::given::{Given, OptionId};
 use crate::options::run::{RunOptions, RunOptionsBuilder};
 use crate::transport::{Execution, Transport};
 use crate::wait::WaitStrategy;
-use admm_ta_agents::method::Method;
-use admm_ta_agents::primal::ProjectionPath;
-use admm_ta_agents::primal_settings::PrimalVariant;
-pub use admm_ta_agents::stopping::StopRule;
-use admm_ta_agents::ties::Perturbation;
+pub use admm_ta_agents::certify::stopping::StopRule;
+use admm_ta_agents::methods::Method;
+use admm_ta_agents::methods::primal::agent::ProjectionPath;
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::problem::ties::Perturbation;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -150,12 +150,12 @@ impl SolveOptions {
     }
 
     /// ρ as given; `None`: the scale-free default of the method's rule
-    /// ([`admm_ta_agents::method::Method::default_rho`]).
+    /// ([`admm_ta_agents::methods::Method::default_rho`]).
     pub fn rho(&self) -> Option<f64> {
         self.rho
     }
 
-    /// Anneal ρ by the schedule of [`admm_ta_agents::rho::RhoSchedule`] (every agent applies
+    /// Anneal ρ by the schedule of [`admm_ta_agents::methods::rho::RhoSchedule`] (every agent applies
     /// it at the same round).
     pub fn adaptive_rho(&self) -> bool {
         self.adaptive_rho
@@ -193,7 +193,7 @@ impl SolveOptions {
         self.projection
     }
 
-    /// The primal method's variant ([`admm_ta_agents::primal_settings`]; default: fast).
+    /// The primal method's variant ([`admm_ta_agents::methods::primal::settings`]; default: fast).
     pub fn primal_variant(&self) -> PrimalVariant {
         self.primal_variant
     }

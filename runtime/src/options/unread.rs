@@ -8,11 +8,11 @@ use crate::options::error::ConfigError;
 use crate::options::given::{Given, OptionId, Setting, Value};
 use crate::transport::{Execution, Transport};
 use crate::wait::WaitStrategy;
-use admm_ta_agents::method::Method;
-use admm_ta_agents::primal::ProjectionPath;
-use admm_ta_agents::primal_settings::PrimalVariant;
-use admm_ta_agents::stopping::StopRule;
-use admm_ta_agents::ties::Perturbation;
+use admm_ta_agents::certify::stopping::StopRule;
+use admm_ta_agents::methods::Method;
+use admm_ta_agents::methods::primal::agent::ProjectionPath;
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::problem::ties::Perturbation;
 
 /// What a builder was given: the options it names and every setting's value.
 pub(super) struct Chosen {
@@ -168,8 +168,8 @@ mod tests {
     use super::super::SolveOptions;
     use super::super::given::FrontEnd;
     use crate::transport::Transport;
-    use admm_ta_agents::method::Method;
-    use admm_ta_agents::stopping::StopRule;
+    use admm_ta_agents::certify::stopping::StopRule;
+    use admm_ta_agents::methods::Method;
 
     fn refused(b: super::super::SolveOptionsBuilder) -> String {
         b.refuse_unread(true).build().unwrap_err().to_string()
@@ -219,7 +219,7 @@ mod tests {
         assert!(
             refused(
                 b().method(Method::Hungarian)
-                    .perturbation(admm_ta_agents::ties::Perturbation::Fixed(0.1))
+                    .perturbation(admm_ta_agents::problem::ties::Perturbation::Fixed(0.1))
             )
             .starts_with("--perturb 0.1")
         );
@@ -244,7 +244,7 @@ mod tests {
         let error = SolveOptions::builder()
             .refuse_unread(true)
             .method(Method::Market)
-            .primal_variant(admm_ta_agents::primal_settings::PrimalVariant::Paper)
+            .primal_variant(admm_ta_agents::methods::primal::settings::PrimalVariant::Paper)
             .build()
             .unwrap_err();
         assert_eq!(

@@ -7,10 +7,10 @@ use crate::runner::LockstepWatch;
 use crate::sim::{LockstepSim, RoundView};
 use crate::solve::trace::{Affine, Tracer, decides_by_readout, relaxed_objective, within_0_1pct};
 use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::method_agent::MethodAgent;
-use admm_ta_agents::oracle::OptimalAssignment;
+use admm_ta_agents::certify::oracle::OptimalAssignment;
+use admm_ta_agents::certify::stopping::{AgreementStop, AgreementStreak, TeamStopRule};
+use admm_ta_agents::method::agent::MethodAgent;
 use admm_ta_agents::problem::TaskAssignmentProblem;
-use admm_ta_agents::stopping::{AgreementStop, AgreementStreak, TeamStopRule};
 
 /// Rounds after which an agreement is first certified, and the spacing of later checks
 /// (each check is one `m × n` assignment problem per robot).
@@ -23,7 +23,7 @@ enum Central<'p> {
     None,
     Agreement(AgreementStop),
     /// The robots agree on one assignment whose certificate slacks sum to at most
-    /// `tolerance` (see [`admm_ta_agents::primal::PrimalAgent::certificate_slack`]).
+    /// `tolerance` (see [`admm_ta_agents::methods::primal::agent::PrimalAgent::certificate_slack`]).
     Certified {
         streak: AgreementStreak,
         tolerance: f64,

@@ -25,14 +25,14 @@ use crate::transport::Execution;
 use crate::usage::ThreadUsage;
 use crate::workload::Workload;
 use crate::workload::plan::prepare;
-use admm_ta_agents::local_stop::LocalCertifiedStop;
-use admm_ta_agents::method::Method;
-use admm_ta_agents::oracle::{self, OptimalAssignment};
+use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
+use admm_ta_agents::certify::oracle::{self, OptimalAssignment};
+use admm_ta_agents::certify::rounding;
+use admm_ta_agents::methods::Method;
+use admm_ta_agents::problem::ties;
 use admm_ta_agents::problem::{
     AssignmentCase, CaseChoice, CostMatrix, IDLE, TaskAssignmentProblem,
 };
-use admm_ta_agents::rounding;
-use admm_ta_agents::ties;
 use admm_ta_topologies::Graph;
 use std::time::Instant;
 
@@ -197,7 +197,7 @@ fn solve_user(
         };
         let unperturbed = options
             .to_builder()
-            .perturbation(admm_ta_agents::ties::Perturbation::Off)
+            .perturbation(admm_ta_agents::problem::ties::Perturbation::Off)
             .build()?;
         solve_once(
             &exact_problem,

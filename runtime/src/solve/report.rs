@@ -4,7 +4,7 @@ use crate::latency::LatencySummary;
 use crate::options::StopRule;
 use crate::transport::Transport;
 use crate::usage::ThreadUsage;
-use admm_ta_agents::method::Method;
+use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::{AssignmentCase, IDLE};
 use serde::{Serialize, Serializer};
 

@@ -4,11 +4,11 @@
 use crate::options::SolveOptions;
 use crate::sim::RoundView;
 use crate::solve::report::{OracleCheck, TracePoint};
-use admm_ta_agents::method::Method;
-use admm_ta_agents::oracle::OptimalAssignment;
-use admm_ta_agents::primal_settings::PrimalVariant;
+use admm_ta_agents::certify::oracle::OptimalAssignment;
+use admm_ta_agents::certify::rounding;
+use admm_ta_agents::methods::Method;
+use admm_ta_agents::methods::primal::settings::PrimalVariant;
 use admm_ta_agents::problem::TaskAssignmentProblem;
-use admm_ta_agents::rounding;
 
 /// The robots' decisions are their readouts of `G_i` (the fast primal variant), not the
 /// argmax of their own relaxed columns.

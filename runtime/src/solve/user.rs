@@ -1,14 +1,14 @@
 //! Between the user's problem and the normalised one the agents solve
-//! ([`admm_ta_agents::normalise`]): what each method can take, and the report in the user's
+//! ([`admm_ta_agents::problem::normalise`]): what each method can take, and the report in the user's
 //! numbers (assignment with idle robots, cost, the exact check).
 
 use crate::options::StopRule;
 use crate::solve::error::SolveError;
 use crate::solve::report::SolveReport;
 use crate::solve::trace::Affine;
-use admm_ta_agents::method::Method;
-use admm_ta_agents::normalise;
-use admm_ta_agents::oracle::OptimalAssignment;
+use admm_ta_agents::certify::oracle::OptimalAssignment;
+use admm_ta_agents::methods::Method;
+use admm_ta_agents::problem::normalise;
 use admm_ta_agents::problem::{IDLE, TaskAssignmentProblem};
 use admm_ta_topologies::Graph;
 
@@ -62,7 +62,7 @@ pub(crate) fn to_internal(problem: &TaskAssignmentProblem, assignment: &[usize])
 }
 
 /// The graph the agents run on: the user's, or for the transposed problem (`idle` with
-/// `n < m`, the tasks are the agents, see [`admm_ta_agents::normalise`]) task `t` hosted by
+/// `n < m`, the tasks are the agents, see [`admm_ta_agents::problem::normalise`]) task `t` hosted by
 /// robot `t mod n`, and two tasks neighbours when their robots are the same or neighbours
 /// (the user's graph, lifted: connected as it is, of the same diameter, complete when it is).
 pub(crate) fn internal_graph(

@@ -1,17 +1,17 @@
 //! One surveillance robot's life over many episodes (the persistent surveillance case
-//! study, [`admm_ta_agents::surveillance`]): what every agent of the team shares, what each
+//! study, [`admm_ta_agents::problem::surveillance`]): what every agent of the team shares, what each
 //! records per episode, and the agent function every transport runs — threads in
 //! [`crate::episodes`], or one agent process per robot for the whole run.
 
 use crate::exchange::Exchange;
 use crate::exchange::ExchangeError;
 use crate::exchange::round_loop::{AgentOutcome, AgentPlan, AgentStop, RoundLoop};
-use admm_ta_agents::local_stop::LocalCertifiedStop;
-use admm_ta_agents::method::{AgentMethod, AgentSettings};
-use admm_ta_agents::method_agent::MethodAgent;
+use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
+use admm_ta_agents::method::agent::MethodAgent;
+use admm_ta_agents::methods::rho::RhoRule;
+use admm_ta_agents::methods::{AgentMethod, AgentSettings};
+use admm_ta_agents::problem::surveillance::SurveillanceScenario;
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
-use admm_ta_agents::rho::RhoRule;
-use admm_ta_agents::surveillance::SurveillanceScenario;
 use serde::{Deserialize, Serialize};
 
 /// One robot's view of one episode.

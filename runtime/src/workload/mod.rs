@@ -12,7 +12,7 @@ pub mod plan;
 use crate::exchange::round_loop::AgentStop;
 use crate::workload::episode::EpisodeSettings;
 use crate::workload::plan::Plan;
-use admm_ta_agents::probe::ProbeStep;
+use admm_ta_agents::methods::probe::ProbeStep;
 
 /// What a team's agents compute.
 #[derive(Clone, Copy)]
@@ -24,7 +24,7 @@ pub enum Workload<'a> {
         stop: &'a AgentStop,
         max_rounds: u64,
     },
-    /// Latency probes ([`admm_ta_agents::probe::ProbeAgent`]): `payload_len` values per
+    /// Latency probes ([`admm_ta_agents::methods::probe::ProbeAgent`]): `payload_len` values per
     /// message, a step of known cost, `rounds` rounds (warm-up included).
     Probe {
         payload_len: usize,

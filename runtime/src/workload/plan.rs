@@ -3,14 +3,14 @@
 //! options, exactly as every transport (and every independently started agent) needs them.
 
 use crate::options::SolveOptions;
-use admm_ta_agents::method::{AgentMethod, AgentSettings};
-use admm_ta_agents::method_agent::MethodAgent;
-use admm_ta_agents::primal::PrimalSettings;
-use admm_ta_agents::primal_settings::{FastTuning, PrimalVariant, fast_rho};
+use admm_ta_agents::method::agent::MethodAgent;
+use admm_ta_agents::methods::primal::agent::PrimalSettings;
+use admm_ta_agents::methods::primal::readout_filter::ReadoutFilter;
+use admm_ta_agents::methods::primal::settings::{FastTuning, PrimalVariant, fast_rho};
+use admm_ta_agents::methods::rho::RhoSchedule;
+use admm_ta_agents::methods::{AgentMethod, AgentSettings};
 use admm_ta_agents::problem::TaskAssignmentProblem;
-use admm_ta_agents::readout_filter::ReadoutFilter;
-use admm_ta_agents::rho::RhoSchedule;
-use admm_ta_agents::ties;
+use admm_ta_agents::problem::ties;
 use admm_ta_topologies::Graph;
 use std::sync::{Arc, OnceLock};
 
@@ -32,8 +32,12 @@ pub struct AgentFactory<'a> {
 impl AgentFactory<'_> {
     /// Robot `i`'s agent, with its own (optionally perturbed) costs.
     pub fn agent(&self, i: usize) -> MethodAgent {
-        let costs =
-            admm_ta_agents::ties::perturbed_row(self.problem.costs(), i, self.epsilon, self.seed);
+        let costs = admm_ta_agents::problem::ties::perturbed_row(
+            self.problem.costs(),
+            i,
+            self.epsilon,
+            self.seed,
+        );
         MethodAgent::new(
             i,
             costs,
@@ -57,7 +61,7 @@ impl AgentFactory<'_> {
 }
 
 /// The readout filter every robot of a fast primal team uses, designed from the graph
-/// (`admm_ta_agents::readout_filter`); `None` for the other methods and variants, below a
+/// (`admm_ta_agents::methods::primal::readout_filter`); `None` for the other methods and variants, below a
 /// tenth of the fast variant's ρ, on graphs without edges, and where no history window fits
 /// the robot's memory budget.
 pub fn readout_filter(
@@ -118,7 +122,7 @@ pub fn prepare<'a>(
     // The options checked a given factor.
     let gamma_factor = options
         .gamma_factor()
-        .unwrap_or(admm_ta_agents::dual::DEFAULT_GAMMA_FACTOR);
+        .unwrap_or(admm_ta_agents::methods::dual::agent::DEFAULT_GAMMA_FACTOR);
     let epsilon = ties::epsilon(problem.costs(), options.perturbation());
     let tolerance = 1e-9 * problem.costs().spread() * n as f64;
     let diameter = graph.diameter().unwrap_or(0);

@@ -1,0 +1,3 @@
+//! Dual consensus ADMM (Algorithm 2) and its inexact variant.
+
+pub mod agent;
