@@ -2,10 +2,8 @@
 //! runs in its file of `commands/`). Value lists (methods, transports, stop rules, wait
 //! strategies, …) come from the library's own types.
 
-use admm_ta::{
-    CaseChoice, CostModel, Method, OnFailure, PrimalVariant, ProjectionPath, StopRule, Transport,
-    WaitStrategy,
-};
+use crate::method_flags::MethodFlags;
+use admm_ta::{CaseChoice, CostModel, Method, OnFailure, StopRule, Transport, WaitStrategy};
 use admm_ta_bench::rounds::case::{Barrier, StepKind};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -260,9 +258,9 @@ pub enum Experiment {
         /// Random costs: uniform [0,1) or geometric (distances in the unit square).
         #[arg(long, value_enum, default_value = "uniform")]
         cost_model: CostModel,
-        /// The primal method's variant: fast or paper.
-        #[arg(long, value_enum, default_value = "fast")]
-        primal_variant: PrimalVariant,
+        /// The methods' own settings (each method reads its own).
+        #[command(flatten)]
+        settings: MethodFlags,
         /// Run the ADMM methods that have a schedule (dual methods, paper primal) with
         /// --adaptive-rho.
         #[arg(long)]
@@ -406,11 +404,10 @@ pub struct SolveArgs {
     /// loopback: the multi-host transport; needs `--features zenoh`).
     #[arg(long, value_enum, default_value = "sim")]
     pub transport: Transport,
-    /// Primal method: fast (each robot reads the assignment from its certificate matrix by
-    /// a local assignment problem, large ρ, over-relaxed and anchored steps, certificate
-    /// every round) or paper (Algorithm 1 as published; refused with the other methods).
-    #[arg(long, value_enum, default_value = "fast")]
-    pub primal_variant: PrimalVariant,
+    /// The methods' own settings, declared by each method (`--primal-variant`,
+    /// `--projection`, `--gamma-factor`): a setting another method has is refused.
+    #[command(flatten)]
+    pub settings: MethodFlags,
     /// ADMM penalty ρ: auto (scale-free rule from the cost spread and the graph's mean
     /// degree d̄: primal fast 100·spread/(2·d̄), primal paper
     /// 0.5·spread·√((n−1)/d̄)/(2·d̄·n), dual 5/(spread·d̄), inexact dual 10/(spread·d̄)) or a
@@ -424,10 +421,6 @@ pub struct SolveArgs {
     /// and with the methods without ρ.
     #[arg(long)]
     pub adaptive_rho: bool,
-    /// Inexact dual: g of the proximal weight γ = g·(m+1)/(2·|N(i)|·ρ) (default 0.5);
-    /// refused with the other methods.
-    #[arg(long, allow_negative_numbers = true)]
-    pub gamma_factor: Option<f64>,
     #[arg(long, default_value_t = 5000)]
     pub max_iters: usize,
     /// local: every robot checks its own optimality certificate and agreement with its
@@ -440,10 +433,6 @@ pub struct SolveArgs {
     pub stop: StopRule,
     #[arg(long, default_value_t = 10)]
     pub stop_rounds: usize,
-    /// Primal method's x-update solver: fast (Newton projection) or qp (clarabel; slow
-    /// cross-check; refused with the other methods).
-    #[arg(long, value_enum, default_value = "fast")]
-    pub projection: ProjectionPath,
     /// Tie-breaking cost perturbation: auto (only for lattice costs such as integers), off,
     /// or a number ε.
     #[arg(long, default_value = "auto")]

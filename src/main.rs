@@ -4,6 +4,7 @@
 mod cli;
 mod commands;
 mod exit;
+mod method_flags;
 mod output;
 
 use clap::{CommandFactory, FromArgMatches};

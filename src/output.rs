@@ -1,8 +1,9 @@
 //! Human and JSON renderings of a solve report.
 
+use admm_ta::agents::method::info::Certification;
 use admm_ta::agents::problem::{AssignmentCase, IDLE};
 use admm_ta::runtime::transport::Execution;
-use admm_ta::{Method, SolveReport, StopRule};
+use admm_ta::{SolveReport, StopRule};
 use anyhow::Result;
 
 /// Standard output could not be written (a full disk, a closed pipe): exit 1, or quietly
@@ -71,15 +72,12 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         if report.maximize { ", maximizing" } else { "" },
         report.topology
     );
-    let inner = if report.method == Method::Primal {
-        format!(
-            ", {:.2} Newton steps per projection",
-            report.mean_projection_steps
-        )
-    } else {
-        String::new()
+    let info = report.method.info();
+    let inner = match info.report.inner_steps {
+        Some(steps) => format!(", {:.2} {steps}", report.mean_projection_steps),
+        None => String::new(),
     };
-    let rho = if report.method.is_admm() {
+    let rho = if info.penalty() {
         format!("ρ = {:.4e}; ", report.rho)
     } else {
         String::new()
@@ -136,12 +134,10 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         } else {
             ""
         },
-        if report.certified {
-            ""
-        } else if report.method == Method::Cbaa {
-            " — NOT certified optimal (CBAA is a heuristic)"
-        } else {
-            " — NOT certified optimal (the best assignment found when the run stopped)"
+        match info.certification {
+            _ if report.certified => String::new(),
+            Certification::Never { because } => format!(" — NOT certified optimal ({because})"),
+            _ => " — NOT certified optimal (the best assignment found when the run stopped)".into(),
         }
     );
     if let Some(startup) = report.startup_ms {

@@ -573,6 +573,27 @@ fn team_file_settings_are_refused_by_the_command_lines_rule_naming_file_and_key(
             "method = \"hungarian\"\n",
             "method = \"hungarian\" is the centralized solver",
         ),
+        // A method's own settings are the file's keys too, checked by the method.
+        (
+            "k7",
+            "method = \"dual\"\ngamma_factor = 0.3\n",
+            "gamma_factor = 0.3 does not apply to method = \"dual\": it works with method = \"inexact-dual\"",
+        ),
+        (
+            "k8",
+            "primal_variant = \"fancy\"\n",
+            "primal_variant must be \"paper\" or \"fast\", got 'fancy'",
+        ),
+        (
+            "k9",
+            "method = \"inexact-dual\"\ngamma_factor = -1\n",
+            "gamma_factor (the γ factor) must be a positive finite number, got -1",
+        ),
+        (
+            "k10",
+            "gamma_factor = [1]\n",
+            "gamma_factor must be a number or a name",
+        ),
     ] {
         let path = dir.path().join(format!("{run}.toml"));
         std::fs::write(&path, format!("run = \"{run}\"\n{base}{keys}{zenoh_hosts}")).unwrap();

@@ -46,13 +46,71 @@ pub struct StepReport {
     pub assignment_digest: u64,
 }
 
+/// Why a neighbour's payload is refused before a step reads it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PayloadError {
+    #[error("{got} values, expected {expected}")]
+    Length { got: usize, expected: usize },
+    #[error("value {index} is {value}")]
+    NotFinite { index: usize, value: f64 },
+    /// A value outside what the method ever sends.
+    #[error("{part} is {value}")]
+    BadValue { part: PayloadPart, value: f64 },
+    /// A block of values that is neither all known nor all unknown, or not finite.
+    #[error("{part} is partly unknown or not finite")]
+    BadBlock { part: PayloadPart },
+}
+
+/// A named part of a payload, for messages: `bid on task 3`, `price raise`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PayloadPart {
+    pub name: &'static str,
+    pub index: Option<usize>,
+}
+
+impl PayloadPart {
+    /// Part `index` of the kind `name` (`bid on task`).
+    pub fn at(name: &'static str, index: usize) -> Self {
+        Self {
+            name,
+            index: Some(index),
+        }
+    }
+
+    /// The one part called `name`.
+    pub fn named(name: &'static str) -> Self {
+        Self { name, index: None }
+    }
+}
+
+impl std::fmt::Display for PayloadPart {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.index {
+            Some(index) => write!(f, "{} {index}", self.name),
+            None => f.write_str(self.name),
+        }
+    }
+}
+
 /// `Err` unless `payload` has `expected` values.
-pub fn check_length(payload: &[f64], expected: usize) -> Result<(), String> {
+pub fn check_length(payload: &[f64], expected: usize) -> Result<(), PayloadError> {
     if payload.len() == expected {
         Ok(())
     } else {
-        Err(format!("{} values, expected {expected}", payload.len()))
+        Err(PayloadError::Length {
+            got: payload.len(),
+            expected,
+        })
     }
+}
+
+/// Why an agent takes no new costs.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NewCostsError {
+    #[error("repeated assignments with new costs run the primal method only")]
+    Unsupported,
+    #[error("{got} costs for a robot with another number of tasks")]
+    WrongLength { got: usize },
 }
 
 /// One robot's algorithm.
@@ -65,10 +123,13 @@ pub trait ConsensusAgent {
     /// message (wrong length, NaN, a value outside what the method ever sends) is refused
     /// with a one-line reason instead of flowing into the solution. The default accepts
     /// `payload_len` finite numbers; methods with sentinels override it.
-    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+    fn check_payload(&self, payload: &[f64]) -> Result<(), PayloadError> {
         check_length(payload, self.payload_len())?;
         match payload.iter().position(|v| !v.is_finite()) {
-            Some(k) => Err(format!("value {k} is {}", payload[k])),
+            Some(index) => Err(PayloadError::NotFinite {
+                index,
+                value: payload[index],
+            }),
             None => Ok(()),
         }
     }
@@ -101,7 +162,7 @@ pub trait AgentAlgorithm: ConsensusAgent + Send + std::any::Any {
 
     /// New own costs for the next episode of a repeated assignment, warm-started from the
     /// current iterates or (`warm = false`) from zero.
-    fn set_costs(&mut self, _costs: &[f64], _warm: bool) -> Result<(), String> {
-        Err("repeated assignments with new costs run the primal method only".into())
+    fn set_costs(&mut self, _costs: &[f64], _warm: bool) -> Result<(), NewCostsError> {
+        Err(NewCostsError::Unsupported)
     }
 }

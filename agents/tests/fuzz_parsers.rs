@@ -5,9 +5,18 @@
 
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::method::agent::MethodAgent;
-use admm_ta_agents::methods::{AgentMethod, AgentSettings};
-use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
+use admm_ta_agents::method::team::{AgentInit, TeamContext, TeamParams};
+use admm_ta_agents::methods::{Contender, Method};
+use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use proptest::prelude::*;
+
+/// Every method a team runs.
+fn team_methods() -> Vec<Method> {
+    Method::ALL
+        .into_iter()
+        .filter(|m| m.team().is_some())
+        .collect()
+}
 
 /// Text that looks like a cost CSV: numbers, junk cells, separators and line breaks.
 fn csv_like() -> impl Strategy<Value = String> {
@@ -79,7 +88,7 @@ proptest! {
     /// any wrong length, and accepts the payload a real agent of the method wrote.
     #[test]
     fn payload_checks_refuse_corruption_and_accept_real_payloads(
-        method in prop::sample::select(AgentMethod::ALL.to_vec()),
+        method in prop::sample::select(team_methods()),
         robots in 1usize..7,
         position in any::<prop::sample::Index>(),
         garbage in any::<f64>(),
@@ -87,11 +96,20 @@ proptest! {
     ) {
         let tasks = robots;
         let costs = CostMatrix::uniform(robots, tasks, 7).unwrap();
-        let settings = AgentSettings::new(method, 0.5, robots.saturating_sub(1).max(1), 1e-9);
+        let problem = TaskAssignmentProblem::new(costs.clone(), CaseChoice::Auto).unwrap();
+        let graph = admm_ta_topologies::generate::complete(robots).unwrap();
+        let contender = Contender::as_in_paper(method).unwrap_or(Contender::of(method));
+        let setup = method.setup(&contender.settings()).unwrap().unwrap();
+        let params = TeamParams { rho: 0.5, diameter: robots.saturating_sub(1).max(1), tolerance: 1e-9 };
+        let team = setup.team(TeamContext { problem: &problem, graph: &graph, params });
         let agents: Vec<MethodAgent> = (0..robots.min(2))
-            .map(|i| MethodAgent::new(
-                i, costs.row(i).to_vec(), robots, AssignmentCase::One, robots - 1, settings,
-            ))
+            .map(|i| MethodAgent::new(team.agent(AgentInit {
+                index: i,
+                costs: costs.row(i).to_vec(),
+                robots,
+                case: problem.case(),
+                degree: robots - 1,
+            })))
             .collect();
         let mut payload = vec![0.0; agents[0].payload_len()];
         agents[agents.len() - 1].write_initial_payload(&mut payload);
@@ -102,7 +120,7 @@ proptest! {
         // The distributed Hungarian marks unknown rows with NaN: a NaN there is valid, a
         // NaN in a known row is not.
         let known_row = payload[k - k % tasks].is_finite();
-        if method != AgentMethod::DistHungarian || (known_row && tasks > 1) {
+        if method != Method::DistHungarian || (known_row && tasks > 1) {
             prop_assert!(agents[0].check_payload(&nan).is_err());
         }
         let mut corrupt = payload.clone();

@@ -4,8 +4,8 @@
 
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::method::agent::MethodAgent;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
-use admm_ta_agents::methods::{AgentMethod, AgentSettings};
+use admm_ta_agents::method::team::{AgentInit, TeamContext, TeamParams};
+use admm_ta_agents::methods::{Contender, Method};
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -35,9 +35,18 @@ unsafe impl GlobalAlloc for CountingAllocator {
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
+/// `method` in `variant` (a name of its variant setting; ignored by methods without
+/// variants).
+fn contender(method: Method, variant: &'static str) -> Contender {
+    Contender {
+        method,
+        variant: method.variant_setting().map(|_| variant),
+    }
+}
+
 fn team_rounds(
-    method: AgentMethod,
-    variant: PrimalVariant,
+    method: Method,
+    variant: &'static str,
     robots: usize,
     tasks: usize,
     case: AssignmentCase,
@@ -49,22 +58,40 @@ fn team_rounds(
 
 /// As [`team_rounds`] on given costs (a normalised problem's, say).
 fn team_rounds_on(
-    method: AgentMethod,
-    variant: PrimalVariant,
+    method: Method,
+    variant: &'static str,
     costs: &CostMatrix,
     case: AssignmentCase,
     rounds: usize,
 ) -> usize {
     let (robots, tasks) = (costs.robots(), costs.tasks());
-    let rho = method
-        .method()
-        .default_rho(costs, (robots - 1) as f64, variant);
-    let settings = AgentSettings {
-        primal_variant: variant,
-        ..AgentSettings::new(method, rho, 1, 1e-9)
+    let setup = method
+        .setup(&contender(method, variant).settings())
+        .unwrap()
+        .unwrap();
+    let rho = setup.default_rho(costs, (robots - 1) as f64).unwrap_or(0.0);
+    let problem = TaskAssignmentProblem::internal_from(costs.clone(), case).unwrap();
+    let graph = admm_ta_topologies::generate::complete(robots).unwrap();
+    let params = TeamParams {
+        rho,
+        diameter: 1,
+        tolerance: 1e-9,
     };
+    let team = setup.team(TeamContext {
+        problem: &problem,
+        graph: &graph,
+        params,
+    });
     let mut agents: Vec<MethodAgent> = (0..robots)
-        .map(|i| MethodAgent::new(i, costs.row(i).to_vec(), robots, case, robots - 1, settings))
+        .map(|i| {
+            MethodAgent::new(team.agent(AgentInit {
+                index: i,
+                costs: costs.row(i).to_vec(),
+                robots,
+                case,
+                degree: robots - 1,
+            }))
+        })
         .collect();
     let len = method.payload_len(robots, tasks);
     let mut current = vec![0.0; len * robots];
@@ -98,26 +125,19 @@ fn team_rounds_on(
 fn every_method_steps_without_allocating_after_warm_up() {
     // The distributed Hungarian allocates once, when it solves the full problem.
     for method in [
-        AgentMethod::Primal,
-        AgentMethod::Dual,
-        AgentMethod::InexactDual,
-        AgentMethod::Cbaa,
-        AgentMethod::Market,
+        Method::Primal,
+        Method::Dual,
+        Method::InexactDual,
+        Method::Cbaa,
+        Method::Market,
     ] {
         assert_eq!(
-            team_rounds(
-                method,
-                PrimalVariant::Paper,
-                12,
-                12,
-                AssignmentCase::One,
-                40
-            ),
+            team_rounds(method, "paper", 12, 12, AssignmentCase::One, 40),
             0,
             "{method:?}"
         );
         assert_eq!(
-            team_rounds(method, PrimalVariant::Paper, 14, 6, AssignmentCase::Two, 40),
+            team_rounds(method, "paper", 14, 6, AssignmentCase::Two, 40),
             0,
             "{method:?}"
         );
@@ -132,7 +152,7 @@ fn every_method_steps_without_allocating_after_warm_up() {
                 TaskAssignmentProblem::new(CostMatrix::from_csv_str(&text).unwrap(), choice)
                     .unwrap();
             let internal = problem.internal();
-            for variant in [PrimalVariant::Paper, PrimalVariant::Fast] {
+            for variant in ["paper", "fast"] {
                 assert_eq!(
                     team_rounds_on(method, variant, internal.costs(), internal.case(), 40),
                     0,
@@ -181,14 +201,7 @@ fn the_fast_primal_steps_and_reads_its_assignment_without_allocating() {
     // closed-form projection in its own scratch.
     for (robots, tasks, case) in [(12, 12, AssignmentCase::One), (14, 6, AssignmentCase::Two)] {
         assert_eq!(
-            team_rounds(
-                AgentMethod::Primal,
-                PrimalVariant::Fast,
-                robots,
-                tasks,
-                case,
-                40
-            ),
+            team_rounds(Method::Primal, "fast", robots, tasks, case, 40),
             0,
             "{robots}×{tasks}"
         );

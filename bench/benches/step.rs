@@ -13,8 +13,8 @@
 use admm_ta_agents::agent::{ConsensusAgent, Inbox};
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::method::agent::MethodAgent;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
-use admm_ta_agents::methods::{AgentMethod, AgentSettings};
+use admm_ta_agents::method::team::TeamParams;
+use admm_ta_agents::methods::{Contender, Method};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::workload::plan::AgentFactory;
@@ -27,24 +27,23 @@ use std::time::Duration;
 const RECORDED_ROUNDS: usize = 30;
 
 /// Robot 0 after 60 rounds, and its neighbours' payloads of rounds 30–59.
-fn agent_in_flight(method: AgentMethod, n: usize) -> (MethodAgent, Vec<Vec<Vec<f64>>>) {
+fn agent_in_flight(method: Method, n: usize) -> (MethodAgent, Vec<Vec<Vec<f64>>>) {
     let problem =
         TaskAssignmentProblem::new(CostMatrix::uniform(n, n, 7).unwrap(), CaseChoice::Auto)
             .unwrap();
     let graph = generate::complete(n).unwrap();
-    let rho =
-        method
-            .method()
-            .default_rho(problem.costs(), graph.mean_degree(), PrimalVariant::Paper);
-    let team = AgentFactory {
-        problem: &problem,
-        graph: &graph,
-        settings: AgentSettings::new(method, rho, 1, f64::INFINITY),
-        epsilon: None,
-        seed: 0,
-        schedule: None,
-        readout_filter: std::sync::OnceLock::new(),
+    // Each method as the paper ran it (the primal method's paper variant).
+    let contender = Contender::as_in_paper(method).unwrap_or(Contender::of(method));
+    let setup = method.setup(&contender.settings()).unwrap().unwrap();
+    let rho = setup
+        .default_rho(problem.costs(), graph.mean_degree())
+        .unwrap();
+    let params = TeamParams {
+        rho,
+        diameter: 1,
+        tolerance: f64::INFINITY,
     };
+    let team = AgentFactory::new(&problem, &graph, setup, params, None, 0, None);
     let mut sim = LockstepSim::new(team.agents(), &graph);
     for _ in 0..30 {
         sim.step_round();
@@ -72,11 +71,7 @@ fn step(c: &mut Criterion) {
         .sample_size(30)
         .measurement_time(Duration::from_secs(3))
         .warm_up_time(Duration::from_millis(500));
-    for method in [
-        AgentMethod::Primal,
-        AgentMethod::Dual,
-        AgentMethod::InexactDual,
-    ] {
+    for method in Method::admm() {
         for n in [20usize, 50] {
             let (mut agent, rounds) = agent_in_flight(method, n);
             let inboxes: Vec<Vec<&[f64]>> = rounds

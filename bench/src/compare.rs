@@ -2,8 +2,8 @@
 //! stop, optimality, messages and bytes per agent, wall time (`admm-ta experiment compare`).
 
 use crate::experiment::Experiment;
+use admm_ta_agents::method::settings::GivenSettings;
 use admm_ta_agents::methods::Method;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
 use admm_ta_agents::problem::cost_model::CostModel;
 use admm_ta_agents::problem::{CaseChoice, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
@@ -23,9 +23,11 @@ pub struct CompareConfig {
     pub transports: Vec<Transport>,
     pub topology: TopologySpec,
     pub cost_model: CostModel,
-    /// The primal method's variant.
-    pub primal_variant: PrimalVariant,
-    /// `--adaptive-rho` for the methods that have a schedule (not the fast primal variant).
+    /// The methods' own settings (each method reads its own: `--primal-variant` the primal
+    /// method's).
+    pub settings: GivenSettings,
+    /// `--adaptive-rho` for the methods whose settings follow a schedule (not the fast
+    /// primal variant).
     pub adaptive_rho: bool,
     pub max_iters: usize,
     /// The `admm-ta` binary (ipc transport).
@@ -70,6 +72,15 @@ impl Experiment for Comparison {
     }
 }
 
+/// Whether `method` with its own of `settings` follows an `--adaptive-rho` schedule.
+fn has_schedule(method: Method, settings: &GivenSettings) -> bool {
+    method
+        .setup(&settings.only(method.settings()))
+        .ok()
+        .flatten()
+        .is_some_and(|setup| setup.schedule(1.0).is_some())
+}
+
 /// Runs every (size, method, transport) on `seeds` square problems of the cost model.
 pub fn run(
     config: &CompareConfig,
@@ -80,7 +91,7 @@ pub fn run(
         for &method in &config.methods {
             for &transport in &config.transports {
                 // A centralized method runs on a lockstep transport only.
-                if method.agent_method().is_none()
+                if method.team().is_none()
                     && transport.capabilities().execution != Execution::Lockstep
                 {
                     continue;
@@ -111,10 +122,8 @@ pub fn run(
                         .transport(transport)
                         .seed(seed)
                         .check(true)
-                        .adaptive_rho(
-                            config.adaptive_rho && method.has_schedule(config.primal_variant),
-                        )
-                        .primal_variant(config.primal_variant)
+                        .adaptive_rho(config.adaptive_rho && has_schedule(method, &config.settings))
+                        .settings(config.settings.clone())
                         .max_iters(config.max_iters)
                         .agent_program(config.agent_program.clone())
                         .build()?;
@@ -178,7 +187,7 @@ mod tests {
             transports: vec![Transport::Sim],
             topology: TopologySpec::Complete,
             cost_model: CostModel::Uniform,
-            primal_variant: PrimalVariant::Fast,
+            settings: GivenSettings::default(),
             adaptive_rho: false,
             max_iters: 2000,
             agent_program: None,

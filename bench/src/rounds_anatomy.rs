@@ -9,8 +9,7 @@
 
 use crate::experiment::{Experiment, OutputFile};
 use crate::plot::{Chart, Scale, Series};
-use admm_ta_agents::methods::Method;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::methods::Contender;
 use admm_ta_agents::problem::cost_model::CostModel;
 use admm_ta_agents::problem::{CaseChoice, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
@@ -20,44 +19,6 @@ use admm_ta_topologies::TopologySpec;
 use serde::Serialize;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// A method as the experiment runs it (the primal method once per variant).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct Contender {
-    pub method: Method,
-    pub primal_variant: PrimalVariant,
-}
-
-impl Contender {
-    /// Primal fast, primal paper, dual, inexact dual, market, distributed Hungarian, CBAA.
-    pub fn all() -> Vec<Contender> {
-        let with = |method, primal_variant| Contender {
-            method,
-            primal_variant,
-        };
-        let mut all = vec![
-            with(Method::Primal, PrimalVariant::Fast),
-            with(Method::Primal, PrimalVariant::Paper),
-        ];
-        for method in [
-            Method::Dual,
-            Method::InexactDual,
-            Method::Market,
-            Method::DistHungarian,
-            Method::Cbaa,
-        ] {
-            all.push(with(method, PrimalVariant::Fast));
-        }
-        all
-    }
-
-    pub fn name(&self) -> String {
-        match self.method {
-            Method::Primal => format!("primal ({})", self.primal_variant.name()),
-            method => method.name().to_string(),
-        }
-    }
-}
 
 /// Settings of the experiment.
 #[derive(Debug, Clone)]
@@ -175,7 +136,7 @@ fn run_one(job: &Job, config: &AnatomyConfig) -> Result<Run, SolveError> {
         .expect("generated topologies are connected");
     let options = SolveOptions::builder()
         .method(contender.method)
-        .primal_variant(contender.primal_variant)
+        .settings(contender.settings())
         .seed(seed)
         .check(true)
         .max_iters(config.max_iters)
@@ -236,7 +197,7 @@ pub fn run(
             .collect::<Result<Vec<Run>, _>>()?;
         cells.push(Cell {
             contender,
-            name: contender.name(),
+            name: contender.label(),
             cost_model: model,
             topology: config.topologies[topology].clone(),
             relaxed_within_0_1pct: median(runs.iter().map(|r| r.relaxed_within_0_1pct)),

@@ -8,9 +8,8 @@
 //! diameters of rounds).
 
 use crate::experiment::Experiment;
-use crate::rounds_anatomy::{self, AnatomyConfig, Contender, median};
-use admm_ta_agents::methods::Method;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use crate::rounds_anatomy::{self, AnatomyConfig, median};
+use admm_ta_agents::methods::{Contender, Method};
 use admm_ta_agents::problem::cost_model::CostModel;
 use admm_ta_runtime::solve::error::SolveError;
 use serde::Serialize;
@@ -96,10 +95,8 @@ pub fn run(
             robots: size,
             tasks: size,
             seeds: config.seeds,
-            contenders: vec![Contender {
-                method: Method::Primal,
-                primal_variant: PrimalVariant::Fast,
-            }],
+            // The method `solve` runs by default, with its default settings.
+            contenders: vec![Contender::of(Method::default())],
             cost_models: config.cost_models.clone(),
             topologies: config.topologies.clone(),
             max_iters: config.max_iters,

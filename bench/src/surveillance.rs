@@ -14,6 +14,7 @@ use crate::figures::FigureError;
 use crate::plot::{Chart, Legend, Series};
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
 use admm_ta_agents::certify::oracle;
+use admm_ta_agents::methods::{Contender, Method};
 use admm_ta_agents::problem::surveillance::SurveillanceScenario;
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
 use admm_ta_runtime::episodes::{EpisodeRunConfig, run_episodes};
@@ -81,7 +82,7 @@ fn cold_rounds(
     let n = costs.len();
     let agents = (0..n)
         .map(|i| {
-            let mut agent = settings.agent(i, graph.degree(i));
+            let mut agent = settings.agent(i, graph);
             agent
                 .set_costs(&costs[i], false)
                 .expect("a primal agent of the model's shape");
@@ -129,13 +130,18 @@ pub fn run(
         .and_then(|t| t.build(n, 0))
         .map_err(|e| FigureError::Setup(format!("topology {}: {e}", model.topology)))?;
     let diameter = graph.diameter().unwrap_or(0);
+    // The paper's case study: its own method, as it ran it.
+    let method = Method::papers_own();
+    let contender = Contender::as_in_paper(method).unwrap_or(Contender::of(method));
     let settings = EpisodeSettings::new(
         model.clone(),
         episodes,
         warm_start,
         graph.mean_degree(),
         diameter,
-    );
+        contender,
+    )
+    .map_err(|e| FigureError::Setup(e.to_string()))?;
     let run = run_episodes(&settings, &graph, config)?;
     let mut per_episode = Vec::with_capacity(episodes);
     let mut misses = Vec::new();

@@ -20,8 +20,8 @@
 //! the same costs shifted to [1, 2).
 
 use crate::experiment::Experiment;
-use admm_ta_agents::methods::Method;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::method::team::Decisions;
+use admm_ta_agents::methods::{Contender, Method};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::solve::error::SolveError;
@@ -31,21 +31,23 @@ use serde::Serialize;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// The paper's Table 1.
-pub const PAPER: [(Method, f64); 3] = [
-    (Method::Primal, 28.0),
-    (Method::Dual, 159.0),
-    (Method::InexactDual, 387.0),
-];
-
-/// The rows: the paper's three methods, the primal one in both variants (the variant is
-/// ignored by the dual methods), with the paper's number.
-const ROWS: [(Method, PrimalVariant, f64); 4] = [
-    (Method::Primal, PrimalVariant::Paper, 28.0),
-    (Method::Primal, PrimalVariant::Fast, 28.0),
-    (Method::Dual, PrimalVariant::Paper, 159.0),
-    (Method::InexactDual, PrimalVariant::Paper, 387.0),
-];
+/// The rows: every method the paper's Table 1 reports (in the registry's order), each
+/// variant once — the variant the paper ran first — with the paper's number.
+fn rows() -> Vec<(Contender, f64)> {
+    let mut rows = Vec::new();
+    for method in Method::ALL {
+        let Some(paper) = method.info().paper.and_then(|p| p.table1) else {
+            continue;
+        };
+        let mut variants = method.variants();
+        let as_in_paper = Contender::as_in_paper(method).and_then(|c| c.variant);
+        variants.sort_by_key(|v| *v != as_in_paper);
+        for variant in variants {
+            rows.push((Contender { method, variant }, paper));
+        }
+    }
+    rows
+}
 
 /// Settings of the experiment.
 #[derive(Debug, Clone)]
@@ -117,8 +119,8 @@ impl Stats {
 #[derive(Debug, Clone, Serialize)]
 pub struct Row {
     pub method: Method,
-    /// The primal method's variant (`None` for the others).
-    pub primal_variant: Option<PrimalVariant>,
+    /// The method's variant (`None` for a method without variants).
+    pub variant: Option<&'static str>,
     /// What `within_0_1pct` measures: the relaxed own columns (the paper's) or the
     /// robots' decisions (the fast variant's).
     pub criterion: &'static str,
@@ -148,8 +150,7 @@ pub struct Table1 {
 }
 
 fn run_trial(
-    method: Method,
-    variant: PrimalVariant,
+    contender: Contender,
     shift: f64,
     seed: u64,
     config: &Table1Config,
@@ -162,15 +163,23 @@ fn run_trial(
     let graph = TopologySpec::Complete
         .build(n, seed)
         .expect("complete graph");
-    let rho = config.rho_scale * method.default_rho(problem.costs(), graph.mean_degree(), variant);
+    let setup = contender
+        .method
+        .setup(&contender.settings())
+        .map_err(|e| SolveError::Config(e.into()))?
+        .expect("Table 1's methods are team methods");
+    let default = setup
+        .default_rho(problem.costs(), graph.mean_degree())
+        .expect("Table 1's methods have a penalty");
+    let rho = config.rho_scale * default;
     let run = |stop| {
         let options = SolveOptions::builder()
-            .method(method)
+            .method(contender.method)
+            .settings(contender.settings())
             .stop(stop)
             .check(true)
             .max_iters(config.max_iters)
             .adaptive_rho(config.adaptive_rho)
-            .primal_variant(variant)
             .rho(Some(rho))
             .seed(seed)
             .build()?;
@@ -196,12 +205,14 @@ pub fn run(
     config: &Table1Config,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Table1, SolveError> {
-    let jobs: Vec<(Method, PrimalVariant, f64, u64)> = config
+    let rows_of_paper = rows();
+    let jobs: Vec<(Contender, f64, u64)> = config
         .shifts
         .iter()
         .flat_map(|&shift| {
-            ROWS.into_iter()
-                .flat_map(move |(m, v, _)| (0..config.trials).map(move |s| (m, v, shift, s)))
+            rows_of_paper
+                .iter()
+                .flat_map(move |&(c, _)| (0..config.trials).map(move |s| (c, shift, s)))
         })
         .collect();
     let results: Mutex<Vec<Option<Result<Trial, SolveError>>>> =
@@ -213,10 +224,10 @@ pub fn run(
             scope.spawn(|| {
                 loop {
                     let k = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(&(method, variant, shift, seed)) = jobs.get(k) else {
+                    let Some(&(contender, shift, seed)) = jobs.get(k) else {
                         break;
                     };
-                    let trial = run_trial(method, variant, shift, seed, config);
+                    let trial = run_trial(contender, shift, seed, config);
                     results.lock().expect("no panics while holding it")[k] = Some(trial);
                     progress(done.fetch_add(1, Ordering::Relaxed) + 1, jobs.len());
                 }
@@ -226,10 +237,10 @@ pub fn run(
     let mut results = results.into_inner().expect("no panics while holding it");
     let mut rows = Vec::new();
     for &shift in &config.shifts {
-        for (method, variant, paper) in ROWS {
+        for &(contender, paper) in &rows_of_paper {
             let mut trials = Vec::new();
             for (k, job) in jobs.iter().enumerate() {
-                if job.0 == method && job.1 == variant && job.2 == shift {
+                if job.0 == contender && job.1 == shift {
                     trials.push(results[k].take().expect("every job ran")?);
                 }
             }
@@ -238,11 +249,16 @@ pub fn run(
                 .filter(|t| t.certified)
                 .filter_map(|t| t.within_0_1pct.map(|w| t.stop_round as f64 - w as f64))
                 .collect();
-            let fast = method == Method::Primal && variant == PrimalVariant::Fast;
+            let readout = contender
+                .method
+                .setup(&contender.settings())
+                .ok()
+                .flatten()
+                .is_some_and(|s| s.decisions() == Decisions::Readout);
             rows.push(Row {
-                method,
-                primal_variant: (method == Method::Primal).then_some(variant),
-                criterion: if fast { "decisions" } else { "relaxed" },
+                method: contender.method,
+                variant: contender.variant,
+                criterion: if readout { "decisions" } else { "relaxed" },
                 cost_shift: shift,
                 paper,
                 within_0_1pct: Stats::of(trials.iter().map(|t| t.within_0_1pct)),
@@ -318,18 +334,16 @@ fn render(table: &Table1) -> String {
     for row in &table.rows {
         out += &format!(
             "{:<14} {:<7} {:>6.0} | {} | {} | {} | {:>9.1} {:>6}\n",
-            match row.primal_variant {
-                Some(v) => format!(
-                    "primal {}{}",
-                    v.name(),
-                    if row.criterion == "decisions" {
-                        "*"
-                    } else {
-                        ""
-                    }
-                ),
-                None => row.method.name().to_string(),
-            },
+            format!(
+                "{}{}{}",
+                row.method.name(),
+                row.variant.map_or(String::new(), |v| format!(" {v}")),
+                if row.criterion == "decisions" {
+                    "*"
+                } else {
+                    ""
+                }
+            ),
             format!("[{},{})", row.cost_shift, row.cost_shift + 1.0),
             row.paper,
             cell(&row.within_0_1pct),
@@ -339,7 +353,7 @@ fn render(table: &Table1) -> String {
             row.wrong_stops
         );
     }
-    out += "* the fast primal variant: within 0.1% on the robots' decisions (its relaxed own columns stay near the polytope's centre and never meet the paper's criterion)\n";
+    out += "* within 0.1% on the robots' decisions (the variants that decide by a readout of the team's assignment: their relaxed own columns stay near the polytope's centre and never meet the paper's criterion)\n";
     out
 }
 

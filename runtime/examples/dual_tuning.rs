@@ -5,7 +5,7 @@
 //! ρ = RHO_FACTOR / (spread · mean degree).
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::oracle;
-use admm_ta_agents::methods::dual::agent::{DualAgent, DualSettings, DualUpdate};
+use admm_ta_agents::methods::dual::agent::{DualAgent, DualParams, DualUpdate};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_topologies::TopologySpec;
@@ -44,7 +44,7 @@ fn main() {
                     n,
                     problem.case(),
                     graph.degree(i),
-                    DualSettings {
+                    DualParams {
                         rho,
                         update: if exact {
                             DualUpdate::Exact

@@ -3,10 +3,10 @@
 //! `cargo run --release -p admm-ta-runtime --example rho_schedule -- ROBOTS TASKS TOPOLOGY SEEDS GROWTH LIMIT`.
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::certify::rounding::argmax_assignment;
-use admm_ta_agents::methods::primal::agent::PrimalSettings;
+use admm_ta_agents::methods::primal::agent::PrimalParams;
+use admm_ta_agents::methods::primal::team_agents;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::sim::LockstepSim;
-use admm_ta_runtime::workload::plan::primal_team;
 use admm_ta_topologies::TopologySpec;
 
 fn main() {
@@ -26,7 +26,7 @@ fn main() {
         let graph = spec.build(n, seed).unwrap();
         let optimum = oracle::solve(&problem).unwrap();
         let rho0 = admm_ta_agents::methods::rho::default_rho(problem.costs(), graph.mean_degree());
-        let agents = primal_team(&problem, &graph, PrimalSettings::new(rho0), None, seed);
+        let agents = team_agents(&problem, &graph, PrimalParams::new(rho0), None, seed);
         let mut sim = LockstepSim::new(agents, &graph);
         let mut decisions = vec![0; n];
         let (mut optimal_since, mut integral_at) = (None, None);

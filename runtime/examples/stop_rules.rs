@@ -4,10 +4,10 @@
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::certify::rounding::argmax_assignment;
 use admm_ta_agents::certify::stopping::NeverStop;
-use admm_ta_agents::methods::primal::agent::PrimalSettings;
+use admm_ta_agents::methods::primal::agent::PrimalParams;
+use admm_ta_agents::methods::primal::team_agents;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::sim::LockstepSim;
-use admm_ta_runtime::workload::plan::primal_team;
 use admm_ta_topologies::TopologySpec;
 
 fn main() {
@@ -29,7 +29,7 @@ fn main() {
         let optimum = oracle::solve(&problem).unwrap();
         let rho =
             factor * problem.costs().spread() / (2.0 * graph.mean_degree().max(1.0) * n as f64);
-        let agents = primal_team(&problem, &graph, PrimalSettings::new(rho), None, seed);
+        let agents = team_agents(&problem, &graph, PrimalParams::new(rho), None, seed);
         let mut sim = LockstepSim::new(agents, &graph);
         // per rule (all-entries τ, own-column τ): streak, stop round, stop optimal
         let mut streak = vec![[0usize; 2]; taus.len()];

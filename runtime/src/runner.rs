@@ -229,8 +229,7 @@ fn on_threads(
             settings,
             max_rounds,
         } => {
-            let mut agents: Vec<MethodAgent> =
-                (0..n).map(|i| settings.agent(i, graph.degree(i))).collect();
+            let mut agents: Vec<MethodAgent> = (0..n).map(|i| settings.agent(i, graph)).collect();
             let plans = plans(n, max_rounds, &AgentStop::MaxIters, options);
             let results = threads::run_threads_with(
                 &mut agents,

@@ -6,9 +6,8 @@
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::certify::stopping::NeverStop;
-use admm_ta_agents::method::agent::MethodAgent;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
-use admm_ta_agents::methods::{AgentMethod, AgentSettings};
+use admm_ta_agents::methods::primal::settings::fast_rho;
+use admm_ta_agents::methods::primal::{PrimalAgent, PrimalParams, PrimalVariant, team_agents};
 use admm_ta_agents::problem::cost_model::geometric;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
@@ -97,32 +96,15 @@ fn every_certified_assignment_is_optimal() {
     assert!(uncertified.is_empty(), "not certified: {uncertified:#?}");
 }
 
-fn fast_agents(problem: &TaskAssignmentProblem, spec: TopologySpec) -> (Vec<MethodAgent>, usize) {
+/// The fast variant's agents (without the extrapolated readout, whose filter a solve's team
+/// designs), and the graph's diameter.
+fn fast_agents(problem: &TaskAssignmentProblem, spec: TopologySpec) -> (Vec<PrimalAgent>, usize) {
     let n = problem.robots();
     let graph = spec.build(n, 0).unwrap();
     let diameter = graph.diameter().unwrap();
-    let rho = admm_ta_agents::methods::Method::Primal.default_rho(
-        problem.costs(),
-        graph.mean_degree(),
-        PrimalVariant::Fast,
-    );
-    let settings = AgentSettings {
-        primal_variant: PrimalVariant::Fast,
-        ..AgentSettings::new(AgentMethod::Primal, rho, diameter, 1e-9 * n as f64)
-    };
-    let agents = (0..n)
-        .map(|i| {
-            MethodAgent::new(
-                i,
-                problem.costs().row(i).to_vec(),
-                n,
-                problem.case(),
-                graph.degree(i),
-                settings,
-            )
-        })
-        .collect();
-    (agents, diameter)
+    let rho = fast_rho(problem.costs().spread(), graph.mean_degree());
+    let params = PrimalParams::for_variant(PrimalVariant::Fast, rho, diameter, n, 1e-9 * n as f64);
+    (team_agents(problem, &graph, params, None, 0), diameter)
 }
 
 #[test]
@@ -151,7 +133,7 @@ fn the_multipliers_sum_to_zero_exactly_on_a_long_chain_run() {
     let mut float_sum = vec![0.0f64; n * m];
     let mut magnitude = vec![0.0f64; n * m];
     for agent in sim.agents() {
-        let primal = agent.as_primal().unwrap();
+        let primal = agent;
         for (k, &units) in primal.exact_multipliers().unwrap().iter().enumerate() {
             sum[k] += units;
         }

@@ -3,28 +3,28 @@
 
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::certify::stopping::NeverStop;
-use admm_ta_agents::method::agent::MethodAgent;
-use admm_ta_agents::methods::primal::agent::{PrimalSettings, ProjectionPath};
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::methods::primal::{
+    PrimalAgent, PrimalParams, PrimalVariant, ProjectionPath, team_agents,
+};
 use admm_ta_agents::methods::rho::default_rho;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::solve::solve;
-use admm_ta_runtime::workload::plan::primal_team;
 use admm_ta_topologies::{Graph, TopologySpec, generate};
 
+/// One agent of the paper's primal variant per robot, with its own costs.
 fn agents(
     problem: &TaskAssignmentProblem,
     graph: &Graph,
     path: ProjectionPath,
-) -> Vec<MethodAgent> {
+) -> Vec<PrimalAgent> {
     let rho = default_rho(problem.costs(), graph.mean_degree());
-    let settings = PrimalSettings {
+    let params = PrimalParams {
         projection: path,
-        ..PrimalSettings::new(rho)
+        ..PrimalParams::new(rho)
     };
-    primal_team(problem, graph, settings, None, 0)
+    team_agents(problem, graph, params, None, 0)
 }
 
 fn payloads<A: admm_ta_agents::agent::ConsensusAgent + Send>(
@@ -95,7 +95,7 @@ fn stop_rule_is_safe(stop: StopRule) {
             // The agreement stop waits for near-integral iterates: the paper's variant.
             let config = SolveOptions::builder()
                 .stop(stop)
-                .primal_variant(match stop {
+                .setting(match stop {
                     StopRule::Agreement => PrimalVariant::Paper,
                     _ => PrimalVariant::Fast,
                 })
@@ -176,7 +176,7 @@ fn certified_stop_fires_soon_after_the_assignment_is_optimal() {
                     .stop(stop)
                     .check(true)
                     // The agreement rule is the paper variant's.
-                    .primal_variant(PrimalVariant::Paper)
+                    .setting(PrimalVariant::Paper)
                     .build()
                     .unwrap(),
             )
@@ -225,11 +225,7 @@ fn certificate_slack_bounds_the_optimality_gap_in_every_round() {
                 let slack: f64 = sim
                     .agents()
                     .iter()
-                    .map(|a| {
-                        a.as_primal()
-                            .expect("primal team")
-                            .certificate_slack_for(pi)
-                    })
+                    .map(|a| a.certificate_slack_for(pi))
                     .sum();
                 assert!(
                     gap <= slack + 1e-9,

@@ -18,7 +18,7 @@ fn the_local_stop_never_certifies_a_wrong_assignment() {
         (12, 7, "random:0.4"),
     ];
     let (mut runs, mut certified) = (0, 0);
-    for method in Method::ADMM {
+    for method in Method::admm() {
         for (robots, tasks, topology) in settings {
             for seed in 0..15 {
                 let (problem, graph) =

@@ -27,7 +27,7 @@ pub fn run(command: Command) -> Result<()> {
             transports,
             topology,
             cost_model,
-            primal_variant,
+            settings,
             adaptive_rho,
             max_iters,
             out,
@@ -49,14 +49,15 @@ pub fn run(command: Command) -> Result<()> {
                 }
             }
             let runs = |m: &Method, t: &Transport| {
-                m.agent_method().is_some() || t.capabilities().execution == Execution::Lockstep
+                m.team().is_some() || t.capabilities().execution == Execution::Lockstep
             };
             if !methods
                 .iter()
                 .any(|m| transports.iter().any(|t| runs(m, t)))
             {
                 usage_bail!(
-                    "no method of --methods runs on --transports: a centralized method (hungarian) runs on {} only",
+                    "no method of --methods runs on --transports: a centralized method ({}) runs on {} only",
+                    Method::names_where(|i| i.team.is_none(), "or"),
                     Transport::names_where(|c| c.execution == Execution::Lockstep, "or")
                 );
             }
@@ -67,7 +68,7 @@ pub fn run(command: Command) -> Result<()> {
                 transports,
                 topology: spec,
                 cost_model,
-                primal_variant,
+                settings: settings.0,
                 adaptive_rho,
                 max_iters,
                 agent_program: Some(agent_program()?),

@@ -46,6 +46,7 @@ pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
     let mut options = SolveOptions::builder()
         .refuse_unread(true)
         .method(args.method)
+        .settings(args.settings.0.clone())
         .transport(args.transport)
         .seed(args.seed)
         .check(args.check)
@@ -56,12 +57,6 @@ pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
     }
     if given("adaptive_rho") {
         options = options.adaptive_rho(args.adaptive_rho);
-    }
-    if given("primal_variant") {
-        options = options.primal_variant(args.primal_variant);
-    }
-    if given("gamma_factor") {
-        options = options.gamma_factor(args.gamma_factor);
     }
     if given("max_iters") {
         options = options.max_iters(args.max_iters);
@@ -74,9 +69,6 @@ pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
     }
     if given("perturb") {
         options = options.perturbation(parse_perturb(&args.perturb)?);
-    }
-    if given("projection") {
-        options = options.projection(args.projection);
     }
     if given("trace") {
         options = options.trace(args.trace);

@@ -1,24 +1,27 @@
 //! One agent type that runs any team method, so that runners and transports handle every
-//! method the same way: the method's own agent, built by its registration in
-//! [`crate::methods`], behind one dynamic call per step.
+//! method the same way: the method's own agent, built by its team's
+//! [`crate::method::team::TeamBuilder`], behind one dynamic call per step.
 //!
 //! ```
 //! use admm_ta_agents::agent::ConsensusAgent;
-//! use admm_ta_agents::methods::{AgentMethod, AgentSettings};
 //! use admm_ta_agents::method::agent::MethodAgent;
-//! use admm_ta_agents::problem::AssignmentCase;
-//! let settings = AgentSettings::new(AgentMethod::Dual, 0.5, 1, 1e-9);
-//! let agent = MethodAgent::new(0, vec![0.2, 0.7], 2, AssignmentCase::One, 1, settings);
+//! use admm_ta_agents::method::settings::GivenSettings;
+//! use admm_ta_agents::method::team::{AgentInit, TeamContext, TeamParams};
+//! use admm_ta_agents::methods::Method;
+//! use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
+//! let costs = CostMatrix::new(2, 2, vec![0.2, 0.7, 0.6, 0.1]).unwrap();
+//! let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
+//! let graph = admm_ta_topologies::generate::complete(2).unwrap();
+//! let setup = Method::Dual.setup(&GivenSettings::default()).unwrap().expect("a team method");
+//! let params = TeamParams { rho: 0.5, diameter: 1, tolerance: 1e-9 };
+//! let team = setup.team(TeamContext { problem: &problem, graph: &graph, params });
+//! let init = AgentInit { index: 0, costs: vec![0.2, 0.7], robots: 2, case: AssignmentCase::One, degree: 1 };
+//! let agent = MethodAgent::new(team.agent(init));
 //! assert_eq!(agent.payload_len(), 4); // ν: 2 robot rows + 2 task rows
 //! ```
 
 use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
-use crate::methods::primal::agent::PrimalAgent;
-use crate::methods::primal::readout_filter::ReadoutFilter;
 use crate::methods::rho::RhoSchedule;
-use crate::methods::{AgentInit, AgentSettings};
-use crate::problem::AssignmentCase;
-use std::sync::Arc;
 
 /// An agent of any team method, optionally following a ρ schedule (applied by the agent
 /// itself before each step, so every transport changes ρ at the same round).
@@ -29,24 +32,8 @@ pub struct MethodAgent {
 }
 
 impl MethodAgent {
-    /// Robot `index` of `robots` with its own costs, `degree = |N(i)|`, of the team method
-    /// `settings.method`.
-    pub fn new(
-        index: usize,
-        costs: Vec<f64>,
-        robots: usize,
-        case: AssignmentCase,
-        degree: usize,
-        settings: AgentSettings,
-    ) -> Self {
-        let algorithm = (settings.method.info().build)(AgentInit {
-            index,
-            costs,
-            robots,
-            case,
-            degree,
-            settings: &settings,
-        });
+    /// The agent `algorithm` (built by its team's builder).
+    pub fn new(algorithm: Box<dyn AgentAlgorithm>) -> Self {
         Self {
             algorithm,
             schedule: None,
@@ -67,27 +54,13 @@ impl MethodAgent {
     }
 
     /// New own costs for the next episode of a repeated assignment, warm-started from the
-    /// current iterates or (`warm = false`) from zero; primal consensus ADMM only.
-    pub fn set_costs(&mut self, costs: &[f64], warm: bool) -> Result<(), String> {
+    /// current iterates or (`warm = false`) from zero; the methods that support it.
+    pub fn set_costs(
+        &mut self,
+        costs: &[f64],
+        warm: bool,
+    ) -> Result<(), crate::agent::NewCostsError> {
         self.algorithm.set_costs(costs, warm)
-    }
-
-    /// Gives the fast primal variant's agent the team's readout filter (no effect on other
-    /// methods, on the paper's variant or with `None`).
-    pub fn with_readout_filter(mut self, filter: Option<Arc<ReadoutFilter>>) -> Self {
-        if let Some(filter) = filter {
-            let any: &mut dyn std::any::Any = self.algorithm.as_mut();
-            if let Some(primal) = any.downcast_mut::<PrimalAgent>() {
-                primal.set_readout_filter(filter);
-            }
-        }
-        self
-    }
-
-    /// The primal agent inside, if this is one.
-    pub fn as_primal(&self) -> Option<&PrimalAgent> {
-        let any: &dyn std::any::Any = self.algorithm.as_ref();
-        any.downcast_ref()
     }
 }
 
@@ -98,7 +71,7 @@ impl ConsensusAgent for MethodAgent {
     fn write_initial_payload(&self, out: &mut [f64]) {
         self.algorithm.write_initial_payload(out)
     }
-    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+    fn check_payload(&self, payload: &[f64]) -> Result<(), crate::agent::PayloadError> {
         self.algorithm.check_payload(payload)
     }
     fn step(&mut self, inbox: &dyn Inbox, out: &mut [f64]) -> StepReport {
@@ -119,24 +92,5 @@ impl ConsensusAgent for MethodAgent {
     }
     fn own_column(&self) -> &[f64] {
         self.algorithm.own_column()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::methods::AgentMethod;
-
-    #[test]
-    fn only_the_primal_agent_is_a_primal_agent_and_takes_new_costs() {
-        for method in AgentMethod::ALL {
-            let settings = AgentSettings::new(method, 0.5, 1, 1e-9);
-            let mut agent =
-                MethodAgent::new(0, vec![0.2, 0.7], 2, AssignmentCase::One, 1, settings);
-            assert_eq!(agent.payload_len(), method.payload_len(2, 2));
-            let primal = method == AgentMethod::Primal;
-            assert_eq!(agent.as_primal().is_some(), primal, "{method:?}");
-            assert_eq!(agent.set_costs(&[0.1, 0.3], true).is_ok(), primal);
-        }
     }
 }

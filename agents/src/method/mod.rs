@@ -1,3 +1,14 @@
-//! What every method declares, and the agent that runs any of them.
+//! What every method declares, and the agent that runs any of them. The registry of the
+//! methods themselves is [`crate::methods`].
+//!
+//! * [`info`]: a method's information ([`info::MethodInfo`]): name, role, stop rules,
+//!   memory, certification, numbers, report text, the paper's figures;
+//! * [`settings`]: a method's own settings type, one field and one spec per setting;
+//! * [`team`]: how a method's team is built ([`team::TeamMethod`]) and what runners hold of
+//!   it ([`team::MethodSetup`], [`team::TeamBuilder`]);
+//! * [`agent`]: [`agent::MethodAgent`], any method's agent behind one dynamic call per step.
 
 pub mod agent;
+pub mod info;
+pub mod settings;
+pub mod team;

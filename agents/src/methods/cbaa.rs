@@ -28,7 +28,13 @@
 //! the bids, which is not the optimal assignment in general (the paper's Section 4.3: it
 //! never was in their trials). Its optimality gap is reported by `solve --check`.
 
-use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, PayloadError, PayloadPart, StepReport};
+use crate::method::info::{
+    Certification, Fig2Graphs, Memory, MethodInfo, Numbers, OWN_STATE_STOPS, PaperFacts,
+    ReportText, Role, TEAM_STATE, per_agent,
+};
+use crate::method::settings::NoSettings;
+use crate::method::team::{AgentInit, TeamBuilder, TeamContext, TeamMethod};
 
 /// No winner (as stored in the payload).
 const NOBODY: f64 = -1.0;
@@ -104,16 +110,22 @@ impl ConsensusAgent for CbaaAgent {
     }
 
     /// Bids finite or `−∞` (none yet); winners "nobody" or a robot index (an integer).
-    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+    fn check_payload(&self, payload: &[f64]) -> Result<(), PayloadError> {
         let m = self.tasks;
         crate::agent::check_length(payload, 2 * m)?;
         for j in 0..m {
             let (bid, winner) = (payload[j], payload[m + j]);
             if bid.is_nan() || bid == f64::INFINITY {
-                return Err(format!("bid on task {j} is {bid}"));
+                return Err(PayloadError::BadValue {
+                    part: PayloadPart::at("bid on task", j),
+                    value: bid,
+                });
             }
             if winner != NOBODY && !(winner >= 0.0 && winner.fract() == 0.0 && winner < 1e9) {
-                return Err(format!("winner of task {j} is {winner}"));
+                return Err(PayloadError::BadValue {
+                    part: PayloadPart::at("winner of task", j),
+                    value: winner,
+                });
             }
         }
         Ok(())
@@ -201,6 +213,62 @@ impl ConsensusAgent for CbaaAgent {
 
 /// No penalty, one problem: the defaults.
 impl AgentAlgorithm for CbaaAgent {}
+
+/// The CBAA baseline's registration.
+pub const INFO: MethodInfo = MethodInfo {
+    name: "cbaa",
+    summary: "the consensus-based auction baseline: fast, conflict-free, not optimal",
+    role: Role::Baseline,
+    team: Some(&CbaaMethod),
+    variants: None,
+    stops: OWN_STATE_STOPS,
+    // Costs, bids and winners, the own column, two round buffers of 2m.
+    memory: Memory {
+        bytes: |n, m| per_agent(n, 8.0 * m as f64),
+        of: TEAM_STATE,
+        because: "each robot holds 2m bids and winners",
+    },
+    certification: Certification::Never {
+        because: "CBAA is a heuristic",
+    },
+    numbers: Numbers::Normalised,
+    report: ReportText { inner_steps: None },
+    paper: Some(PaperFacts {
+        label: "CBAA (not optimal)",
+        proposed: false,
+        table1: None,
+        fig1: None,
+        fig2: Fig2Graphs {
+            complete: true,
+            random: false,
+        },
+        variant: None,
+    }),
+};
+
+/// CBAA as a team method.
+pub struct CbaaMethod;
+
+impl TeamMethod for CbaaMethod {
+    type Settings = NoSettings;
+    const PENALTY: bool = false;
+
+    fn payload_len(&self, _robots: usize, tasks: usize) -> usize {
+        2 * tasks
+    }
+
+    fn team<'a>(&'static self, _: &NoSettings, _: TeamContext<'a>) -> Box<dyn TeamBuilder + 'a> {
+        Box::new(CbaaTeam)
+    }
+}
+
+struct CbaaTeam;
+
+impl TeamBuilder for CbaaTeam {
+    fn agent(&self, init: AgentInit) -> Box<dyn AgentAlgorithm> {
+        Box::new(CbaaAgent::new(init.index, init.costs))
+    }
+}
 
 #[cfg(test)]
 mod tests {

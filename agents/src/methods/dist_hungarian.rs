@@ -16,7 +16,13 @@
 //! needs far fewer bytes on large teams. This version sends `8nm` bytes per round, like the
 //! primal ADMM.
 
-use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, PayloadError, PayloadPart, StepReport};
+use crate::method::info::{
+    Certification, Fig2Graphs, Memory, MethodInfo, Numbers, OWN_STATE_STOPS, PaperFacts,
+    ReportText, Role, TEAM_STATE, case_two_expansion, per_agent,
+};
+use crate::method::settings::NoSettings;
+use crate::method::team::{AgentInit, TeamBuilder, TeamContext, TeamMethod};
 use crate::problem::{AssignmentCase, CostMatrix};
 
 /// Robot `index`'s state.
@@ -93,7 +99,7 @@ impl ConsensusAgent for DistHungarianAgent {
     }
 
     /// Each row all `NaN` (unknown) or all finite.
-    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+    fn check_payload(&self, payload: &[f64]) -> Result<(), PayloadError> {
         crate::agent::check_length(payload, self.known.len())?;
         for (r, row) in payload.chunks(self.tasks).enumerate() {
             let unknown = row[0].is_nan();
@@ -101,7 +107,9 @@ impl ConsensusAgent for DistHungarianAgent {
                 .iter()
                 .any(|v| if unknown { !v.is_nan() } else { !v.is_finite() })
             {
-                return Err(format!("cost row {r} is partly unknown or not finite"));
+                return Err(PayloadError::BadBlock {
+                    part: PayloadPart::at("cost row", r),
+                });
             }
         }
         Ok(())
@@ -162,3 +170,64 @@ impl ConsensusAgent for DistHungarianAgent {
 
 /// No penalty, one problem: the defaults.
 impl AgentAlgorithm for DistHungarianAgent {}
+
+/// The distributed Hungarian baseline's registration.
+pub const INFO: MethodInfo = MethodInfo {
+    name: "dist-hungarian",
+    summary: "robots flood their cost rows and solve locally: optimal after a graph diameter",
+    role: Role::Baseline,
+    team: Some(&DistHungarianMethod),
+    variants: None,
+    stops: OWN_STATE_STOPS,
+    // The known rows, two round buffers and the copy solved; Case 2's n×n expansion.
+    memory: Memory {
+        bytes: |n, m| per_agent(n, 4.0 * (n * m) as f64 + case_two_expansion(n, m)),
+        of: TEAM_STATE,
+        because: "each robot holds the n×m cost rows",
+    },
+    certification: Certification::WhenFinished,
+    // It floods and solves the user's own numbers: every robot solves the same matrix the
+    // same way.
+    numbers: Numbers::Exact,
+    report: ReportText { inner_steps: None },
+    paper: Some(PaperFacts {
+        label: "distributed Hungarian",
+        proposed: false,
+        table1: None,
+        fig1: None,
+        fig2: Fig2Graphs {
+            complete: true,
+            random: true,
+        },
+        variant: None,
+    }),
+};
+
+/// The distributed Hungarian method as a team method.
+pub struct DistHungarianMethod;
+
+impl TeamMethod for DistHungarianMethod {
+    type Settings = NoSettings;
+    const PENALTY: bool = false;
+
+    fn payload_len(&self, robots: usize, tasks: usize) -> usize {
+        robots * tasks
+    }
+
+    fn team<'a>(&'static self, _: &NoSettings, _: TeamContext<'a>) -> Box<dyn TeamBuilder + 'a> {
+        Box::new(DistHungarianTeam)
+    }
+}
+
+struct DistHungarianTeam;
+
+impl TeamBuilder for DistHungarianTeam {
+    fn agent(&self, init: AgentInit) -> Box<dyn AgentAlgorithm> {
+        Box::new(DistHungarianAgent::new(
+            init.index,
+            init.costs,
+            init.robots,
+            init.case,
+        ))
+    }
+}

@@ -57,7 +57,13 @@
 //! Size: one agent — the market, its distribution over the graph (both explained above) and
 //! the matching and clique search of its replicated state; about 100 lines are its unit tests.
 
-use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, PayloadError, PayloadPart, StepReport};
+use crate::method::info::{
+    Certification, Fig2Graphs, Memory, MethodInfo, Numbers, OWN_STATE_STOPS, PaperFacts,
+    ReportText, Role, TEAM_STATE, per_agent,
+};
+use crate::method::settings::NoSettings;
+use crate::method::team::{AgentInit, TeamBuilder, TeamContext, TeamMethod, TeamParams};
 
 /// Demand bits per payload number: integers up to `2⁴⁸` are exact in an `f64`.
 const BITS_PER_WORD: usize = 48;
@@ -342,22 +348,31 @@ impl ConsensusAgent for MarketAgent {
     }
 
     /// Row flags 0 or 1, packed words integers below `2⁴⁸`, the raise positive or `+∞`.
-    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+    fn check_payload(&self, payload: &[f64]) -> Result<(), PayloadError> {
         let n = self.robots;
         crate::agent::check_length(payload, self.payload.len())?;
         if let Some(r) = payload[..n].iter().position(|&f| f != 0.0 && f != 1.0) {
-            return Err(format!("row flag {r} is {}", payload[r]));
+            return Err(PayloadError::BadValue {
+                part: PayloadPart::at("row flag", r),
+                value: payload[r],
+            });
         }
         let words = &payload[n..payload.len() - 1];
         if let Some(w) = words
             .iter()
             .position(|&w| !(0.0..(1u64 << BITS_PER_WORD) as f64).contains(&w) || w.fract() != 0.0)
         {
-            return Err(format!("demand word {w} is {}", words[w]));
+            return Err(PayloadError::BadValue {
+                part: PayloadPart::at("demand word", w),
+                value: words[w],
+            });
         }
         let delta = payload[payload.len() - 1];
         if delta.is_nan() || delta <= 0.0 {
-            return Err(format!("price raise is {delta}"));
+            return Err(PayloadError::BadValue {
+                part: PayloadPart::named("price raise"),
+                value: delta,
+            });
         }
         Ok(())
     }
@@ -458,6 +473,69 @@ impl ConsensusAgent for MarketAgent {
 
 /// No penalty, one problem: the defaults.
 impl AgentAlgorithm for MarketAgent {}
+
+/// The market baseline's registration.
+pub const INFO: MethodInfo = MethodInfo {
+    name: "market",
+    summary: "Liu & Shell's price-escalation market replicated over the graph: optimal, 2·diameter rounds per price raise, sends demand bits only",
+    role: Role::Baseline,
+    team: Some(&MarketMethod),
+    variants: None,
+    stops: OWN_STATE_STOPS,
+    // The replicated market (prices, matching, clique, search scratch: about 10n), the own
+    // column, and the payload being built plus two round buffers.
+    memory: Memory {
+        bytes: |n, m| {
+            let payload = MarketAgent::payload_len_for(n);
+            per_agent(n, (10 * n + m + 3 * payload) as f64)
+        },
+        of: TEAM_STATE,
+        because: "each robot holds the team's demand bits",
+    },
+    certification: Certification::WhenFinished,
+    numbers: Numbers::Normalised,
+    report: ReportText { inner_steps: None },
+    paper: Some(PaperFacts {
+        label: "market",
+        proposed: false,
+        table1: None,
+        fig1: None,
+        fig2: Fig2Graphs {
+            complete: true,
+            random: false,
+        },
+        variant: None,
+    }),
+};
+
+/// The market as a team method.
+pub struct MarketMethod;
+
+impl TeamMethod for MarketMethod {
+    type Settings = NoSettings;
+    const PENALTY: bool = false;
+
+    fn payload_len(&self, robots: usize, _tasks: usize) -> usize {
+        MarketAgent::payload_len_for(robots)
+    }
+
+    fn team<'a>(&'static self, _: &NoSettings, team: TeamContext<'a>) -> Box<dyn TeamBuilder + 'a> {
+        Box::new(MarketTeam(team.params))
+    }
+}
+
+struct MarketTeam(TeamParams);
+
+impl TeamBuilder for MarketTeam {
+    fn agent(&self, init: AgentInit) -> Box<dyn AgentAlgorithm> {
+        Box::new(MarketAgent::new(
+            init.index,
+            init.costs,
+            init.robots,
+            self.0.diameter,
+        ))
+    }
+}
 
 #[cfg(test)]
 mod tests {

@@ -73,7 +73,7 @@ impl ConsensusAgent for ProbeAgent {
 
     /// Length only: a full scan of every neighbour's payload (the default check) would make
     /// the `touch` step read every byte, hiding what a zero-copy exchange saves.
-    fn check_payload(&self, payload: &[f64]) -> Result<(), String> {
+    fn check_payload(&self, payload: &[f64]) -> Result<(), crate::agent::PayloadError> {
         crate::agent::check_length(payload, self.state.len())
     }
 

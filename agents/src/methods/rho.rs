@@ -1,9 +1,9 @@
 //! The penalty parameter ρ: the scale-free default rules of the consensus ADMM methods
-//! ([`RhoRule`], which each method's entry in [`crate::methods`] names) and the
+//! ([`RhoRule`], which each method's registration names) and the
 //! `--adaptive-rho` schedules ([`RhoSchedule`]).
 //!
 //! **The primal rule** (of the paper's variant; the fast variant's default takes a ρ about
-//! 10⁴ times larger, [`crate::methods::primal::settings::fast_rho`], where the iteration no longer
+//! 10⁴ times larger, `fast_rho` of the primal method's settings, where the iteration no longer
 //! depends on it).
 //! The x-update depends on the costs only through `α/ρ` and is unchanged by adding a
 //! constant to a robot's costs (its column sum is fixed), so a ρ proportional to a shift-free
@@ -19,7 +19,6 @@
 //! rounds to the optimal assignment from 246 to 148 (15×15 chain, 20 seeds), from ≈1450 (half
 //! the runs within 3000 rounds) to 561 (50×30 chain) and from 259 to 132 (50×30, random:0.1).
 
-use crate::methods::primal::settings::{PrimalVariant, fast_rho};
 use crate::problem::CostMatrix;
 
 /// The `0.5` of the rule.
@@ -61,15 +60,6 @@ impl RhoRule {
         match self {
             Self::Primal => default_rho(costs, mean_degree),
             Self::Dual { factor } => factor / (costs.spread() * mean_degree.max(1.0)),
-        }
-    }
-
-    /// The default ρ when the primal method runs `variant` (the fast variant's is
-    /// [`fast_rho`]; the other rules ignore the variant).
-    pub fn rho_for(self, costs: &CostMatrix, mean_degree: f64, variant: PrimalVariant) -> f64 {
-        match (self, variant) {
-            (Self::Primal, PrimalVariant::Fast) => fast_rho(costs.spread(), mean_degree),
-            _ => self.rho(costs, mean_degree),
         }
     }
 

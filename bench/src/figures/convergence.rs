@@ -10,8 +10,6 @@ use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::report::TracePoint;
 use serde::Serialize;
 
-/// The methods of `fig1-convergence`.
-const METHODS: [Method; 3] = Method::ADMM;
 /// The graphs of `fig1-topologies`.
 const GRAPHS: [&str; 3] = ["complete", RANDOM_GRAPH, "chain"];
 
@@ -41,7 +39,8 @@ fn traced_run(
         problem,
         graph_spec,
         seed,
-        SolveOptions::builder().method(method).trace(true),
+        method,
+        SolveOptions::builder().trace(true),
     )?;
     Ok(TracedRun {
         method,
@@ -160,20 +159,16 @@ pub fn fig1_convergence(
     let mut runs = Vec::new();
     for seed in 0..config.trials {
         let problem = uniform(n, n, seed)?;
-        for method in METHODS {
+        for method in Method::admm() {
             progress(&format!("seed {seed} {}", method.name()));
             runs.push(traced_run(&problem, "complete", method, seed, config)?);
         }
     }
-    let summaries = METHODS
-        .iter()
-        .map(|&m| {
+    let summaries = Method::admm()
+        .into_iter()
+        .map(|m| {
             let of: Vec<&TracedRun> = runs.iter().filter(|r| r.method == m).collect();
-            summarise(
-                m.name(),
-                &of,
-                (m == Method::Primal).then_some("≈ 50 (within 0.1%)"),
-            )
+            summarise(m.name(), &of, m.info().paper.and_then(|p| p.fig1))
         })
         .collect();
     Ok(ConvergenceFigure {
@@ -196,7 +191,7 @@ pub fn fig1_topologies(
         let problem = uniform(n, m, seed)?;
         for g in GRAPHS {
             progress(&format!("seed {seed} {g}"));
-            runs.push(traced_run(&problem, g, Method::Primal, seed, config)?);
+            runs.push(traced_run(&problem, g, Method::papers_own(), seed, config)?);
         }
     }
     let summaries = GRAPHS
@@ -222,7 +217,7 @@ impl ConvergenceFigure {
     fn method_charts(&self) -> Vec<(String, OutputFile)> {
         let first = |m: Method| self.runs.iter().find(|r| r.method == m && r.seed == 0);
         let mut charts = Vec::new();
-        if let Some(primal) = first(Method::Primal) {
+        if let Some(primal) = first(Method::papers_own()) {
             let chart = Chart::new(
                 "Fig. 1 (left): primal ADMM-TA, 50 robots × 50 tasks, complete graph (seed 0)",
                 "iteration",
@@ -241,7 +236,7 @@ impl ConvergenceFigure {
         .x_scale(Scale::Log)
         .y_scale(Scale::Log)
         .legend(Legend::LowerLeft);
-        for m in METHODS {
+        for m in Method::admm() {
             if let Some(run) = first(m) {
                 chart = chart.series(gap_series(m.name(), run));
             }

@@ -21,7 +21,7 @@
 pub mod convergence;
 pub mod scaling;
 
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::methods::{Contender, Method};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptionsBuilder;
 use admm_ta_runtime::runner::RunError;
@@ -97,25 +97,28 @@ pub(crate) fn topology(
 }
 
 impl FigureConfig {
-    /// Solves `problem` on a `graph_spec` graph drawn from `seed`, checked against the
-    /// optimum, with this experiment's ρ schedule, round limit and agent binary; `config`
-    /// gives the rest (method, stop, transport, trace).
+    /// Solves `problem` by `method` on a `graph_spec` graph drawn from `seed`, checked
+    /// against the optimum, with this experiment's ρ schedule, round limit and agent binary;
+    /// `options` gives the rest (stop, transport, trace).
     pub(crate) fn checked_solve(
         &self,
         problem: &TaskAssignmentProblem,
         graph_spec: &str,
         seed: u64,
+        method: Method,
         options: SolveOptionsBuilder,
     ) -> Result<(SolveReport, OracleCheck), FigureError> {
         let graph = topology(graph_spec, problem.robots(), seed)?;
+        // The figures reproduce the paper's: each method as the paper ran it (the primal
+        // method's paper variant: the fast one's relaxed columns stay near the polytope's
+        // centre on purpose; see `experiment rounds-anatomy` and `compare` for it).
+        let as_in_paper = Contender::as_in_paper(method).unwrap_or(Contender::of(method));
         let options = options
+            .method(method)
+            .settings(as_in_paper.settings())
             .seed(seed)
             .check(true)
             .adaptive_rho(self.adaptive_rho)
-            // The figures reproduce the paper's: its variant of the primal method (the
-            // fast one's relaxed columns stay near the polytope's centre on purpose; see
-            // `experiment rounds-anatomy` and `compare` for it).
-            .primal_variant(PrimalVariant::Paper)
             .max_iters(self.max_iters)
             .agent_program(self.agent_program.clone())
             .fault_injection(false)

@@ -5,6 +5,7 @@
 use crate::experiment::{Experiment, OutputFile};
 use crate::figures::{FigureConfig, FigureError, RANDOM_GRAPH, uniform};
 use crate::plot::{Chart, Scale, Series};
+use admm_ta_agents::method::info::Fig2Graphs;
 use admm_ta_agents::methods::Method;
 use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::transport::Transport;
@@ -74,7 +75,8 @@ fn scaling_point(
             &uniform(n, n, seed)?,
             graph_spec,
             seed,
-            SolveOptions::builder().method(method).stop(stop),
+            method,
+            SolveOptions::builder().stop(stop),
         )?;
         point.trials += 1;
         point.mean_iterations += match stop {
@@ -90,7 +92,10 @@ fn scaling_point(
     Ok(point)
 }
 
-/// The runs of `fig2-scaling`, in order: `(graph, series label, method, stop, sizes)`.
+/// The runs of `fig2-scaling`, in order: `(graph, series label, method, stop, sizes)`: on
+/// the complete graph and on random graphs, every method the paper ran there — its own
+/// method to the paper's criterion (every size) and to the decentralized stop (up to
+/// `decentralized_up_to`), each baseline to its own stop.
 fn scaling_plan(
     config: &FigureConfig,
 ) -> Vec<(&'static str, String, Method, StopRule, Vec<usize>)> {
@@ -101,64 +106,32 @@ fn scaling_plan(
         .filter(|&n| n <= config.decentralized_up_to)
         .collect();
     let all = config.sizes.clone();
-    vec![
-        (
-            "complete",
-            "ADMM-TA (within 0.1%)".into(),
-            Method::Primal,
-            StopRule::Oracle,
-            all.clone(),
-        ),
-        (
-            "complete",
-            "ADMM-TA (decentralized stop)".into(),
-            Method::Primal,
-            StopRule::Local,
-            small.clone(),
-        ),
-        (
-            "complete",
-            "CBAA (not optimal)".into(),
-            Method::Cbaa,
-            StopRule::Local,
-            all.clone(),
-        ),
-        (
-            "complete",
-            "market".into(),
-            Method::Market,
-            StopRule::Local,
-            all.clone(),
-        ),
-        (
-            "complete",
-            "distributed Hungarian".into(),
-            Method::DistHungarian,
-            StopRule::Local,
-            all.clone(),
-        ),
-        (
-            RANDOM_GRAPH,
-            "ADMM-TA (within 0.1%)".into(),
-            Method::Primal,
-            StopRule::Oracle,
-            all.clone(),
-        ),
-        (
-            RANDOM_GRAPH,
-            "ADMM-TA (decentralized stop)".into(),
-            Method::Primal,
-            StopRule::Local,
-            small,
-        ),
-        (
-            RANDOM_GRAPH,
-            "distributed Hungarian".into(),
-            Method::DistHungarian,
-            StopRule::Local,
-            all,
-        ),
-    ]
+    let mut plan = Vec::new();
+    for (graph, on) in [
+        ("complete", (|g| g.complete) as fn(&Fig2Graphs) -> bool),
+        (RANDOM_GRAPH, |g| g.random),
+    ] {
+        for method in Method::ALL {
+            let Some(paper) = method.info().paper.filter(|p| on(&p.fig2)) else {
+                continue;
+            };
+            if paper.proposed {
+                let within = format!("{} (within 0.1%)", paper.label);
+                plan.push((graph, within, method, StopRule::Oracle, all.clone()));
+                let stop = format!("{} (decentralized stop)", paper.label);
+                plan.push((graph, stop, method, StopRule::Local, small.clone()));
+            } else {
+                plan.push((
+                    graph,
+                    paper.label.to_string(),
+                    method,
+                    StopRule::Local,
+                    all.clone(),
+                ));
+            }
+        }
+    }
+    plan
 }
 
 /// Number of points `fig2-scaling` computes (for progress bars).
@@ -205,9 +178,7 @@ pub struct IpcScalingFigure {
 
 /// The methods `ipc-scaling` runs: every method with agents.
 pub fn ipc_methods() -> impl Iterator<Item = Method> {
-    Method::ALL
-        .into_iter()
-        .filter(|m| m.agent_method().is_some())
+    Method::ALL.into_iter().filter(|m| m.team().is_some())
 }
 
 /// Markdown table of ipc points.
@@ -258,9 +229,8 @@ pub fn ipc_scaling(
                     &uniform(n, n, seed)?,
                     "complete",
                     seed,
-                    SolveOptions::builder()
-                        .method(method)
-                        .transport(Transport::Ipc),
+                    method,
+                    SolveOptions::builder().transport(Transport::Ipc),
                 )?;
                 let latency = report.round_latency_us.unwrap_or_default();
                 p.trials += 1;

@@ -86,7 +86,7 @@ pub enum ExchangeError {
         agent: usize,
         neighbour: usize,
         round: u64,
-        what: String,
+        what: admm_ta_agents::agent::PayloadError,
     },
     /// The team was asked to stop by a termination signal (to this process, to the launcher
     /// or host, or to another agent of the team): nobody failed.

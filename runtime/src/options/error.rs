@@ -1,10 +1,11 @@
 //! Settings no run can honour, and the one check of a timeout.
 
-use crate::options::given::{Compact, FrontEnd, OptionId, Setting, Value};
+use crate::options::given::{Compact, FrontEnd, OptionId, OptionName, Setting, Value};
 use crate::transport::{Execution, Transport, ZenohNotBuilt};
 use admm_ta_agents::certify::stopping::StopRule;
+use admm_ta_agents::method::settings::{SettingError, SettingKind};
+use admm_ta_agents::method::team::{Refusal, RunOption};
 use admm_ta_agents::methods::Method;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
 use std::time::Duration;
 
 /// Settings no run can honour. Errors name options by [`OptionId`]: `Display` spells them
@@ -23,7 +24,8 @@ pub enum ConfigError {
     CentralizedMethod {
         method: &'static str,
     },
-    Gamma(f64),
+    /// A method setting's value that the method cannot take.
+    Setting(SettingError),
     BarrierNeedsAgents,
     NotBuilt(ZenohNotBuilt),
     CentralStop {
@@ -36,11 +38,9 @@ pub enum ConfigError {
         method: Method,
     },
     TraceNeedsCheck,
-    /// An option of the paper's primal variant with the fast one: `--adaptive-rho` (the
-    /// fast iteration runs where ρ drops out; the schedule was measured for the paper's
-    /// readout) or `--stop agreement` (it waits for near-integral iterates, which the fast
-    /// variant's never are: they stay inside the polytope).
-    PaperOnly(Setting),
+    /// An option of the run that the method's settings exclude (`--adaptive-rho` or
+    /// `--stop agreement` with the fast primal variant: see the method's refusal).
+    Refused(Refusal),
     /// An option the caller gave that the method never reads (it would be silently
     /// ignored); `applies`: the methods that read it.
     NotForMethod {
@@ -94,10 +94,7 @@ impl ConfigError {
                     "method = \"{method}\" is the centralized solver: it has no agents to start (give a team method, or solve the problem with admm-ta solve)"
                 ),
             },
-            Self::Gamma(gamma) => format!(
-                "{} (the γ factor) must be a positive finite number, got {gamma}",
-                name(OptionId::GammaFactor)
-            ),
+            Self::Setting(e) => setting_error(e, front),
             Self::BarrierNeedsAgents => format!(
                 "{} needs the {} transport ({} have none)",
                 name(OptionId::GlobalBarrier),
@@ -121,22 +118,34 @@ impl ConfigError {
             Self::TraceNeedsCheck => {
                 "--trace needs --check: it follows the run against the centralized optimum".into()
             }
-            Self::PaperOnly(option) => format!(
-                "{} applies to the paper's primal variant, not the fast one: add {}",
-                front.setting(*option),
-                front.setting(Setting::new(
-                    OptionId::PrimalVariant,
-                    Value::Name(PrimalVariant::Paper.name())
-                ))
-            ),
+            Self::Refused(refusal) => {
+                let option = match refusal.option {
+                    RunOption::AdaptiveRho => Setting::new(OptionId::AdaptiveRho, Value::On),
+                    RunOption::Stop(stop) => {
+                        Setting::new(OptionId::Stop, Value::Name(stop.name().into()))
+                    }
+                };
+                format!(
+                    "{} applies to {}: add {}",
+                    front.setting(&option),
+                    refusal.because,
+                    front.setting(&Setting::new(
+                        OptionName::Method(refusal.needs),
+                        Value::Name(refusal.value.into())
+                    ))
+                )
+            }
             Self::NotForMethod {
                 option,
                 method,
                 applies,
             } => format!(
                 "{} does not apply to {}: it works with {}",
-                front.setting(*option),
-                front.setting(Setting::new(OptionId::Method, Value::Name(method))),
+                front.setting(option),
+                front.setting(&Setting::new(
+                    OptionId::Method,
+                    Value::Name((*method).into())
+                )),
                 front.choices(OptionId::Method, applies)
             ),
             Self::NotForTransport {
@@ -145,17 +154,20 @@ impl ConfigError {
                 applies,
             } => format!(
                 "{} does not apply to {}: it works with {}",
-                front.setting(*option),
-                front.setting(Setting::new(OptionId::Transport, Value::Name(transport))),
+                front.setting(option),
+                front.setting(&Setting::new(
+                    OptionId::Transport,
+                    Value::Name((*transport).into())
+                )),
                 front.choices(OptionId::Transport, applies)
             ),
             Self::NotForStop { option, stop } => format!(
                 "{} does not apply to {}: it counts the rounds of {}",
-                front.setting(*option),
-                front.setting(Setting::new(OptionId::Stop, Value::Name(stop))),
-                front.setting(Setting::new(
+                front.setting(option),
+                front.setting(&Setting::new(OptionId::Stop, Value::Name((*stop).into()))),
+                front.setting(&Setting::new(
                     OptionId::Stop,
-                    Value::Name(StopRule::Agreement.name())
+                    Value::Name(StopRule::Agreement.name().into())
                 ))
             ),
         }
@@ -178,34 +190,46 @@ impl std::error::Error for ConfigError {
     }
 }
 
+impl From<SettingError> for ConfigError {
+    fn from(e: SettingError) -> Self {
+        Self::Setting(e)
+    }
+}
+
 impl From<ZenohNotBuilt> for ConfigError {
     fn from(e: ZenohNotBuilt) -> Self {
         Self::NotBuilt(e)
     }
 }
 
-/// Refuses the paper variant's options with the fast primal variant: `--adaptive-rho` and
-/// `--stop agreement`.
-pub fn paper_only(
-    method: Method,
-    variant: PrimalVariant,
-    adaptive_rho: bool,
-    stop: StopRule,
-) -> Result<(), ConfigError> {
-    if method != Method::Primal || variant != PrimalVariant::Fast {
-        Ok(())
-    } else if adaptive_rho {
-        Err(ConfigError::PaperOnly(Setting::new(
-            OptionId::AdaptiveRho,
-            Value::On,
-        )))
-    } else if stop == StopRule::Agreement {
-        Err(ConfigError::PaperOnly(Setting::new(
-            OptionId::Stop,
-            Value::Name(StopRule::Agreement.name()),
-        )))
-    } else {
-        Ok(())
+/// A method setting's error in the terms of `front`.
+fn setting_error(error: &SettingError, front: FrontEnd) -> String {
+    let name = front.name(OptionName::Method(error.spec()));
+    match error {
+        SettingError::OutOfRange { spec, got } => {
+            let what = match spec.kind {
+                SettingKind::PositiveNumber { what } => what,
+                SettingKind::Choice(_) => spec.key,
+            };
+            format!("{name} ({what}) must be a positive finite number, got {got}")
+        }
+        SettingError::NotANumber { got, .. } => format!("{name} must be a number, got '{got}'"),
+        SettingError::NotAChoice { spec, got } => {
+            let choices: Vec<String> = spec
+                .choices()
+                .iter()
+                .map(|c| match front {
+                    FrontEnd::TeamFile => format!("\"{c}\""),
+                    FrontEnd::CommandLine => c.to_string(),
+                })
+                .collect();
+            let choices: Vec<&str> = choices.iter().map(String::as_str).collect();
+            format!(
+                "{name} must be {}, got '{got}'",
+                admm_ta_agents::method::info::join(&choices, "or")
+            )
+        }
+        SettingError::NotOfMethod { .. } => format!("{name} is not a setting of this method"),
     }
 }
 

@@ -1,22 +1,23 @@
-//! Which option a check or an error is about ([`OptionId`]), which options a caller gave
+//! Which option a check or an error is about ([`OptionName`]: an option of every solve,
+//! [`OptionId`], or a method's own setting, [`SettingSpec`]), which options a caller gave
 //! ([`Given`]), and how each front end spells them ([`FrontEnd`]): the command line's flag
-//! (`--max-iters`) or the team file's key (`max_iters`). Errors name options by id; each
-//! front end renders them in its own terms.
+//! (`--max-iters`) or the team file's key (`max_iters`). Errors name options; each front
+//! end renders them in its own terms.
 
-/// An option of a solve, whatever front end set it.
+use admm_ta_agents::method::settings::{SettingSpec, SettingValue};
+
+/// An option of every solve, whatever front end set it (a method's own settings are
+/// [`SettingSpec`]s of the method).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum OptionId {
     Method,
     Transport,
     Rho,
     AdaptiveRho,
-    GammaFactor,
     MaxIters,
     Stop,
     StopRounds,
     Perturb,
-    Projection,
-    PrimalVariant,
     Trace,
     GlobalBarrier,
     RoundTimeout,
@@ -33,13 +34,10 @@ impl OptionId {
             Self::Transport => "--transport",
             Self::Rho => "--rho",
             Self::AdaptiveRho => "--adaptive-rho",
-            Self::GammaFactor => "--gamma-factor",
             Self::MaxIters => "--max-iters",
             Self::Stop => "--stop",
             Self::StopRounds => "--stop-rounds",
             Self::Perturb => "--perturb",
-            Self::Projection => "--projection",
-            Self::PrimalVariant => "--primal-variant",
             Self::Trace => "--trace",
             Self::GlobalBarrier => "--global-barrier",
             Self::RoundTimeout => "--round-timeout",
@@ -56,7 +54,6 @@ impl OptionId {
             Self::Transport => "transport",
             Self::AdaptiveRho => "adaptive_rho",
             Self::MaxIters => "max_iters",
-            Self::PrimalVariant => "primal_variant",
             Self::RoundTimeout => "round_timeout",
             Self::StartupTimeout => "startup_timeout",
             _ => return None,
@@ -84,26 +81,70 @@ impl Given {
 }
 
 /// A value as an error shows it.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Value {
     /// A switch that is on (`--adaptive-rho`, `adaptive_rho = true`).
     On,
     /// A name (`--method market`, `method = "market"`).
-    Name(&'static str),
+    Name(std::borrow::Cow<'static, str>),
     /// A number (`--rho 3`, `rho = 3`).
     Number(f64),
 }
 
-/// An option with the value it was given.
+/// An option: of every solve, or a method's own setting.
 #[derive(Debug, Clone, Copy, PartialEq)]
+pub enum OptionName {
+    Run(OptionId),
+    Method(&'static SettingSpec),
+}
+
+impl OptionName {
+    /// The command line's flag.
+    pub fn flag(self) -> &'static str {
+        match self {
+            Self::Run(id) => id.flag(),
+            Self::Method(spec) => spec.flag,
+        }
+    }
+
+    /// The team file's key, for the options a team file sets.
+    pub fn key(self) -> Option<&'static str> {
+        match self {
+            Self::Run(id) => id.key(),
+            Self::Method(spec) => Some(spec.key),
+        }
+    }
+}
+
+impl From<OptionId> for OptionName {
+    fn from(id: OptionId) -> Self {
+        Self::Run(id)
+    }
+}
+
+/// An option with the value it was given.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Setting {
-    pub id: OptionId,
+    pub option: OptionName,
     pub value: Value,
 }
 
+impl Value {
+    /// A method setting's given value as an error shows it.
+    pub fn of(value: &SettingValue) -> Self {
+        match value {
+            SettingValue::Number(v) => Self::Number(*v),
+            SettingValue::Name(n) => Self::Name(n.clone().into()),
+        }
+    }
+}
+
 impl Setting {
-    pub fn new(id: OptionId, value: Value) -> Self {
-        Self { id, value }
+    pub fn new(option: impl Into<OptionName>, value: Value) -> Self {
+        Self {
+            option: option.into(),
+            value,
+        }
     }
 }
 
@@ -120,18 +161,20 @@ pub enum FrontEnd {
 impl FrontEnd {
     /// The option's name: its flag, or its key in a team file (the flag when a team file
     /// has no such key: then no team file set it).
-    pub fn name(self, id: OptionId) -> &'static str {
-        match (self, id.key()) {
+    pub fn name(self, option: impl Into<OptionName>) -> &'static str {
+        let option = option.into();
+        match (self, option.key()) {
             (Self::TeamFile, Some(key)) => key,
-            _ => id.flag(),
+            _ => option.flag(),
         }
     }
 
     /// The option with any of `values`: `--method primal or dual`, or
     /// `method = "primal" or "dual"`.
-    pub fn choices(self, id: OptionId, values: &[&str]) -> String {
-        let name = self.name(id);
-        if self == Self::TeamFile && id.key().is_some() {
+    pub fn choices(self, option: impl Into<OptionName>, values: &[&str]) -> String {
+        let option = option.into();
+        let name = self.name(option);
+        if self == Self::TeamFile && option.key().is_some() {
             let quoted: Vec<String> = values.iter().map(|v| format!("\"{v}\"")).collect();
             format!("{name} = {}", join(&quoted))
         } else {
@@ -141,16 +184,16 @@ impl FrontEnd {
     }
 
     /// The option with its value: `--method market` or `method = "market"`.
-    pub fn setting(self, setting: Setting) -> String {
-        let name = self.name(setting.id);
-        let file = self == Self::TeamFile && setting.id.key().is_some();
-        match (setting.value, file) {
+    pub fn setting(self, setting: &Setting) -> String {
+        let name = self.name(setting.option);
+        let file = self == Self::TeamFile && setting.option.key().is_some();
+        match (&setting.value, file) {
             (Value::On, false) => name.to_string(),
             (Value::On, true) => format!("{name} = true"),
             (Value::Name(value), false) => format!("{name} {value}"),
             (Value::Name(value), true) => format!("{name} = \"{value}\""),
-            (Value::Number(value), false) => format!("{name} {}", Compact(value)),
-            (Value::Number(value), true) => format!("{name} = {}", Compact(value)),
+            (Value::Number(value), false) => format!("{name} {}", Compact(*value)),
+            (Value::Number(value), true) => format!("{name} = {}", Compact(*value)),
         }
     }
 }
@@ -185,20 +228,21 @@ mod tests {
 
     #[test]
     fn each_front_end_spells_an_option_its_own_way() {
-        let paper = Setting::new(OptionId::PrimalVariant, Value::Name("paper"));
+        let variant = &admm_ta_agents::methods::primal::settings::VARIANT;
+        let paper = Setting::new(OptionName::Method(variant), Value::Name("paper".into()));
         assert_eq!(
-            FrontEnd::CommandLine.setting(paper),
+            FrontEnd::CommandLine.setting(&paper),
             "--primal-variant paper"
         );
         assert_eq!(
-            FrontEnd::TeamFile.setting(paper),
+            FrontEnd::TeamFile.setting(&paper),
             "primal_variant = \"paper\""
         );
         let adaptive = Setting::new(OptionId::AdaptiveRho, Value::On);
-        assert_eq!(FrontEnd::CommandLine.setting(adaptive), "--adaptive-rho");
-        assert_eq!(FrontEnd::TeamFile.setting(adaptive), "adaptive_rho = true");
+        assert_eq!(FrontEnd::CommandLine.setting(&adaptive), "--adaptive-rho");
+        assert_eq!(FrontEnd::TeamFile.setting(&adaptive), "adaptive_rho = true");
         let rho = Setting::new(OptionId::Rho, Value::Number(3.0));
-        assert_eq!(FrontEnd::CommandLine.setting(rho), "--rho 3");
+        assert_eq!(FrontEnd::CommandLine.setting(&rho), "--rho 3");
         assert_eq!(FrontEnd::TeamFile.name(OptionId::MaxIters), "max_iters");
         assert_eq!(
             FrontEnd::TeamFile.choices(OptionId::Method, &["primal", "dual"]),

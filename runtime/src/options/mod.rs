@@ -22,9 +22,9 @@ use crate::options::run::{RunOptions, RunOptionsBuilder};
 use crate::transport::{Execution, Transport};
 use crate::wait::WaitStrategy;
 pub use admm_ta_agents::certify::stopping::StopRule;
+use admm_ta_agents::method::settings::{GivenSettings, Setting, SettingSpec, SettingValue};
+use admm_ta_agents::method::team::MethodSetup;
 use admm_ta_agents::methods::Method;
-use admm_ta_agents::methods::primal::agent::ProjectionPath;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
 use admm_ta_agents::problem::ties::Perturbation;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -65,14 +65,13 @@ pub struct SolveOptions {
     method: Method,
     rho: Option<f64>,
     adaptive_rho: bool,
-    gamma_factor: Option<f64>,
+    /// The method's own settings, as given.
+    settings: GivenSettings,
     max_iters: usize,
     stop: StopRule,
     stop_rounds: usize,
     seed: u64,
     perturbation: Perturbation,
-    projection: ProjectionPath,
-    primal_variant: PrimalVariant,
     check: bool,
     trace: bool,
     on_failure: OnFailure,
@@ -86,17 +85,15 @@ impl Default for SolveOptions {
     fn default() -> Self {
         Self {
             run: RunOptions::default().with_fault_injection(true),
-            method: Method::Primal,
+            method: Method::default(),
             rho: None,
             adaptive_rho: false,
-            gamma_factor: None,
+            settings: GivenSettings::default(),
             max_iters: 5000,
             stop: StopRule::Local,
             stop_rounds: 10,
             seed: 0,
             perturbation: Perturbation::Auto,
-            projection: ProjectionPath::Fast,
-            primal_variant: PrimalVariant::Fast,
             check: false,
             trace: false,
             on_failure: OnFailure::Abort,
@@ -119,14 +116,12 @@ impl SolveOptions {
             method: self.method,
             rho: self.rho,
             adaptive_rho: self.adaptive_rho,
-            gamma_factor: self.gamma_factor,
+            settings: self.settings.clone(),
             max_iters: self.max_iters,
             stop: self.stop,
             stop_rounds: self.stop_rounds,
             seed: self.seed,
             perturbation: self.perturbation,
-            projection: self.projection,
-            primal_variant: self.primal_variant,
             check: self.check,
             trace: self.trace,
             on_failure: self.on_failure,
@@ -150,7 +145,7 @@ impl SolveOptions {
     }
 
     /// ρ as given; `None`: the scale-free default of the method's rule
-    /// ([`admm_ta_agents::methods::Method::default_rho`]).
+    /// ([`admm_ta_agents::method::team::MethodSetup::default_rho`]).
     pub fn rho(&self) -> Option<f64> {
         self.rho
     }
@@ -161,9 +156,19 @@ impl SolveOptions {
         self.adaptive_rho
     }
 
-    /// `g` of the inexact dual's `γ = g (m+1)/(2dρ)`; `None`: the default.
-    pub fn gamma_factor(&self) -> Option<f64> {
-        self.gamma_factor
+    /// The method's own settings, as given (a lenient builder's may include settings of
+    /// other methods, which the method ignores).
+    pub fn settings(&self) -> &GivenSettings {
+        &self.settings
+    }
+
+    /// The method with its own settings (`None`: the centralized solver); the settings were
+    /// checked by [`SolveOptionsBuilder::build`].
+    pub fn method_setup(&self) -> Option<Box<dyn MethodSetup>> {
+        let own = self.settings.only(self.method.settings());
+        self.method
+            .setup(&own)
+            .expect("the options' build checked the method's settings")
     }
 
     /// Round limit.
@@ -187,15 +192,6 @@ impl SolveOptions {
 
     pub fn perturbation(&self) -> Perturbation {
         self.perturbation
-    }
-
-    pub fn projection(&self) -> ProjectionPath {
-        self.projection
-    }
-
-    /// The primal method's variant ([`admm_ta_agents::methods::primal::settings`]; default: fast).
-    pub fn primal_variant(&self) -> PrimalVariant {
-        self.primal_variant
     }
 
     /// Compare with the centralized optimum and trace convergence.
@@ -222,14 +218,12 @@ pub struct SolveOptionsBuilder {
     method: Method,
     rho: Option<f64>,
     adaptive_rho: bool,
-    gamma_factor: Option<f64>,
+    settings: GivenSettings,
     max_iters: usize,
     stop: StopRule,
     stop_rounds: usize,
     seed: u64,
     perturbation: Perturbation,
-    projection: ProjectionPath,
-    primal_variant: PrimalVariant,
     check: bool,
     trace: bool,
     on_failure: OnFailure,
@@ -310,10 +304,21 @@ impl SolveOptionsBuilder {
         self
     }
 
-    /// `None`: the default factor.
-    pub fn gamma_factor(mut self, factor: Option<f64>) -> Self {
-        self.given = self.given.with(OptionId::GammaFactor);
-        self.gamma_factor = factor;
+    /// A method setting, typed: `.setting(PrimalVariant::Paper)`, `.setting(GammaFactor(0.7))`.
+    pub fn setting<S: Setting>(self, setting: S) -> Self {
+        self.setting_value(S::SPEC, setting.value())
+    }
+
+    /// A method setting by its spec (the command line and team files: see
+    /// [`admm_ta_agents::methods::Method::all_settings`]).
+    pub fn setting_value(mut self, spec: &'static SettingSpec, value: SettingValue) -> Self {
+        self.settings = self.settings.set(spec, value);
+        self
+    }
+
+    /// Every method setting at once (replacing those set before).
+    pub fn settings(mut self, settings: GivenSettings) -> Self {
+        self.settings = settings;
         self
     }
 
@@ -343,18 +348,6 @@ impl SolveOptionsBuilder {
     pub fn perturbation(mut self, perturbation: Perturbation) -> Self {
         self.given = self.given.with(OptionId::Perturb);
         self.perturbation = perturbation;
-        self
-    }
-
-    pub fn projection(mut self, projection: ProjectionPath) -> Self {
-        self.given = self.given.with(OptionId::Projection);
-        self.projection = projection;
-        self
-    }
-
-    pub fn primal_variant(mut self, variant: PrimalVariant) -> Self {
-        self.given = self.given.with(OptionId::PrimalVariant);
-        self.primal_variant = variant;
         self
     }
 
@@ -389,11 +382,13 @@ impl SolveOptionsBuilder {
     /// The options, or the first reason no solve could run them (in the order the command
     /// line reports them): ρ or a timeout out of range, `--on-failure continue` on a
     /// transport that cannot name the failed agent, no rounds, a centralized method off
-    /// the lockstep simulation, γ out of range, a global barrier the transport has not, a
-    /// transport this build lacks, a central stop rule off the lockstep simulation, a stop
-    /// rule the method does not honour (the method registry says which), a trace without a
-    /// check, `--adaptive-rho` or `--stop agreement` with the fast primal variant; with
-    /// [`SolveOptionsBuilder::refuse_unread`], an option given that the run never reads.
+    /// the lockstep simulation, a method setting's value out of its range (γ), a global
+    /// barrier the transport has not, a transport this build lacks, a central stop rule off
+    /// the lockstep simulation, a stop rule the method does not honour (the method registry
+    /// says which), a trace without a check; with [`SolveOptionsBuilder::refuse_unread`], an
+    /// option given that the run never reads (a method setting of another method among
+    /// them); last, an option the method's settings exclude (`--adaptive-rho` or `--stop
+    /// agreement` with the fast primal variant).
     pub fn build(self) -> Result<SolveOptions, ConfigError> {
         if let Some(rho) = self.rho.filter(|r| !(*r > 0.0 && r.is_finite())) {
             return Err(ConfigError::Rho(rho));
@@ -407,14 +402,18 @@ impl SolveOptionsBuilder {
             return Err(ConfigError::NoIterations);
         }
         let lockstep = capabilities.execution == Execution::Lockstep;
-        if self.method.agent_method().is_none() && !lockstep {
+        if self.method.team().is_none() && !lockstep {
             return Err(ConfigError::CentralizedMethod {
                 method: self.method.name(),
             });
         }
-        if let Some(gamma) = self.gamma_factor.filter(|g| !(*g > 0.0 && g.is_finite())) {
-            return Err(ConfigError::Gamma(gamma));
+        // Every setting's value, whichever method it belongs to; then the method's own.
+        for (spec, value) in self.settings.iter() {
+            spec.check(value)?;
         }
+        let setup = self
+            .method
+            .setup(&self.settings.only(self.method.settings()))?;
         // What the rule against unread options looks at (checked last).
         let chosen = self.refuse_unread.then_some(unread::Chosen {
             given: self.given,
@@ -422,9 +421,7 @@ impl SolveOptionsBuilder {
             transport: self.run.transport,
             rho: self.rho,
             adaptive_rho: self.adaptive_rho,
-            gamma_factor: self.gamma_factor,
-            projection: self.projection,
-            primal_variant: self.primal_variant,
+            settings: &self.settings,
             max_iters: self.max_iters,
             perturbation: self.perturbation,
             stop: self.stop,
@@ -452,25 +449,22 @@ impl SolveOptionsBuilder {
         if let Some(chosen) = chosen {
             chosen.refuse_unread()?;
         }
-        error::paper_only(
-            self.method,
-            self.primal_variant,
-            self.adaptive_rho,
-            self.stop,
-        )?;
+        if let Some(setup) = &setup {
+            setup
+                .refuse(self.adaptive_rho, self.stop)
+                .map_err(ConfigError::Refused)?;
+        }
         Ok(SolveOptions {
             run,
             method: self.method,
             rho: self.rho,
             adaptive_rho: self.adaptive_rho,
-            gamma_factor: self.gamma_factor,
+            settings: self.settings,
             max_iters: self.max_iters,
             stop: self.stop,
             stop_rounds: self.stop_rounds,
             seed: self.seed,
             perturbation: self.perturbation,
-            projection: self.projection,
-            primal_variant: self.primal_variant,
             check: self.check,
             trace: self.trace,
             on_failure: self.on_failure,
@@ -483,6 +477,8 @@ impl SolveOptionsBuilder {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use admm_ta_agents::methods::dual::GammaFactor;
+    use admm_ta_agents::methods::primal::PrimalVariant;
 
     #[test]
     fn defaults_are_valid_and_invalid_combinations_are_refused() {
@@ -520,8 +516,8 @@ mod tests {
             }
         );
         assert_eq!(
-            refused(b().gamma_factor(Some(0.0))),
-            ConfigError::Gamma(0.0)
+            refused(b().setting(GammaFactor(0.0))).to_string(),
+            "--gamma-factor (the γ factor) must be a positive finite number, got 0"
         );
         assert_eq!(
             refused(b().global_barrier(true)),
@@ -540,8 +536,14 @@ mod tests {
         );
         assert_eq!(refused(b().trace(true)), ConfigError::TraceNeedsCheck);
         assert_eq!(
-            refused(b().adaptive_rho(true)),
-            ConfigError::PaperOnly(given::Setting::new(OptionId::AdaptiveRho, given::Value::On))
+            refused(b().adaptive_rho(true)).to_string(),
+            "--adaptive-rho applies to the paper's primal variant, not the fast one: add --primal-variant paper"
+        );
+        assert!(
+            b().adaptive_rho(true)
+                .setting(PrimalVariant::Paper)
+                .build()
+                .is_ok()
         );
         assert_eq!(
             b().transport(Transport::Zenoh).build().is_ok(),

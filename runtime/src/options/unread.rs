@@ -5,25 +5,23 @@
 //! below says what reads the option.
 
 use crate::options::error::ConfigError;
-use crate::options::given::{Given, OptionId, Setting, Value};
+use crate::options::given::{Given, OptionId, OptionName, Setting, Value};
 use crate::transport::{Execution, Transport};
 use crate::wait::WaitStrategy;
 use admm_ta_agents::certify::stopping::StopRule;
+use admm_ta_agents::method::settings::GivenSettings;
 use admm_ta_agents::methods::Method;
-use admm_ta_agents::methods::primal::agent::ProjectionPath;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
 use admm_ta_agents::problem::ties::Perturbation;
 
 /// What a builder was given: the options it names and every setting's value.
-pub(super) struct Chosen {
+pub(super) struct Chosen<'a> {
     pub given: Given,
     pub method: Method,
     pub transport: Transport,
     pub rho: Option<f64>,
     pub adaptive_rho: bool,
-    pub gamma_factor: Option<f64>,
-    pub projection: ProjectionPath,
-    pub primal_variant: PrimalVariant,
+    /// The method settings given (of any method).
+    pub settings: &'a GivenSettings,
     pub max_iters: usize,
     pub perturbation: Perturbation,
     pub stop: StopRule,
@@ -34,7 +32,7 @@ pub(super) struct Chosen {
     pub startup_timeout: f64,
 }
 
-impl Chosen {
+impl Chosen<'_> {
     /// The first option given that the method or the transport never reads, refused.
     pub(super) fn refuse_unread(&self) -> Result<(), ConfigError> {
         refuse_unread(self)
@@ -44,7 +42,7 @@ impl Chosen {
 fn refuse_unread(b: &Chosen) -> Result<(), ConfigError> {
     let given = |id| b.given.contains(id);
     let method = b.method;
-    let for_method = |option: Setting, reads: fn(Method) -> bool| {
+    let for_method = |option: Setting, reads: &dyn Fn(Method) -> bool| {
         if reads(method) {
             Ok(())
         } else {
@@ -58,41 +56,30 @@ fn refuse_unread(b: &Chosen) -> Result<(), ConfigError> {
     // ρ and its schedule: the ADMM methods (market, CBAA and the Hungarian methods have
     // no penalty; `workload::plan` sets ρ = 0 for them).
     if given(OptionId::Rho) {
-        let value = b.rho.map_or(Value::Name("auto"), Value::Number);
-        for_method(Setting::new(OptionId::Rho, value), has_rho)?;
+        let value = b.rho.map_or(Value::Name("auto".into()), Value::Number);
+        for_method(Setting::new(OptionId::Rho, value), &has_rho)?;
     }
     if given(OptionId::AdaptiveRho) && b.adaptive_rho {
-        for_method(Setting::new(OptionId::AdaptiveRho, Value::On), has_rho)?;
+        for_method(Setting::new(OptionId::AdaptiveRho, Value::On), &has_rho)?;
     }
-    if given(OptionId::GammaFactor)
-        && let Some(gamma) = b.gamma_factor
-    {
-        let option = Setting::new(OptionId::GammaFactor, Value::Number(gamma));
-        for_method(option, |m| m == Method::InexactDual)?;
-    }
-    if given(OptionId::Projection) {
-        let option = Setting::new(OptionId::Projection, Value::Name(b.projection.name()));
-        for_method(option, |m| m == Method::Primal)?;
-    }
-    if given(OptionId::PrimalVariant) {
-        let value = Value::Name(b.primal_variant.name());
-        for_method(Setting::new(OptionId::PrimalVariant, value), |m| {
-            m == Method::Primal
-        })?;
+    // A method's own settings: the methods that declare them.
+    for (spec, value) in b.settings.iter() {
+        let option = Setting::new(OptionName::Method(spec), Value::of(value));
+        for_method(option, &|m| m.settings().iter().any(|s| s.key == spec.key))?;
     }
     // What only a team reads: the centralized solver runs no rounds and breaks no ties.
     if given(OptionId::MaxIters) {
         let option = Setting::new(OptionId::MaxIters, Value::Number(b.max_iters as f64));
-        for_method(option, |m| m.agent_method().is_some())?;
+        for_method(option, &|m| m.team().is_some())?;
     }
     if given(OptionId::Perturb) {
         let value = match b.perturbation {
-            Perturbation::Auto => Value::Name("auto"),
-            Perturbation::Off => Value::Name("off"),
+            Perturbation::Auto => Value::Name("auto".into()),
+            Perturbation::Off => Value::Name("off".into()),
             Perturbation::Fixed(eps) => Value::Number(eps),
         };
-        for_method(Setting::new(OptionId::Perturb, value), |m| {
-            m.agent_method().is_some()
+        for_method(Setting::new(OptionId::Perturb, value), &|m| {
+            m.team().is_some()
         })?;
     }
     // The agreement stop alone counts rounds of agreement.
@@ -104,8 +91,8 @@ fn refuse_unread(b: &Chosen) -> Result<(), ConfigError> {
     }
     // The trace is recorded by the lockstep watch of a team's rounds.
     if given(OptionId::Trace) && b.trace {
-        for_method(Setting::new(OptionId::Trace, Value::On), |m| {
-            m.agent_method().is_some()
+        for_method(Setting::new(OptionId::Trace, Value::On), &|m| {
+            m.team().is_some()
         })?;
         for_transport(b, Setting::new(OptionId::Trace, Value::On), |c| {
             c == Execution::Lockstep
@@ -118,7 +105,7 @@ fn refuse_unread(b: &Chosen) -> Result<(), ConfigError> {
         for_transport(b, option, |c| c != Execution::Lockstep)?;
     }
     if given(OptionId::Wait) {
-        let option = Setting::new(OptionId::Wait, Value::Name(b.wait.name()));
+        let option = Setting::new(OptionId::Wait, Value::Name(b.wait.name().into()));
         for_transport(b, option, |c| c != Execution::Lockstep)?;
     }
     if given(OptionId::StartupTimeout) {
@@ -130,11 +117,11 @@ fn refuse_unread(b: &Chosen) -> Result<(), ConfigError> {
 }
 
 fn has_rho(method: Method) -> bool {
-    method.rho_rule().is_some()
+    method.penalty()
 }
 
 /// The methods `reads` holds for, in the registry's order.
-fn method_names(reads: fn(Method) -> bool) -> Vec<&'static str> {
+fn method_names(reads: &dyn Fn(Method) -> bool) -> Vec<&'static str> {
     Method::ALL
         .into_iter()
         .filter(|m| reads(*m))
@@ -234,8 +221,11 @@ mod tests {
                 .starts_with("--startup-timeout 5 does not apply to --transport threads")
         );
         assert!(
-            refused(b().method(Method::Dual).projection(Default::default()))
-                .starts_with("--projection fast does not apply")
+            refused(
+                b().method(Method::Dual)
+                    .setting(admm_ta_agents::methods::primal::ProjectionPath::Fast)
+            )
+            .starts_with("--projection fast does not apply")
         );
     }
 
@@ -244,7 +234,7 @@ mod tests {
         let error = SolveOptions::builder()
             .refuse_unread(true)
             .method(Method::Market)
-            .primal_variant(admm_ta_agents::methods::primal::settings::PrimalVariant::Paper)
+            .setting(admm_ta_agents::methods::primal::PrimalVariant::Paper)
             .build()
             .unwrap_err();
         assert_eq!(

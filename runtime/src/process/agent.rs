@@ -112,7 +112,7 @@ pub fn run_scenario(
     let connected_unix_ns = unix_ns();
     let ran = match &scenario.workload {
         ScenarioWorkload::Episodes(settings) => {
-            let mut agent = settings.agent(index, graph.degree(index));
+            let mut agent = settings.agent(index, &graph);
             run_surveillance_agent(&mut agent, endpoint.exchange(), &plan, settings)
                 .map(|(records, outcome)| (outcome, records))
         }

@@ -28,8 +28,8 @@ use crate::process::team_file::{HostEntry, Team};
 use crate::workload::Workload;
 use crate::workload::plan::prepare;
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
+use admm_ta_agents::certify::stopping::StopRule;
 use admm_ta_agents::certify::{oracle, rounding};
-use admm_ta_agents::methods::Method;
 use serde::Serialize;
 use std::os::fd::AsRawFd;
 use std::path::{Path, PathBuf};
@@ -82,17 +82,17 @@ pub(crate) fn team_scenario(team: &Team) -> Result<Scenario, String> {
         .solve_options()
         .map_err(|e| e.in_terms_of(FrontEnd::TeamFile))?;
     // The options refused a centralized method on the team's process transport.
-    let method = options.method().agent_method().ok_or_else(|| {
+    let setup = options.method_setup().ok_or_else(|| {
         format!(
             "method {} is solved centrally: it has no agents",
             options.method().name()
         )
     })?;
     // The agents solve the normalised problem, as a solve's do.
-    let plan = prepare(problem.internal(), &graph, &options, method).map_err(|e| e.to_string())?;
+    let plan = prepare(problem.internal(), &graph, &options, setup).map_err(|e| e.to_string())?;
     let stop = LocalCertifiedStop::new(plan.diameter, problem.robots(), plan.tolerance)
         .map_err(|e| e.to_string())?
-        .with_cadence(plan.agents.settings.stop_cadence());
+        .with_cadence(plan.stop_cadence);
     let scenario = Scenario::new(
         Workload::Solve {
             plan: &plan,
@@ -400,7 +400,12 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
         cost,
         maximize: team.file.maximize,
         repaired,
-        certified: certified[0].is_some() && team.file.method != Method::Cbaa,
+        certified: team
+            .file
+            .method
+            .info()
+            .certification
+            .certifies(certified[0].is_some(), StopRule::Local),
         iterations: rounds[0],
         converged: certified[0].is_some(),
         certified_round: certified[0],

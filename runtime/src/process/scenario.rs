@@ -1,7 +1,7 @@
 //! The scenario file the launcher writes into the run directory: everything an agent
-//! process needs to rebuild its own agent, its plan and its end of the transport. Floating-point
-//! values travel as their bit patterns, so every process computes with exactly the same
-//! numbers as the lockstep simulation.
+//! process needs to rebuild its own agent, its plan and its end of the transport: the
+//! problem, the graph, the method with its own settings (its settings type, serialised), the
+//! team's numbers and the run's names and limits.
 
 use crate::exchange::round_loop::{AgentPlan, AgentStop};
 use crate::options::run::RunOptions;
@@ -14,26 +14,14 @@ use crate::zenoh_net::links::ZenohLinks;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
 use admm_ta_agents::method::agent::MethodAgent;
-use admm_ta_agents::methods::primal::agent::ProjectionPath;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::method::team::{MethodSetup, TeamParams};
+use admm_ta_agents::methods::Method;
 use admm_ta_agents::methods::probe::{ProbeAgent, ProbeStep};
-use admm_ta_agents::methods::{AgentMethod, AgentSettings};
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix, TaskAssignmentProblem};
 use admm_ta_topologies::Graph;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-
-/// How agents stop, as written in the scenario.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ScenarioStop {
-    /// Decentralized certified stop with this total tolerance (bits of an f64).
-    Local {
-        tolerance_bits: u64,
-    },
-    MaxIters,
-}
 
 /// What the agents compute.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
@@ -44,11 +32,13 @@ pub enum ScenarioWorkload {
     Method,
     /// A benchmark probe ([`ProbeAgent`]) with a payload of `payload_len` values.
     Probe { payload_len: usize, step: ProbeStep },
-    /// Repeated surveillance episodes with the primal method ([`crate::episodes`]).
+    /// Repeated surveillance episodes ([`crate::episodes`]).
     Episodes(Box<EpisodeSettings>),
 }
 
-/// One run, as the agents see it.
+/// One run, as the agents see it. Numbers travel as JSON numbers, which serde_json writes
+/// and reads back exactly (its `float_roundtrip`), so every process computes with exactly
+/// the same numbers as the lockstep simulation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Scenario {
     pub run_id: String,
@@ -61,18 +51,24 @@ pub struct Scenario {
     pub cost_bits: Vec<u64>,
     pub edges: Vec<(usize, usize)>,
     pub topology: String,
-    pub method: AgentMethod,
-    pub rho_bits: u64,
-    pub gamma_factor_bits: u64,
-    /// Follow the `--adaptive-rho` schedule from `rho_bits`.
-    pub adaptive_rho: bool,
-    pub epsilon_bits: Option<u64>,
-    pub seed: u64,
-    pub qp_projection: bool,
-    /// The primal method's variant.
+    /// The team's method (`None`: latency probes).
+    pub method: Option<Method>,
+    /// The method's own settings, as its settings type serialises them.
     #[serde(default)]
-    pub primal_variant: PrimalVariant,
-    pub stop: ScenarioStop,
+    pub settings: serde_json::Value,
+    /// The penalty ρ (0 for the methods without one).
+    pub rho: f64,
+    /// Follow the method's `--adaptive-rho` schedule from `rho`.
+    pub adaptive_rho: bool,
+    /// The tie-breaking perturbation's size.
+    pub epsilon: Option<f64>,
+    pub seed: u64,
+    /// Total cost tolerance of the optimality certificate.
+    pub tolerance: f64,
+    /// The decentralized certified stop (`false`: the round limit).
+    pub local_stop: bool,
+    /// The decentralized stop's cadence.
+    pub stop_cadence: (u64, u32),
     pub max_rounds: u64,
     pub diameter: usize,
     pub round_timeout_ms: u64,
@@ -124,8 +120,8 @@ impl Scenario {
     /// the run (the launcher, or the members of an independently started team).
     pub fn new(workload: Workload<'_>, graph: &Graph, options: &RunOptions) -> Self {
         let robots = graph.robots();
-        // A team of `tasks` tasks and nothing else decided yet: zero costs, the primal
-        // method, run to the round limit.
+        // A team of `tasks` tasks and nothing else decided yet: zero costs, no method, run
+        // to the round limit.
         let blank = |tasks: usize| Self {
             run_id: String::new(),
             iceoryx_prefix: String::new(),
@@ -140,15 +136,15 @@ impl Scenario {
             cost_bits: vec![0; robots * tasks],
             edges: graph.edges().collect(),
             topology: graph.name().to_string(),
-            method: AgentMethod::Primal,
-            rho_bits: 0,
-            gamma_factor_bits: 0,
+            method: None,
+            settings: serde_json::Value::Null,
+            rho: 0.0,
             adaptive_rho: false,
-            epsilon_bits: None,
+            epsilon: None,
             seed: 0,
-            qp_projection: false,
-            primal_variant: PrimalVariant::Paper,
-            stop: ScenarioStop::MaxIters,
+            tolerance: 0.0,
+            local_stop: false,
+            stop_cadence: (1, 0),
             max_rounds: 0,
             diameter: graph.diameter().unwrap_or(0),
             round_timeout_ms: options.round_timeout().as_millis() as u64,
@@ -162,36 +158,27 @@ impl Scenario {
             zenoh: None,
             local_agents: None,
         };
+        let bits = |values: &[f64]| values.iter().map(|v| v.to_bits()).collect();
         match workload {
             Workload::Solve {
                 plan,
                 stop,
                 max_rounds,
             } => {
-                let problem = plan.agents.problem;
-                let settings = &plan.agents.settings;
+                let factory = &plan.agents;
+                let problem = factory.problem;
                 Self {
                     case: problem.case(),
-                    cost_bits: problem
-                        .costs()
-                        .values()
-                        .iter()
-                        .map(|v| v.to_bits())
-                        .collect(),
-                    method: settings.method,
-                    rho_bits: settings.rho.to_bits(),
-                    gamma_factor_bits: settings.gamma_factor.to_bits(),
-                    adaptive_rho: plan.agents.schedule.is_some(),
-                    epsilon_bits: plan.agents.epsilon.map(f64::to_bits),
-                    seed: plan.agents.seed,
-                    qp_projection: settings.projection == ProjectionPath::Qp,
-                    primal_variant: settings.primal_variant,
-                    stop: match stop {
-                        AgentStop::MaxIters => ScenarioStop::MaxIters,
-                        AgentStop::Local(_) => ScenarioStop::Local {
-                            tolerance_bits: plan.tolerance.to_bits(),
-                        },
-                    },
+                    cost_bits: bits(problem.costs().values()),
+                    method: Some(plan.method),
+                    settings: factory.setup.settings_json(),
+                    rho: plan.rho,
+                    adaptive_rho: factory.schedule.is_some(),
+                    epsilon: factory.epsilon,
+                    seed: factory.seed,
+                    tolerance: plan.tolerance,
+                    local_stop: matches!(stop, AgentStop::Local(_)),
+                    stop_cadence: plan.stop_cadence,
                     max_rounds,
                     diameter: plan.diameter,
                     ..blank(problem.tasks())
@@ -211,13 +198,11 @@ impl Scenario {
                 max_rounds,
             } => Self {
                 case: AssignmentCase::Two,
-                cost_bits: settings
-                    .model
-                    .initial_costs()
-                    .iter()
-                    .map(|v| v.to_bits())
-                    .collect(),
-                rho_bits: settings.rho.to_bits(),
+                cost_bits: bits(&settings.model.initial_costs()),
+                method: Some(settings.method),
+                settings: settings.settings.clone(),
+                rho: settings.rho,
+                tolerance: settings.tolerance,
                 max_rounds,
                 diameter: settings.diameter,
                 workload: ScenarioWorkload::Episodes(Box::new(settings.clone())),
@@ -256,37 +241,34 @@ impl Scenario {
             .map_err(|e| ScenarioError::Inconsistent(e.to_string()))
     }
 
-    pub fn settings(&self) -> AgentSettings {
-        let tolerance = match self.stop {
-            ScenarioStop::Local { tolerance_bits } => f64::from_bits(tolerance_bits),
-            ScenarioStop::MaxIters => f64::INFINITY,
-        };
-        AgentSettings {
-            projection: if self.qp_projection {
-                ProjectionPath::Qp
-            } else {
-                ProjectionPath::Fast
-            },
-            gamma_factor: f64::from_bits(self.gamma_factor_bits),
-            primal_variant: self.primal_variant,
-            ..AgentSettings::new(
-                self.method,
-                f64::from_bits(self.rho_bits),
-                self.diameter,
-                tolerance,
-            )
+    /// The team's method with its settings.
+    pub fn method_setup(&self) -> Result<Box<dyn MethodSetup>, ScenarioError> {
+        let team = self.method.and_then(Method::team).ok_or_else(|| {
+            ScenarioError::Inconsistent("a team scenario without a team method".into())
+        })?;
+        team.configure_json(&self.settings)
+            .map_err(|e| ScenarioError::Inconsistent(format!("the method's settings: {e}")))
+    }
+
+    /// What every agent shares.
+    pub fn params(&self) -> TeamParams {
+        TeamParams {
+            rho: self.rho,
+            diameter: self.diameter,
+            tolerance: self.tolerance,
         }
     }
 
     /// Agent `index`'s plan.
     pub fn plan(&self, index: usize) -> Result<AgentPlan, ScenarioError> {
-        let stop = match self.stop {
-            ScenarioStop::MaxIters => AgentStop::MaxIters,
-            ScenarioStop::Local { tolerance_bits } => AgentStop::Local(
-                LocalCertifiedStop::new(self.diameter, self.robots, f64::from_bits(tolerance_bits))
+        let stop = if self.local_stop {
+            AgentStop::Local(
+                LocalCertifiedStop::new(self.diameter, self.robots, self.tolerance)
                     .map_err(|e| ScenarioError::Inconsistent(e.to_string()))?
-                    .with_cadence(self.settings().stop_cadence()),
-            ),
+                    .with_cadence(self.stop_cadence),
+            )
+        } else {
+            AgentStop::MaxIters
         };
         Ok(AgentPlan {
             index,
@@ -301,9 +283,9 @@ impl Scenario {
     /// Values of every round message's payload.
     pub fn payload_len(&self) -> usize {
         match self.workload {
-            ScenarioWorkload::Method | ScenarioWorkload::Episodes(_) => {
-                self.method.payload_len(self.robots, self.tasks)
-            }
+            ScenarioWorkload::Method | ScenarioWorkload::Episodes(_) => self
+                .method
+                .map_or(0, |m| m.payload_len(self.robots, self.tasks)),
             ScenarioWorkload::Probe { payload_len, .. } => payload_len.max(1),
         }
     }
@@ -336,18 +318,101 @@ impl Scenario {
         }
         let problem = self.problem()?;
         let graph = self.graph()?;
-        let team = AgentFactory {
-            problem: &problem,
-            graph: &graph,
-            settings: self.settings(),
-            epsilon: self.epsilon_bits.map(f64::from_bits),
-            seed: self.seed,
-            schedule: self
-                .adaptive_rho
-                .then(|| self.method.schedule(f64::from_bits(self.rho_bits)))
-                .flatten(),
-            readout_filter: std::sync::OnceLock::new(),
-        };
+        let setup = self.method_setup()?;
+        let schedule = self
+            .adaptive_rho
+            .then(|| setup.schedule(self.rho))
+            .flatten();
+        let team = AgentFactory::new(
+            &problem,
+            &graph,
+            setup,
+            self.params(),
+            self.epsilon,
+            self.seed,
+            schedule,
+        );
         Ok(team.agent(index))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::options::{SolveOptions, StopRule};
+    use crate::workload::plan::prepare;
+    use admm_ta_agents::agent::ConsensusAgent;
+    use admm_ta_agents::methods::Method;
+    use admm_ta_agents::methods::dual::GammaFactor;
+    use admm_ta_agents::methods::primal::{PrimalVariant, ProjectionPath};
+    use admm_ta_agents::problem::CaseChoice;
+
+    /// The agents an agent process rebuilds from the scenario file compute exactly what the
+    /// lockstep simulation's compute: the method's settings (and every number of the team)
+    /// survive the file bit for bit.
+    #[test]
+    fn agents_rebuilt_from_the_scenario_file_step_identically() {
+        let costs = CostMatrix::uniform(5, 4, 3).unwrap();
+        let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
+        let graph = admm_ta_topologies::generate::ring(5).unwrap();
+        let cases = [
+            SolveOptions::builder()
+                .method(Method::InexactDual)
+                .setting(GammaFactor(0.1 + 0.2))
+                .rho(Some(1.0 / 3.0)),
+            SolveOptions::builder()
+                .method(Method::Primal)
+                .setting(PrimalVariant::Paper)
+                .setting(ProjectionPath::Qp)
+                .adaptive_rho(true),
+            SolveOptions::builder().method(Method::Primal),
+            SolveOptions::builder().method(Method::Market),
+        ];
+        for options in cases {
+            let options = options.build().unwrap();
+            let internal = problem.internal();
+            let plan = prepare(internal, &graph, &options, options.method_setup().unwrap()).unwrap();
+            let stop = AgentStop::MaxIters;
+            let scenario = Scenario::new(
+                Workload::Solve {
+                    plan: &plan,
+                    stop: &stop,
+                    max_rounds: 10,
+                },
+                &graph,
+                options.run(),
+            );
+            let text = serde_json::to_string(&scenario).unwrap();
+            let read = Scenario::parse(text.as_bytes(), Path::new("scenario.json"), "").unwrap();
+            assert_eq!(read, scenario);
+            assert_eq!(read.stop_cadence, plan.stop_cadence);
+            assert!(options.stop() == StopRule::Local && !read.local_stop);
+            let mut ours = plan.agents.agents();
+            let mut theirs: Vec<MethodAgent> =
+                (0..5).map(|i| read.agent(i).unwrap()).collect();
+            let len = ours[0].payload_len();
+            let mut payloads = vec![vec![0.0; len]; 5];
+            for (i, p) in payloads.iter_mut().enumerate() {
+                ours[i].write_initial_payload(p);
+            }
+            for _ in 0..6 {
+                let mut next = vec![vec![0.0; len]; 5];
+                let mut again = vec![vec![0.0; len]; 5];
+                for i in 0..5 {
+                    let inbox: Vec<&[f64]> = graph
+                        .neighbours(i)
+                        .iter()
+                        .map(|&j| payloads[j].as_slice())
+                        .collect();
+                    ours[i].step(&inbox, &mut next[i]);
+                    theirs[i].step(&inbox, &mut again[i]);
+                }
+                let bits = |v: &Vec<Vec<f64>>| -> Vec<u64> {
+                    v.iter().flatten().map(|x| x.to_bits()).collect()
+                };
+                assert_eq!(bits(&next), bits(&again), "{:?}", options.method());
+                payloads = next;
+            }
+        }
     }
 }

@@ -38,8 +38,8 @@ use crate::options::{SolveOptions, StopRule};
 use crate::process::namespace::RunNamespace;
 use crate::transport::Transport;
 use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
+use admm_ta_agents::method::settings::{GivenSettings, SettingValue};
 use admm_ta_agents::methods::Method;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
 use admm_ta_agents::problem::forbidden;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_topologies::{Graph, TopologySpec, file as topology_file};
@@ -79,10 +79,11 @@ pub struct TeamFile {
     pub max_iters: usize,
     #[serde(default)]
     pub adaptive_rho: bool,
-    /// The primal method's variant (`fast` or `paper`; default `fast`); refused with the
-    /// other methods.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub primal_variant: Option<PrimalVariant>,
+    /// The method's own settings, by their keys (`primal_variant = "paper"`,
+    /// `gamma_factor = 0.7`: [`Method::all_settings`]); a setting of another method is
+    /// refused.
+    #[serde(skip)]
+    pub settings: GivenSettings,
     /// How the team is deployed and what carries its messages.
     #[serde(default)]
     pub transport: Deployment,
@@ -181,8 +182,30 @@ impl Team {
         // A regular file of bounded size, like every input file.
         let text = admm_ta_agents::problem::read_bounded(path, 16 << 20)
             .map_err(|e| format!("cannot read team file: {e}"))?;
-        let file: TeamFile = toml::from_str(&text)
-            .map_err(|e| format!("team file {}: {}", path.display(), e.message()))?;
+        let in_file = |e: &dyn std::fmt::Display| format!("team file {}: {e}", path.display());
+        let mut table: toml::Table = toml::from_str(&text).map_err(|e| in_file(&e.message()))?;
+        // The methods' own settings, by key; the rest is the team file's own keys.
+        let mut settings = GivenSettings::default();
+        for spec in Method::all_settings() {
+            if let Some(value) = table.remove(spec.key) {
+                let value = match value {
+                    toml::Value::String(name) => SettingValue::Name(name),
+                    toml::Value::Float(v) => SettingValue::Number(v),
+                    toml::Value::Integer(v) => SettingValue::Number(v as f64),
+                    other => {
+                        return Err(in_file(&format_args!(
+                            "{} must be a number or a name, got {other}",
+                            spec.key
+                        )));
+                    }
+                };
+                settings = settings.set(spec, value);
+            }
+        }
+        let mut file: TeamFile = table
+            .try_into()
+            .map_err(|e: toml::de::Error| in_file(&e.message()))?;
+        file.settings = settings;
         let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         RunNamespace::check_team_name(&file.run)?;
         check_hosts(&file)?;
@@ -307,21 +330,18 @@ impl Team {
     /// names the file's keys.
     pub fn solve_options(&self) -> Result<SolveOptions, ConfigError> {
         let f = &self.file;
-        let options = SolveOptions::builder()
+        SolveOptions::builder()
             .refuse_unread(true)
             .method(f.method)
+            .settings(f.settings.clone())
             .transport(f.transport.agent_transport())
             .adaptive_rho(f.adaptive_rho)
             .max_iters(f.max_iters)
             .stop(StopRule::Local)
             .seed(f.seed)
             .round_timeout_secs(f.round_timeout)
-            .startup_timeout_secs(f.startup_timeout);
-        match f.primal_variant {
-            Some(variant) => options.primal_variant(variant),
-            None => options,
-        }
-        .build()
+            .startup_timeout_secs(f.startup_timeout)
+            .build()
     }
 }
 

@@ -28,6 +28,7 @@ use crate::workload::plan::prepare;
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
 use admm_ta_agents::certify::oracle::{self, OptimalAssignment};
 use admm_ta_agents::certify::rounding;
+use admm_ta_agents::method::info::Numbers;
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::ties;
 use admm_ta_agents::problem::{
@@ -170,9 +171,8 @@ fn solve_user(
     user::check_supported(problem, options.method())?;
     // Refused before anything large is built (the exact optimum, the tasks' graph).
     check_size(problem, graph, options.method())?;
-    let needs_optimum = options.method() == Method::Hungarian
-        || options.check()
-        || options.stop() == StopRule::Oracle;
+    let centralized = options.method().team().is_none();
+    let needs_optimum = centralized || options.check() || options.stop() == StopRule::Oracle;
     let started = Instant::now();
     let exact = if needs_optimum {
         Some(oracle::solve(problem).map_err(|e| SolveError::Internal(e.to_string()))?)
@@ -180,9 +180,10 @@ fn solve_user(
         None
     };
     let oracle_ms = started.elapsed().as_secs_f64() * 1e3;
-    let report = if options.method() == Method::DistHungarian {
-        // It solves exactly: the agents flood and solve the user's own numbers (no
-        // perturbation: every robot solves the same matrix the same way).
+    let exact_team = !centralized && options.method().info().numbers == Numbers::Exact;
+    let report = if exact_team {
+        // A team that solves the user's own numbers (the distributed Hungarian: no
+        // perturbation, every robot solves the same matrix the same way).
         let exact_problem = problem
             .exact()
             .map_err(|e| SolveError::Internal(e.to_string()))?;
@@ -212,9 +213,10 @@ fn solve_user(
             None => None,
         };
         // The centralized solver has no team: no graph to lift onto the tasks.
-        let internal_graph = match options.method().agent_method() {
-            Some(_) => user::internal_graph(problem, graph)?,
-            None => graph.clone(),
+        let internal_graph = if centralized {
+            graph.clone()
+        } else {
+            user::internal_graph(problem, graph)?
         };
         solve_once(
             problem.internal(),
@@ -226,7 +228,7 @@ fn solve_user(
     };
     let mut report = user::to_user(problem, report, exact.as_ref())?;
     report.topology = graph.name().to_string();
-    if report.method == Method::Hungarian {
+    if centralized {
         // The centralized solver's work is the exact optimum.
         report.wall_time_ms += oracle_ms;
     }
@@ -259,8 +261,8 @@ fn refuse_beyond_memory(
 }
 
 /// The memory check of a solve, done on the user's problem before anything large is
-/// built: the distributed Hungarian method on the user's shape (it solves the user's own
-/// numbers); the centralized solver and a team on the normalised shape they solve (the
+/// built: a team that solves the user's own numbers (the distributed Hungarian method) on the
+/// user's shape; the centralized solver and a team on the normalised shape they solve (the
 /// tasks are the agents when `n < m` is transposed), a team with the edges of the graph it
 /// then runs on (counted, not built: each pair of hosts that are the same or neighbours
 /// links every task of one with every task of the other).
@@ -270,12 +272,13 @@ fn check_size(
     method: Method,
 ) -> Result<(), SolveError> {
     let user = (problem.robots(), problem.tasks());
-    if method == Method::DistHungarian {
+    let team = method.team().is_some();
+    if team && method.info().numbers == Numbers::Exact {
         return refuse_beyond_memory(method, user, user, 0.0);
     }
     let internal = problem.internal();
     let solved = (internal.robots(), internal.tasks());
-    if method.agent_method().is_none() {
+    if !team {
         return refuse_beyond_memory(method, user, solved, 0.0);
     }
     let (agents, hosts) = (internal.robots(), graph.robots());
@@ -303,8 +306,8 @@ fn solve_once(
     affine: Affine,
 ) -> Result<SolveReport, SolveError> {
     let (n, m) = (problem.robots(), problem.tasks());
-    let team = options.method().agent_method().is_some();
-    if team && graph.robots() != n {
+    let setup = options.method_setup();
+    if setup.is_some() && graph.robots() != n {
         return Err(SolveError::SizeMismatch {
             graph: graph.robots(),
             problem: n,
@@ -312,8 +315,8 @@ fn solve_once(
     }
     // The user's problem passed [`check_size`] on the shape solved here.
     // A team method's plan (ρ, tolerance, agents); `None`: the centralized solver.
-    let plan = match options.method().agent_method() {
-        Some(method) => Some(prepare(problem, graph, options, method)?),
+    let plan = match setup {
+        Some(setup) => Some(prepare(problem, graph, options, setup)?),
         None => None,
     };
     let started = Instant::now();
@@ -340,7 +343,7 @@ fn solve_once(
             let stop = match options.stop() {
                 StopRule::Local => AgentStop::Local(
                     LocalCertifiedStop::new(plan.diameter, n, plan.tolerance)?
-                        .with_cadence(plan.agents.settings.stop_cadence()),
+                        .with_cadence(plan.stop_cadence),
                 ),
                 _ => AgentStop::MaxIters,
             };
@@ -371,7 +374,7 @@ fn solve_once(
     let (message_bytes, messages_per_agent) = match &plan {
         None => (0, 0),
         Some(plan) => (
-            8 * plan.agents.settings.method.payload_len(n, m) + std::mem::size_of::<RoundHeader>(),
+            8 * plan.agents.setup.payload_len(n, m) + std::mem::size_of::<RoundHeader>(),
             run.rounds,
         ),
     };

@@ -6,14 +6,15 @@ use crate::sim::RoundView;
 use crate::solve::report::{OracleCheck, TracePoint};
 use admm_ta_agents::certify::oracle::OptimalAssignment;
 use admm_ta_agents::certify::rounding;
-use admm_ta_agents::methods::Method;
-use admm_ta_agents::methods::primal::settings::PrimalVariant;
+use admm_ta_agents::method::team::Decisions;
 use admm_ta_agents::problem::TaskAssignmentProblem;
 
-/// The robots' decisions are their readouts of `G_i` (the fast primal variant), not the
-/// argmax of their own relaxed columns.
+/// The robots' decisions are their readouts of the team's assignment (the fast primal
+/// variant's), not the argmax of their own relaxed columns: as the method declares.
 pub(crate) fn decides_by_readout(options: &SolveOptions) -> bool {
-    options.method() == Method::Primal && options.primal_variant() == PrimalVariant::Fast
+    options
+        .method_setup()
+        .is_some_and(|s| s.decisions() == Decisions::Readout)
 }
 
 /// `Σ_i α_iᵀ x_i` over the robots' own relaxed columns.

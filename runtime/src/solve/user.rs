@@ -2,11 +2,11 @@
 //! ([`admm_ta_agents::problem::normalise`]): what each method can take, and the report in the user's
 //! numbers (assignment with idle robots, cost, the exact check).
 
-use crate::options::StopRule;
 use crate::solve::error::SolveError;
 use crate::solve::report::SolveReport;
 use crate::solve::trace::Affine;
 use admm_ta_agents::certify::oracle::OptimalAssignment;
+use admm_ta_agents::method::info::Numbers;
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::normalise;
 use admm_ta_agents::problem::{IDLE, TaskAssignmentProblem};
@@ -17,7 +17,7 @@ pub(crate) fn check_supported(
     problem: &TaskAssignmentProblem,
     method: Method,
 ) -> Result<(), SolveError> {
-    if !matches!(method, Method::Hungarian | Method::DistHungarian)
+    if method.info().numbers == Numbers::Normalised
         && let Some(why) = problem.normalised().and_then(|n| n.unresolved.as_ref())
     {
         return Err(SolveError::Unresolvable(format!(
@@ -116,9 +116,9 @@ pub(crate) fn to_user(
     mut report: SolveReport,
     exact: Option<&OptimalAssignment>,
 ) -> Result<SolveReport, SolveError> {
-    let assignment = match (report.method, exact) {
+    let assignment = match (report.method.team(), exact) {
         // The centralized solver's answer is the exact optimum of the user's numbers.
-        (Method::Hungarian, Some(exact)) => exact.assignment.clone(),
+        (None, Some(exact)) => exact.assignment.clone(),
         _ => problem.from_internal(&report.assignment),
     };
     if !problem.is_feasible(&assignment) {
@@ -161,16 +161,14 @@ pub(crate) fn to_user(
     Ok(report)
 }
 
-/// Whether the method certifies its result optimal: the centralized solver; the optimal
-/// protocols (market, distributed Hungarian) when they finished; the ADMM methods when a
-/// stop rule that proves optimality fired. CBAA is a heuristic and never certifies.
+/// Whether the method certifies its result optimal, as its registration declares: the
+/// centralized solver always; the optimal protocols (market, distributed Hungarian) when
+/// they finished; the ADMM methods when a stop rule that proves optimality fired; a
+/// heuristic (CBAA) never.
 fn certified(report: &SolveReport) -> bool {
-    match report.method {
-        Method::Hungarian => true,
-        Method::Cbaa => false,
-        Method::Market | Method::DistHungarian => report.converged,
-        Method::Primal | Method::Dual | Method::InexactDual => {
-            report.converged && matches!(report.stop, StopRule::Local | StopRule::Certified)
-        }
-    }
+    report
+        .method
+        .info()
+        .certification
+        .certifies(report.converged, report.stop)
 }

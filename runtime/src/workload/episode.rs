@@ -8,10 +8,12 @@ use crate::exchange::ExchangeError;
 use crate::exchange::round_loop::{AgentOutcome, AgentPlan, AgentStop, RoundLoop};
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
 use admm_ta_agents::method::agent::MethodAgent;
-use admm_ta_agents::methods::rho::RhoRule;
-use admm_ta_agents::methods::{AgentMethod, AgentSettings};
+use admm_ta_agents::method::settings::SettingError;
+use admm_ta_agents::method::team::{AgentInit, TeamContext, TeamParams};
+use admm_ta_agents::methods::{Contender, Method};
 use admm_ta_agents::problem::surveillance::SurveillanceScenario;
-use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
+use admm_ta_agents::problem::{AssignmentCase, CostMatrix, TaskAssignmentProblem};
+use admm_ta_topologies::Graph;
 use serde::{Deserialize, Serialize};
 
 /// One robot's view of one episode.
@@ -29,12 +31,25 @@ pub struct EpisodeRecord {
     pub battery: f64,
 }
 
+/// Why a method cannot run surveillance episodes.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EpisodeError {
+    #[error("--method {method} is solved centrally: it has no team to keep alive")]
+    NoTeam { method: &'static str },
+    #[error(transparent)]
+    Setting(#[from] SettingError),
+}
+
 /// What every agent of a surveillance team shares.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EpisodeSettings {
     pub model: SurveillanceScenario,
     pub episodes: usize,
     pub warm_start: bool,
+    /// The method (one whose agents take new costs between episodes) and its own settings,
+    /// as its settings type serialises them.
+    pub method: Method,
+    pub settings: serde_json::Value,
     pub rho: f64,
     /// Total cost tolerance of the certified stop.
     pub tolerance: f64,
@@ -42,16 +57,17 @@ pub struct EpisodeSettings {
 }
 
 impl EpisodeSettings {
-    /// Settings for `episodes` of `model`: ρ by the primal's scale-free rule and the stop
-    /// tolerance from the spread of the first episode's costs, leaving out the safety
-    /// penalties (which would otherwise set the scale).
+    /// Settings for `episodes` of `model` solved by `contender`: ρ by the method's
+    /// scale-free rule and the stop tolerance from the spread of the first episode's costs,
+    /// leaving out the safety penalties (which would otherwise set the scale).
     pub fn new(
         model: SurveillanceScenario,
         episodes: usize,
         warm_start: bool,
         mean_degree: f64,
         diameter: usize,
-    ) -> Self {
+        contender: Contender,
+    ) -> Result<Self, EpisodeError> {
         let n = model.robots;
         let first = model.initial_costs();
         let ordinary = first
@@ -61,29 +77,54 @@ impl EpisodeSettings {
             .fold(0.0, f64::max);
         let capped: Vec<f64> = first.iter().map(|&c| c.min(ordinary)).collect();
         let costs = CostMatrix::new(n, model.tasks(), capped).expect("a validated model");
-        let rho = RhoRule::Primal.rho(&costs, mean_degree);
+        let setup = contender
+            .method
+            .setup(&contender.settings())?
+            .ok_or(EpisodeError::NoTeam {
+                method: contender.method.name(),
+            })?;
+        let rho = setup.default_rho(&costs, mean_degree).unwrap_or(0.0);
         let tolerance = 1e-9 * costs.spread().max(1e-12) * n as f64;
-        Self {
+        Ok(Self {
             model,
             episodes,
             warm_start,
+            method: contender.method,
+            settings: setup.settings_json(),
             rho,
             tolerance,
             diameter,
-        }
+        })
     }
 
-    /// Robot `index`'s agent, built with its first episode's costs.
-    pub fn agent(&self, index: usize, degree: usize) -> MethodAgent {
-        let costs = self.model.cost_row(index, &self.model.initial_state(index));
-        MethodAgent::new(
+    /// Robot `index`'s agent on `graph`, built with its first episode's costs.
+    pub fn agent(&self, index: usize, graph: &Graph) -> MethodAgent {
+        let model = &self.model;
+        let first = CostMatrix::new(model.robots, model.tasks(), model.initial_costs())
+            .expect("a validated model");
+        let problem = TaskAssignmentProblem::internal_from(first, AssignmentCase::Two)
+            .expect("a validated model");
+        let setup = self
+            .method
+            .team()
+            .and_then(|team| team.configure_json(&self.settings).ok())
+            .expect("the settings its method wrote");
+        let team = setup.team(TeamContext {
+            problem: &problem,
+            graph,
+            params: TeamParams {
+                rho: self.rho,
+                diameter: self.diameter,
+                tolerance: self.tolerance,
+            },
+        });
+        MethodAgent::new(team.agent(AgentInit {
             index,
-            costs,
-            self.model.robots,
-            AssignmentCase::Two,
-            degree,
-            AgentSettings::new(AgentMethod::Primal, self.rho, self.diameter, self.tolerance),
-        )
+            costs: model.cost_row(index, &model.initial_state(index)),
+            robots: model.robots,
+            case: AssignmentCase::Two,
+            degree: graph.degree(index),
+        }))
     }
 }
 
@@ -105,7 +146,10 @@ pub fn run_surveillance_agent(
         if episode > 0 {
             agent
                 .set_costs(&costs, settings.warm_start)
-                .map_err(|what| ExchangeError::Transport { agent: i, what })?;
+                .map_err(|e| ExchangeError::Transport {
+                    agent: i,
+                    what: e.to_string(),
+                })?;
         }
         let stop = LocalCertifiedStop::new(settings.diameter, model.robots, settings.tolerance)
             .map_err(|e| ExchangeError::Transport {

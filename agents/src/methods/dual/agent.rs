@@ -106,7 +106,7 @@ pub enum DualUpdate {
 
 /// Parameters of one dual agent.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DualSettings {
+pub struct DualParams {
     pub rho: f64,
     pub update: DualUpdate,
     /// Graph diameter, for the certificate's disagreement term.
@@ -122,7 +122,7 @@ pub struct DualAgent {
     robots: usize,
     degree: usize,
     case: AssignmentCase,
-    settings: DualSettings,
+    settings: DualParams,
     /// Own costs `α_i`, centred (minus their mean).
     costs: Vec<f64>,
     /// Own multipliers of the current round (the payload), `n` robot rows then `m` task rows.
@@ -147,7 +147,7 @@ impl DualAgent {
         robots: usize,
         case: AssignmentCase,
         degree: usize,
-        settings: DualSettings,
+        settings: DualParams,
     ) -> Self {
         let tasks = costs.len();
         assert!(index < robots && tasks >= 1 && robots >= tasks);
@@ -628,7 +628,7 @@ mod tests {
         let mut rng = SeededRng::new(5);
         for (case, robots, tasks) in [(AssignmentCase::One, 4, 4), (AssignmentCase::Two, 5, 3)] {
             for trial in 0..50 {
-                let settings = DualSettings {
+                let settings = DualParams {
                     rho: 0.5 + rng.uniform(),
                     update: DualUpdate::Exact,
                     diameter: 1,

@@ -17,7 +17,7 @@
 //! A robot without neighbours (n = 1) uses its own iterate in place of a neighbour's, which
 //! turns the step into a proximal-point iteration on its local LP.
 //!
-//! With [`PrimalSettings::fast`] set, the same agent runs the fast variant of
+//! With [`PrimalParams::fast`] set, the same agent runs the fast variant of
 //! [`crate::methods::primal::settings`]: the consensus step of [`crate::methods::primal::fast_consensus`] and the
 //! readout of [`crate::methods::primal::readout`] replace the steps above and the per-column rounding.
 //!
@@ -25,12 +25,12 @@
 //! neighbours' sum, updates `Q` and forms the projection input, then the projection writes
 //! the new iterate straight into the outgoing payload.
 
-use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, NewCostsError, StepReport};
 use crate::certify::rounding;
 use crate::methods::primal::fast_consensus::FastConsensus;
 use crate::methods::primal::readout::GReadout;
 use crate::methods::primal::readout_filter::ReadoutFilter;
-pub use crate::methods::primal::settings::{PrimalSettings, ProjectionPath};
+pub use crate::methods::primal::settings::{PrimalParams, ProjectionPath};
 use crate::numerics::projection::{ProjectionStats, QpProjector, TransportPolytopeProjector};
 use crate::problem::AssignmentCase;
 use crate::problem::general::GeneralProblem;
@@ -50,7 +50,7 @@ pub struct PrimalAgent {
     robots: usize,
     degree: usize,
     case: AssignmentCase,
-    settings: PrimalSettings,
+    settings: PrimalParams,
     costs: Vec<f64>,
     x: Vec<f64>,
     q: Vec<f64>,
@@ -82,7 +82,7 @@ impl PrimalAgent {
         robots: usize,
         case: AssignmentCase,
         degree: usize,
-        settings: PrimalSettings,
+        settings: PrimalParams,
     ) -> Self {
         let tasks = costs.len();
         assert!(index < robots && tasks >= 1 && robots >= tasks);
@@ -439,12 +439,9 @@ impl AgentAlgorithm for PrimalAgent {
         PrimalAgent::set_rho(self, rho);
     }
 
-    fn set_costs(&mut self, costs: &[f64], warm: bool) -> Result<(), String> {
+    fn set_costs(&mut self, costs: &[f64], warm: bool) -> Result<(), NewCostsError> {
         if costs.len() != self.tasks {
-            return Err(format!(
-                "{} costs for a robot with another number of tasks",
-                costs.len()
-            ));
+            return Err(NewCostsError::WrongLength { got: costs.len() });
         }
         PrimalAgent::set_costs(self, costs);
         if !warm {

@@ -31,7 +31,7 @@
 
 use crate::methods::primal::readout::GReadout;
 use crate::methods::primal::readout_filter::{MAX_WINDOW, ReadoutFilter, WEIGHT_BITS};
-use crate::methods::primal::settings::{FastSettings, FastTuning};
+use crate::methods::primal::settings::{FastParams, FastTuning};
 use crate::problem::AssignmentCase;
 use std::sync::Arc;
 
@@ -82,7 +82,7 @@ impl FastConsensus {
         robots: usize,
         case: AssignmentCase,
         degree: usize,
-        settings: &FastSettings,
+        settings: &FastParams,
     ) -> Self {
         Self {
             tuning: settings.tuning,

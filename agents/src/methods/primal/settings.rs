@@ -1,5 +1,7 @@
-//! Settings of the primal consensus ADMM: which variant runs ([`PrimalVariant`]) and every
-//! number a robot's [`crate::methods::primal::agent::PrimalAgent`] needs ([`PrimalSettings`]).
+//! Settings of the primal consensus ADMM: the method's own settings as the user gives them
+//! ([`PrimalSettings`]: which variant runs, [`PrimalVariant`], and the x-update's solver,
+//! [`ProjectionPath`]) and every number a robot's
+//! [`crate::methods::primal::agent::PrimalAgent`] needs ([`PrimalParams`]).
 //!
 //! Two variants share one agent:
 //!
@@ -18,10 +20,56 @@
 //!   uniform costs (seeds 1–30) this takes the median decentralized certified stop from 286
 //!   rounds to 3 (see the README, "How it works").
 
+use crate::method::settings::{MethodSettings, Setting, SettingKind, SettingSpec, SettingValue};
 use serde::{Deserialize, Serialize};
 
+/// The primal method's own settings (`--primal-variant`, `--projection`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PrimalSettings {
+    pub primal_variant: PrimalVariant,
+    pub projection: ProjectionPath,
+}
+
+/// `--primal-variant`: the setting that picks the variant.
+pub const VARIANT: SettingSpec = SettingSpec {
+    key: "primal_variant",
+    flag: "--primal-variant",
+    value_name: "PRIMAL_VARIANT",
+    help: "Primal method: fast (each robot reads the assignment from its certificate matrix by a local assignment problem, large ρ, over-relaxed and anchored steps, certificate every round) or paper (Algorithm 1 as published; refused with the other methods) [default: fast]",
+    kind: SettingKind::Choice(|| PrimalVariant::ALL.iter().map(|v| v.name()).collect()),
+};
+
+/// `--projection`: the x-update's solver.
+pub const PROJECTION: SettingSpec = SettingSpec {
+    key: "projection",
+    flag: "--projection",
+    value_name: "PROJECTION",
+    help: "Primal method's x-update solver: fast (Newton projection) or qp (clarabel; slow cross-check; refused with the other methods) [default: fast]",
+    kind: SettingKind::Choice(|| ProjectionPath::ALL.iter().map(|v| v.name()).collect()),
+};
+
+impl MethodSettings for PrimalSettings {
+    const SPECS: &'static [SettingSpec] = &[VARIANT, PROJECTION];
+}
+
+impl Setting for PrimalVariant {
+    const SPEC: &'static SettingSpec = &VARIANT;
+    fn value(self) -> SettingValue {
+        SettingValue::Name(self.name().to_string())
+    }
+}
+
+impl Setting for ProjectionPath {
+    const SPEC: &'static SettingSpec = &PROJECTION;
+    fn value(self) -> SettingValue {
+        SettingValue::Name(self.name().to_string())
+    }
+}
+
 /// Which solver carries out the x-update (8).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum ProjectionPath {
     /// Semismooth Newton projection (default).
     #[default]
@@ -126,25 +174,25 @@ impl FastTuning {
 
 /// Parameters of one primal agent. Every robot of a team must use the same values.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PrimalSettings {
+pub struct PrimalParams {
     /// The penalty ρ.
     pub rho: f64,
     /// x-update solver.
     pub projection: ProjectionPath,
     /// `None`: the paper's Algorithm 1. `Some`: the fast variant with these settings.
-    pub fast: Option<FastSettings>,
+    pub fast: Option<FastParams>,
 }
 
 /// What the fast variant adds to Algorithm 1.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FastSettings {
+pub struct FastParams {
     /// Over-relaxation and anchor.
     pub tuning: FastTuning,
     /// Size `ε` of the tie-break matrix `E` (entries `ε · U[0, 1)`, the same at every
     /// robot) added to `G_i` by the readout: with exact ties (duplicate robots, integer
     /// costs) robots could read different optima forever without it (every duplicate-robot
     /// instance of `runtime/tests/fast_primal.rs` certifies with it). The readout then minimises `G_i + E` exactly, so its
-    /// certificate slack for `G_i` is at most `n ε`; [`FastSettings::new`] takes
+    /// certificate slack for `G_i` is at most `n ε`; [`FastParams::new`] takes
     /// `ε = tolerance / (2 n²)`, half of a robot's share `tolerance / n`. 0: no tie-break
     /// (and no certificate, for runs without a tolerance).
     pub tie_break: f64,
@@ -153,7 +201,7 @@ pub struct FastSettings {
     pub interior_projection: bool,
 }
 
-impl FastSettings {
+impl FastParams {
     /// The defaults for a team of `robots` on a graph of `diameter`, certifying to the total
     /// cost `tolerance` (infinite: no certificate, no tie-break).
     pub fn new(diameter: usize, robots: usize, tolerance: f64) -> Self {
@@ -170,7 +218,7 @@ impl FastSettings {
     }
 }
 
-impl PrimalSettings {
+impl PrimalParams {
     /// The paper's Algorithm 1 with this ρ.
     pub fn new(rho: f64) -> Self {
         Self {
@@ -191,7 +239,7 @@ impl PrimalSettings {
     ) -> Self {
         Self {
             fast: (variant == PrimalVariant::Fast)
-                .then(|| FastSettings::new(diameter, robots, tolerance)),
+                .then(|| FastParams::new(diameter, robots, tolerance)),
             ..Self::new(rho)
         }
     }
@@ -217,11 +265,11 @@ mod tests {
         let chain = FastTuning::for_diameter(49);
         assert!((chain.anchor - std::f64::consts::PI / 50.0).abs() < 1e-12);
         assert!(chain.relaxation > 1.8 && chain.relaxation < 1.9);
-        assert_eq!(FastSettings::new(1, 10, f64::INFINITY).tie_break, 0.0);
-        assert!((FastSettings::new(1, 10, 2e-9).tie_break - 1e-11).abs() < 1e-24);
+        assert_eq!(FastParams::new(1, 10, f64::INFINITY).tie_break, 0.0);
+        assert!((FastParams::new(1, 10, 2e-9).tie_break - 1e-11).abs() < 1e-24);
         assert_eq!(
-            PrimalSettings::for_variant(PrimalVariant::Paper, 1.0, 3, 4, 1e-9),
-            PrimalSettings::new(1.0)
+            PrimalParams::for_variant(PrimalVariant::Paper, 1.0, 3, 4, 1e-9),
+            PrimalParams::new(1.0)
         );
     }
 }
