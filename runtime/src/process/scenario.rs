@@ -371,7 +371,8 @@ mod tests {
         for options in cases {
             let options = options.build().unwrap();
             let internal = problem.internal();
-            let plan = prepare(internal, &graph, &options, options.method_setup().unwrap()).unwrap();
+            let plan =
+                prepare(internal, &graph, &options, options.method_setup().unwrap()).unwrap();
             let stop = AgentStop::MaxIters;
             let scenario = Scenario::new(
                 Workload::Solve {
@@ -388,8 +389,7 @@ mod tests {
             assert_eq!(read.stop_cadence, plan.stop_cadence);
             assert!(options.stop() == StopRule::Local && !read.local_stop);
             let mut ours = plan.agents.agents();
-            let mut theirs: Vec<MethodAgent> =
-                (0..5).map(|i| read.agent(i).unwrap()).collect();
+            let mut theirs: Vec<MethodAgent> = (0..5).map(|i| read.agent(i).unwrap()).collect();
             let len = ours[0].payload_len();
             let mut payloads = vec![vec![0.0; len]; 5];
             for (i, p) in payloads.iter_mut().enumerate() {
