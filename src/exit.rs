@@ -16,6 +16,7 @@ use admm_ta::runtime::process::launcher::LaunchError;
 use admm_ta::runtime::process::member_error::MemberError;
 use admm_ta::runtime::runner::RunError;
 use admm_ta::runtime::solve::report::SolveReport;
+use admm_ta::runtime::team::errors::CollectError;
 use admm_ta::runtime::transport::ZenohNotBuilt;
 use admm_ta::{ConfigError, SolveError, StopRule, TopologyError};
 
@@ -104,14 +105,12 @@ pub fn code_of(error: &anyhow::Error) -> u8 {
             || cause.is::<TopologyError>()
             || cause.is::<UsageError>()
             || cause.is::<ZenohNotBuilt>()
+            || cause.is::<CollectError>()
         {
             return 2;
         }
         if let Some(e) = cause.downcast_ref::<MemberError>() {
-            return match e {
-                MemberError::Refused(_) => 2,
-                MemberError::Failed(_) => 4,
-            };
+            return if e.is_refusal() { 2 } else { 4 };
         }
         if cause.is::<RunsFailed>() {
             return 4;

@@ -40,7 +40,7 @@
 //! launcher starts each agent as `PROGRAM agent --run ID --index I --scenario FILE`: point
 //! [`Solver::agent_program`] at the `admm-ta` binary (or at a program of your own that
 //! answers that command line with [`runtime::process::agent::run`]). Not run here: a
-//! documentation test has no `admm-ta` binary at hand; `tests/library.rs` runs this
+//! documentation test has no `admm-ta` binary at hand; `tests/answers/library.rs` runs this
 //! example.
 //!
 //! ```no_run

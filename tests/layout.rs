@@ -19,7 +19,14 @@
 //!     below them;
 //! (e) in the runtime, data flows one way: a module names modules of its own layer or of
 //!     lower layers only ([`LAYERS`], the layers of `runtime/src/lib.rs`'s module map; a new
-//!     top-level module must be placed in one).
+//!     top-level module must be placed in one);
+//! (f) the registries close: outside tests, the runtime and the benchmarks name no concrete
+//!     method (no `Method::Primal`, no `methods::primal::…`: the methods are those of the
+//!     registry in `agents/src/methods/mod.rs`), and the process orchestration
+//!     (`runtime/src/process/`) names no concrete transport (neither a transport module nor
+//!     a `Transport::Ipc`);
+//! (g) no function of the runtime or the agents returns `Result<_, String>`: errors are
+//!     typed, one type per operation.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -28,13 +35,15 @@ use std::path::{Path, PathBuf};
 const TRANSPORTS: [&str; 6] = ["sim", "threads", "shm", "ipc", "uds", "zenoh_net"];
 
 /// The runtime's layers, top to bottom, by top-level module (with their submodules).
-const LAYERS: [&[&str]; 5] = [
+const LAYERS: [&[&str]; 6] = [
     // Entry points.
-    &["solve", "episodes", "probe_run"],
+    &["solve", "episodes", "probe_run", "team"],
     // The team runner.
     &["runner"],
     // Process orchestration.
     &["process"],
+    // Configuration: the transport registry, options, workloads.
+    &["transport", "options", "workload"],
     // The transports.
     &TRANSPORTS,
     // Shared mechanisms below every transport.
@@ -48,9 +57,7 @@ const LAYERS: [&[&str]; 5] = [
         "futex",
         "latency",
         "usage",
-        "transport",
-        "options",
-        "workload",
+        "endpoint",
         "error_text",
     ],
 ];
@@ -749,4 +756,174 @@ fn the_parser_reads_nested_use_trees_and_skips_comments_and_strings() {
     .map(|(m, deps)| (m.to_string(), deps.into_iter().map(String::from).collect()))
     .collect();
     assert_eq!(find_cycle(&graph).unwrap(), ["a", "b", "c", "a"]);
+}
+
+/// `code` with the bodies of `#[cfg(test)]` inline modules blanked (tests may name anything).
+fn without_tests(code: &str) -> String {
+    let mut chars: Vec<char> = code.chars().collect();
+    let spans = inline_modules(&chars);
+    let mut from = 0;
+    while let Some(at) = find(&chars, from, "#[cfg(test)]") {
+        from = at + 1;
+        if let Some(&(start, end)) = spans.iter().find(|(start, _)| *start > at) {
+            let between: String = chars[at + 12..start].iter().collect();
+            if between.trim().is_empty() || between.trim().starts_with("#[") {
+                for c in &mut chars[start..=end] {
+                    if *c != '\n' {
+                        *c = ' ';
+                    }
+                }
+            }
+        }
+    }
+    chars.into_iter().collect()
+}
+
+/// The registry's methods: `(Variant, module)` from the lines `Variant => module::INFO,`
+/// of `agents/src/methods/mod.rs`.
+fn registered_methods() -> Vec<(String, String)> {
+    let text = std::fs::read_to_string(root().join("agents/src/methods/mod.rs")).unwrap();
+    let code = code_only(&text);
+    let start = code.find("registry! {").expect("the method registry");
+    let body = &code[start..start + code[start..].find('}').unwrap()];
+    let methods: Vec<(String, String)> = body
+        .lines()
+        .filter_map(|line| {
+            let (variant, info) = line.split_once("=>")?;
+            let module = info.trim().split("::").next()?.to_string();
+            Some((variant.trim().to_string(), module))
+        })
+        .collect();
+    assert!(methods.len() >= 5, "found only {methods:?}");
+    methods
+}
+
+/// Whether `code` names `word` as a whole identifier path segment.
+fn names(code: &str, word: &str) -> bool {
+    let chars: Vec<char> = code.chars().collect();
+    let mut from = 0;
+    while let Some(at) = find(&chars, from, word) {
+        from = at + 1;
+        let before = at.checked_sub(1).map(|p| chars[p]);
+        let after = chars.get(at + word.chars().count()).copied();
+        let part = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+        if !part(before) && !part(after) {
+            return true;
+        }
+    }
+    false
+}
+
+#[test]
+fn the_runtime_and_the_benchmarks_name_no_concrete_method() {
+    let methods = registered_methods();
+    let mut named = Vec::new();
+    for krate in crates()
+        .into_iter()
+        .filter(|c| c.package == "runtime" || c.package == "bench")
+    {
+        for file in &krate.files {
+            let code = without_tests(&file.code);
+            for (variant, module) in &methods {
+                for word in [format!("Method::{variant}"), format!("methods::{module}")] {
+                    if names(&code, &word) {
+                        named.push(format!("{}: {word}", file.path.display()));
+                    }
+                }
+            }
+        }
+    }
+    assert!(named.is_empty(), "concrete methods named: {named:?}");
+}
+
+#[test]
+fn process_orchestration_names_no_concrete_transport() {
+    let mut named = Vec::new();
+    for (module, deps) in dependencies(&runtime()) {
+        if module.split("::").next() != Some("process") {
+            continue;
+        }
+        for dep in deps {
+            if transport_of(&dep).is_some() {
+                named.push(format!("{module} -> {dep}"));
+            }
+        }
+    }
+    let variants = ["Sim", "Threads", "Shm", "Ipc", "Uds", "Zenoh"];
+    for file in runtime()
+        .iter()
+        .filter(|f| f.module.split("::").next() == Some("process"))
+    {
+        let code = without_tests(&file.code);
+        for variant in variants {
+            if names(&code, &format!("Transport::{variant}")) {
+                named.push(format!("{}: Transport::{variant}", file.path.display()));
+            }
+        }
+    }
+    assert!(
+        named.is_empty(),
+        "the process orchestration names concrete transports: {named:?}"
+    );
+}
+
+/// The `Result<…>` types in `code` whose error type is `String`.
+fn string_results(code: &str) -> Vec<String> {
+    let chars: Vec<char> = code.chars().collect();
+    let mut found = Vec::new();
+    let mut from = 0;
+    while let Some(at) = find(&chars, from, "Result<") {
+        from = at + 1;
+        if at > 0 && (chars[at - 1].is_alphanumeric() || chars[at - 1] == '_') {
+            continue;
+        }
+        let (mut depth, mut args, mut current) = (0, Vec::new(), String::new());
+        for (k, &c) in chars.iter().enumerate().skip(at + 6) {
+            match c {
+                '<' => depth += 1,
+                '>' if k > 0 && chars[k - 1] == '-' => {}
+                '>' => depth -= 1,
+                ',' if depth == 1 => {
+                    args.push(std::mem::take(&mut current));
+                    continue;
+                }
+                _ => {}
+            }
+            if depth == 0 {
+                args.push(std::mem::take(&mut current));
+                break;
+            }
+            if !(depth == 1 && c == '<') {
+                current.push(c);
+            }
+        }
+        if args.len() == 2 && args[1].trim() == "String" {
+            found.push(chars[at..at + 40.min(chars.len() - at)].iter().collect());
+        }
+    }
+    if names(code, "type Err = String") {
+        found.push("type Err = String".into());
+    }
+    found
+}
+
+#[test]
+fn the_runtime_and_the_agents_return_no_string_errors() {
+    assert_eq!(
+        string_results("fn f() -> Result<Vec<u8>, String> { g::<Result<(), E>>() }").len(),
+        1
+    );
+    assert!(string_results("fn f() -> Result<String, E> {}").is_empty());
+    let mut found = Vec::new();
+    for krate in crates()
+        .into_iter()
+        .filter(|c| c.package == "runtime" || c.package == "agents")
+    {
+        for file in &krate.files {
+            for result in string_results(&without_tests(&file.code)) {
+                found.push(format!("{}: {result}", file.path.display()));
+            }
+        }
+    }
+    assert!(found.is_empty(), "errors as strings: {found:?}");
 }

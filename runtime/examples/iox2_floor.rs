@@ -86,7 +86,7 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
 fn config(prefix: &str) -> Result<Config, String> {
     let root = std::path::PathBuf::from(format!("/dev/shm/{prefix}root"));
     std::fs::create_dir_all(&root).map_err(|e| format!("{}: {e}", root.display()))?;
-    run_config(prefix, &root)
+    run_config(prefix, &root).map_err(|e| e.to_string())
 }
 
 fn service_name(i: usize) -> Result<ServiceName, String> {

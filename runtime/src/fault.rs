@@ -44,10 +44,19 @@ pub struct Fault {
     pub kind: FaultKind,
 }
 
+/// A fault switch that is not `AGENT:ROUND:KIND`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("a fault must be AGENT:ROUND:KIND, got {text:?}")]
+pub struct BadFault {
+    pub text: String,
+}
+
 impl std::str::FromStr for Fault {
-    type Err = String;
-    fn from_str(text: &str) -> Result<Self, String> {
-        let bad = || format!("a fault must be AGENT:ROUND:KIND, got {text:?}");
+    type Err = BadFault;
+    fn from_str(text: &str) -> Result<Self, BadFault> {
+        let bad = || BadFault {
+            text: text.to_string(),
+        };
         let mut parts = text.split(':');
         let (Some(agent), Some(round), Some(kind), None) =
             (parts.next(), parts.next(), parts.next(), parts.next())
@@ -75,13 +84,13 @@ impl std::str::FromStr for Fault {
 /// The fault the environment injects into agent `index`, if any (never, in a build without
 /// the `fault-injection` feature).
 #[cfg(not(feature = "fault-injection"))]
-pub fn fault_for(_index: usize) -> Result<Option<Fault>, String> {
+pub fn fault_for(_index: usize) -> Result<Option<Fault>, BadFault> {
     Ok(None)
 }
 
 /// The fault the environment injects into agent `index`, if any.
 #[cfg(feature = "fault-injection")]
-pub fn fault_for(index: usize) -> Result<Option<Fault>, String> {
+pub fn fault_for(index: usize) -> Result<Option<Fault>, BadFault> {
     match std::env::var(FAULT_ENV) {
         Ok(text) if !text.is_empty() => {
             let fault: Fault = text.parse()?;

@@ -11,18 +11,27 @@
 //!   with its report), the survivors' re-solve after a failure, the oracle tracer, the
 //!   central stop rules of the simulation;
 //! * [`episodes`]: repeated surveillance assignments by one team alive for all of them;
-//! * [`probe_run`]: a latency-benchmark team of probe agents.
+//! * [`probe_run`]: a latency-benchmark team of probe agents;
+//! * [`team`]: teams of independently started agents (team files, members) and the hosts
+//!   and bridges of teams across machines.
 //!
 //! **Team runner**
 //! * [`runner`]: `run_team` — the only dispatch on how a transport executes (lockstep,
 //!   threads, processes) and the only merge of the agents' latency and CPU usage.
 //!
 //! **Process orchestration**
-//! * [`process`]: the launcher, the agent process, the one mapping of a process transport to
-//!   its exchange (`connect`), scenario files, run namespaces, team files and independently
-//!   started members, and the hosts and bridges of teams across machines.
+//! * [`process`]: the launcher, the agent process, how an agent connects any process
+//!   transport (`connect`, through [`endpoint::ProcessTransport`]), scenario files, run
+//!   namespaces, the team digest.
 //!
-//! **Transports** (each independent of the others)
+//! **Configuration**
+//! * [`transport`]: the registry of transports (one line each) and their capabilities;
+//! * [`options`]: validated `SolveOptions` and `RunOptions` and their `ConfigError`;
+//! * [`workload`]: what agents are built from and compute (a solve's plan, surveillance
+//!   episodes, probes).
+//!
+//! **Transports** (each independent of the others; each declares its
+//! [`endpoint::TransportInfo`])
 //! * [`sim`]: the lockstep simulation — every agent in one thread, round by round, each
 //!   reading only its neighbours' previous-round payloads; the deterministic reference the
 //!   others must reproduce bit for bit;
@@ -45,10 +54,8 @@
 //! * [`wait`]: how agents wait (spin, then sleep), and the counting barrier;
 //! * [`latency`]: round-latency histograms per component;
 //! * [`usage`]: CPU time and context switches of an agent;
-//! * [`transport`]: the one `Transport` type and its capabilities;
-//! * [`options`]: validated `SolveOptions` and `RunOptions` and their `ConfigError`;
-//! * [`workload`]: what agents are built from and compute (a solve's plan, surveillance
-//!   episodes, probes);
+//! * [`endpoint`]: what a transport declares, and the trait of process transports (how an
+//!   agent connects, what a run needs, whom to blame);
 //! * [`error_text`]: errors as one line of text.
 //!
 //! ```
@@ -69,12 +76,18 @@
 pub mod episodes;
 pub mod probe_run;
 pub mod solve;
+pub mod team;
 
 // The team runner.
 pub mod runner;
 
 // Process orchestration.
 pub mod process;
+
+// Configuration.
+pub mod options;
+pub mod transport;
+pub mod workload;
 
 // Transports.
 pub mod ipc;
@@ -86,15 +99,13 @@ pub mod zenoh_net;
 
 // Shared mechanisms.
 pub mod board;
+pub mod endpoint;
 pub mod error_text;
 pub mod exchange;
 pub mod fault;
 pub mod futex;
 pub mod latency;
 pub mod liveness;
-pub mod options;
 pub mod signals;
-pub mod transport;
 pub mod usage;
 pub mod wait;
-pub mod workload;

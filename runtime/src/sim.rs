@@ -5,6 +5,16 @@ use admm_ta_agents::certify::local_stop::{LocalCertifiedStop, NeighbourState, Ve
 use admm_ta_agents::certify::stopping::TeamStopRule;
 use admm_ta_topologies::Graph;
 
+/// The `sim` transport's declaration (its agents are not processes).
+pub const INFO: crate::endpoint::TransportInfo = crate::endpoint::TransportInfo {
+    name: "sim",
+    capabilities: crate::endpoint::Capabilities {
+        execution: crate::endpoint::Execution::Lockstep,
+        ..crate::endpoint::Capabilities::PROCESSES
+    },
+    processes: None,
+};
+
 /// The neighbours' round-`k` payloads of one agent, read in place from the round buffer.
 struct SimInbox<'a> {
     payloads: &'a [f64],

@@ -19,6 +19,17 @@ use std::cell::UnsafeCell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
+/// The `threads` transport's declaration (its agents are not processes).
+pub const INFO: crate::endpoint::TransportInfo = crate::endpoint::TransportInfo {
+    name: "threads",
+    capabilities: crate::endpoint::Capabilities {
+        execution: crate::endpoint::Execution::Threads,
+        global_barrier: true,
+        ..crate::endpoint::Capabilities::PROCESSES
+    },
+    processes: None,
+};
+
 struct Slot {
     header: UnsafeCell<RoundHeader>,
     payload: UnsafeCell<Box<[f64]>>,

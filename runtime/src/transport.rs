@@ -3,137 +3,84 @@
 //!
 //! Every "which transports can do X" question (a global barrier, round latency, agent
 //! processes, fault injection, failure recovery, teams across machines) is answered by
-//! [`Transport::capabilities`], never by listing variants. A new transport is one module,
-//! one variant here with its capabilities, and — if it runs agent processes — one arm in
-//! [`crate::process::connect`].
+//! [`Transport::capabilities`], never by listing variants. A new transport is one module
+//! that declares its [`TransportInfo`] (and implements [`ProcessTransport`] if its agents
+//! are processes) and one line in the registry below.
 
+use crate::endpoint::{ProcessTransport, TransportInfo};
 use serde::{Deserialize, Serialize};
 
-/// What carries the messages.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum Transport {
+pub use crate::endpoint::{Capabilities, Execution};
+pub use crate::zenoh_net::ZenohNotBuilt;
+
+/// The registry: one line per transport, `Variant => its module's INFO`, in the order of the
+/// command line's help. Everything else about a transport is declared by its module.
+macro_rules! transports {
+    ($($(#[$doc:meta])* $variant:ident => $info:path,)+) => {
+        /// What carries the messages.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+        #[serde(rename_all = "kebab-case")]
+        pub enum Transport {
+            #[default]
+            $($(#[$doc])* $variant,)+
+        }
+
+        impl Transport {
+            /// Every transport, in the order of the command line's help.
+            pub const ALL: &'static [Transport] = &[$(Self::$variant,)+];
+
+            /// What the transport declares about itself.
+            pub fn info(self) -> &'static TransportInfo {
+                match self {
+                    $(Self::$variant => &$info,)+
+                }
+            }
+        }
+    };
+}
+
+transports! {
     /// Lockstep simulation in one thread ([`crate::sim`]).
-    #[default]
-    Sim,
+    Sim => crate::sim::INFO,
     /// One OS thread per agent, lock-free slots, crossbeam parkers ([`crate::threads`]).
-    Threads,
+    Threads => crate::threads::INFO,
     /// One OS process per agent, payloads in one shared-memory table of slots read in place,
     /// futex wake-ups: the `threads` protocol across processes, a reference for what a
     /// round between processes costs ([`crate::shm`]).
-    Shm,
+    Shm => crate::shm::process::INFO,
     /// One OS process per agent, iceoryx2 zero-copy publish-subscribe ([`crate::ipc`]).
-    Ipc,
+    Ipc => crate::ipc::process::INFO,
     /// One OS process per agent, every payload copied through Unix-domain sockets: the
     /// baseline that shows what zero-copy saves ([`crate::uds`]).
-    Uds,
+    Uds => crate::uds::process::INFO,
     /// One OS process per agent, Zenoh publish-subscribe through a router: the transport of
     /// multi-host teams ([`crate::zenoh_net`]; needs the `zenoh` feature).
-    Zenoh,
-}
-
-/// How a transport runs a team's agents.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Execution {
-    /// All agents in one thread, round by round: the run sees the whole team after every
-    /// round (central stop rules, the oracle trace) but measures no round latency.
-    Lockstep,
-    /// One OS thread per agent in this process.
-    Threads,
-    /// One OS process per agent, started by a launcher from the `admm-ta` binary (or
-    /// independently, from a team file).
-    Processes,
-}
-
-/// What a transport can do.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Capabilities {
-    pub execution: Execution,
-    /// A global barrier after every round (lockstep rounds for latency benchmarks).
-    pub global_barrier: bool,
-    /// Agents on several machines.
-    pub multi_host: bool,
-    /// Agent processes honour the `ADMM_TA_FAULT` test switch ([`crate::fault`]).
-    pub fault_injection: bool,
-    /// When an agent fails, the launcher learns which one (the agents mark the culprit on the
-    /// run's shared board), so the survivors can re-solve without it (`--on-failure
-    /// continue`).
-    pub failure_recovery: bool,
-    /// This build carries the transport (Zenoh needs the `zenoh` feature).
-    pub built: bool,
+    Zenoh => crate::zenoh_net::process::INFO,
 }
 
 impl Transport {
-    /// Every transport, in the order of the command line's help.
-    pub const ALL: [Transport; 6] = [
-        Self::Sim,
-        Self::Threads,
-        Self::Shm,
-        Self::Ipc,
-        Self::Uds,
-        Self::Zenoh,
-    ];
-
     /// The name used on the command line and in JSON.
     pub fn name(self) -> &'static str {
-        match self {
-            Self::Sim => "sim",
-            Self::Threads => "threads",
-            Self::Shm => "shm",
-            Self::Ipc => "ipc",
-            Self::Uds => "uds",
-            Self::Zenoh => "zenoh",
-        }
+        self.info().name
     }
 
     /// What this transport can do.
     pub fn capabilities(self) -> Capabilities {
-        let none = Capabilities {
-            execution: Execution::Processes,
-            global_barrier: false,
-            multi_host: false,
-            fault_injection: false,
-            failure_recovery: false,
-            built: true,
-        };
-        match self {
-            Self::Sim => Capabilities {
-                execution: Execution::Lockstep,
-                ..none
-            },
-            Self::Threads => Capabilities {
-                execution: Execution::Threads,
-                global_barrier: true,
-                ..none
-            },
-            Self::Shm => Capabilities {
-                global_barrier: true,
-                fault_injection: true,
-                ..none
-            },
-            Self::Ipc => Capabilities {
-                global_barrier: true,
-                fault_injection: true,
-                failure_recovery: true,
-                ..none
-            },
-            Self::Uds => none,
-            Self::Zenoh => Capabilities {
-                multi_host: true,
-                fault_injection: true,
-                built: cfg!(feature = "zenoh"),
-                ..none
-            },
-        }
+        self.info().capabilities
+    }
+
+    /// How its agent processes connect (`None`: its agents are not processes).
+    pub fn processes(self) -> Option<&'static dyn ProcessTransport> {
+        self.info().processes
     }
 
     /// The transports that have `capability`, for messages: `threads, shm or ipc`, `shm, ipc,
     /// uds and zenoh` (`conjunction` joins the last two).
     pub fn names_where(capability: impl Fn(Capabilities) -> bool, conjunction: &str) -> String {
         let names: Vec<&str> = Self::ALL
-            .into_iter()
+            .iter()
             .filter(|t| capability(t.capabilities()))
-            .map(Self::name)
+            .map(|t| t.name())
             .collect();
         match names.split_last() {
             None => String::new(),
@@ -164,7 +111,8 @@ impl std::str::FromStr for Transport {
 
     fn from_str(name: &str) -> Result<Self, UnknownTransport> {
         Self::ALL
-            .into_iter()
+            .iter()
+            .copied()
             .find(|t| t.name() == name)
             .ok_or_else(|| UnknownTransport {
                 name: name.to_string(),
@@ -172,20 +120,13 @@ impl std::str::FromStr for Transport {
     }
 }
 
-/// A Zenoh entry point in a build without the `zenoh` feature.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error(
-    "this admm-ta was built without Zenoh support: rebuild with `cargo build --release --features zenoh`"
-)]
-pub struct ZenohNotBuilt;
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn names_parse_back_and_lists_read_as_text() {
-        for t in Transport::ALL {
+        for &t in Transport::ALL {
             assert_eq!(t.name().parse::<Transport>(), Ok(t));
             assert_eq!(
                 serde_json::to_string(&t).unwrap(),

@@ -17,7 +17,7 @@
 //! is reported as its failure. There is no global barrier.
 
 use crate::board::{Board, Rendezvous};
-use crate::error_text::one_line;
+use crate::endpoint::{ConnectError, ConnectRequest};
 use crate::exchange::header::{
     RoundHeader, words_as_bytes as as_bytes, words_as_bytes_mut as as_bytes_mut,
 };
@@ -30,23 +30,21 @@ use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+pub mod process;
+
 /// Words of the message header.
 const HEADER_WORDS: usize = RoundHeader::WORDS;
 
 /// Longest sleep between two looks at the run's failure mark.
 const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
 
-/// What one agent needs to join a `uds` run.
-#[derive(Debug, Clone)]
-pub struct UdsEndpoint {
-    pub index: usize,
-    pub neighbours: Vec<usize>,
-    pub payload_len: usize,
-    pub policy: WaitPolicy,
-    /// Where the agents' listening sockets are made (the run directory).
-    pub socket_dir: PathBuf,
-    pub board_shm: String,
-    pub agents: usize,
+/// The agent's socket could not be bound.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot listen on {}", path.display())]
+struct CannotListen {
+    path: PathBuf,
+    #[source]
+    source: std::io::Error,
 }
 
 /// Path of agent `i`'s listening socket.
@@ -85,9 +83,9 @@ fn transport(agent: usize, what: impl Into<String>) -> ExchangeError {
 }
 
 /// A stop request (termination signal) during start-up, as the agent's one-line error.
-fn stop_during_startup(agent: usize, board: &Board) -> Result<(), String> {
+fn stop_during_startup(agent: usize, board: &Board) -> Result<(), ExchangeError> {
     match board.stop_signal() {
-        Some(signal) => Err(ExchangeError::Stopped { agent, signal }.to_string()),
+        Some(signal) => Err(ExchangeError::Stopped { agent, signal }),
         None => Ok(()),
     }
 }
@@ -95,14 +93,21 @@ fn stop_during_startup(agent: usize, board: &Board) -> Result<(), String> {
 impl UdsExchange {
     /// Connects agent `endpoint.index` to all its neighbours, waiting for them until
     /// `deadline`.
-    pub fn connect(endpoint: &UdsEndpoint, deadline: Instant) -> Result<Self, String> {
+    pub fn connect(endpoint: &ConnectRequest, deadline: Instant) -> Result<Self, ConnectError> {
         let i = endpoint.index;
-        let board = Board::open(&endpoint.board_shm, endpoint.agents).map_err(|e| one_line(&e))?;
+        let agents = endpoint.agents();
+        let socket_dir = &endpoint.run.dir;
+        let err = |what: String| ConnectError::from(transport(i, what));
+        let board = Board::open(&endpoint.run.board_shm, agents).map_err(ConnectError::setup)?;
         board.set_registered(i);
-        let own = socket_path(&endpoint.socket_dir, i);
+        let own = socket_path(socket_dir, i);
         let _ = std::fs::remove_file(&own);
-        let listener = UnixListener::bind(&own)
-            .map_err(|e| format!("cannot listen on {}: {e}", own.display()))?;
+        let listener = UnixListener::bind(&own).map_err(|source| {
+            ConnectError::setup(CannotListen {
+                path: own.clone(),
+                source,
+            })
+        })?;
         let message_words = HEADER_WORDS + endpoint.payload_len;
         let link = |neighbour, stream| Link {
             neighbour,
@@ -120,7 +125,7 @@ impl UdsExchange {
             .enumerate()
             .filter(|(_, j)| **j < i)
         {
-            let path = socket_path(&endpoint.socket_dir, j);
+            let path = socket_path(socket_dir, j);
             let mut stream = loop {
                 match UnixStream::connect(&path) {
                     Ok(s) => break s,
@@ -129,24 +134,24 @@ impl UdsExchange {
                         std::thread::sleep(Duration::from_millis(1));
                     }
                     Err(e) => {
-                        let team: Vec<usize> = (0..endpoint.agents).collect();
+                        let team: Vec<usize> = (0..agents).collect();
                         let missing = board.never_connected(&team);
-                        return Err(format!(
-                            "agent {i}: neighbour {j} did not listen on {} before the start-up deadline ({e}); missing: agent(s) {missing:?}",
+                        return Err(err(format!(
+                            "neighbour {j} did not listen on {} before the start-up deadline ({e}); missing: agent(s) {missing:?}",
                             path.display()
-                        ));
+                        )));
                     }
                 }
             };
             stream
                 .write_all(&(i as u64).to_le_bytes())
-                .map_err(|e| format!("agent {i}: handshake with neighbour {j} failed: {e}"))?;
+                .map_err(|e| err(format!("handshake with neighbour {j} failed: {e}")))?;
             links[k] = Some(link(j, stream));
         }
         // Higher-numbered neighbours connect to us.
         listener
             .set_nonblocking(true)
-            .map_err(|e| format!("agent {i}: {e}"))?;
+            .map_err(|e| err(e.to_string()))?;
         while links.iter().any(Option::is_none) {
             match listener.accept() {
                 Ok((mut stream, _)) => {
@@ -159,26 +164,24 @@ impl UdsExchange {
                                     .max(Duration::from_millis(1)),
                             ))
                         })
-                        .map_err(|e| format!("agent {i}: {e}"))?;
+                        .map_err(|e| err(e.to_string()))?;
                     let mut word = [0u8; 8];
                     stream
                         .read_exact(&mut word)
-                        .map_err(|e| format!("agent {i}: handshake failed: {e}"))?;
+                        .map_err(|e| err(format!("handshake failed: {e}")))?;
                     let j = u64::from_le_bytes(word) as usize;
                     let k = endpoint
                         .neighbours
                         .iter()
                         .position(|&n| n == j && n > i)
                         .filter(|&k| links[k].is_none())
-                        .ok_or_else(|| {
-                            format!("agent {i}: unexpected connection from agent {j}")
-                        })?;
+                        .ok_or_else(|| err(format!("unexpected connection from agent {j}")))?;
                     links[k] = Some(link(j, stream));
                 }
                 Err(e) if e.kind() == ErrorKind::WouldBlock && Instant::now() < deadline => {
                     if let Err(e) = stop_during_startup(i, &board) {
                         let _ = std::fs::remove_file(&own);
-                        return Err(e);
+                        return Err(e.into());
                     }
                     std::thread::sleep(Duration::from_millis(1));
                 }
@@ -191,32 +194,32 @@ impl UdsExchange {
                         .map(|(&j, _)| j)
                         .collect();
                     let _ = std::fs::remove_file(&own);
-                    let team: Vec<usize> = (0..endpoint.agents).collect();
+                    let team: Vec<usize> = (0..agents).collect();
                     let never = board.never_connected(&team);
-                    return Err(format!(
-                        "agent {i}: neighbour(s) {missing:?} did not connect before the start-up deadline ({e}); missing: agent(s) {never:?}"
-                    ));
+                    return Err(err(format!(
+                        "neighbour(s) {missing:?} did not connect before the start-up deadline ({e}); missing: agent(s) {never:?}"
+                    )));
                 }
             }
         }
         let _ = std::fs::remove_file(&own);
         // Nobody's round deadline starts before the whole team is connected.
         board.set_connected(i);
-        let team: Vec<usize> = (0..endpoint.agents).collect();
+        let team: Vec<usize> = (0..agents).collect();
         board
             .await_connected(&team, deadline)
             .map_err(|waited| match waited {
-                Rendezvous::Stopped(signal) => ExchangeError::Stopped { agent: i, signal }.to_string(),
-                Rendezvous::Failed(failed) => format!("agent {i}: stopped at start-up because agent {failed} failed"),
-                Rendezvous::NeverConnected(missing) => format!(
-                    "agent {i}: the team did not connect before the start-up deadline; missing: agent(s) {missing:?} (not started, started too late, or stuck)"
-                ),
+                Rendezvous::Stopped(signal) => ExchangeError::Stopped { agent: i, signal }.into(),
+                Rendezvous::Failed(failed) => err(format!("stopped at start-up because agent {failed} failed")),
+                Rendezvous::NeverConnected(missing) => err(format!(
+                    "the team did not connect before the start-up deadline; missing: agent(s) {missing:?} (not started, started too late, or stuck)"
+                )),
             })?;
         let links: Vec<Link> = links.into_iter().flatten().collect();
         for l in &links {
             l.stream
                 .set_nonblocking(true)
-                .map_err(|e| format!("agent {i}: {e}"))?;
+                .map_err(|e| err(e.to_string()))?;
         }
         let poll_fds = links
             .iter()

@@ -3,7 +3,8 @@
 use crate::cli::AgentArgs;
 use crate::exit::{Outcome, usage_bail};
 use crate::output::outln;
-use admm_ta::runtime::process::{agent, member};
+use admm_ta::runtime::process::agent;
+use admm_ta::runtime::team::member;
 use anyhow::Result;
 
 /// Runs the agent. An independently started agent whose team reached the round limit before

@@ -1,9 +1,9 @@
 //! `admm-ta collect`: the assignment of an independently started team, from its agents' results.
 
 use crate::cli::CollectArgs;
-use crate::exit::{NotOptimal, Outcome, UsageError};
+use crate::exit::{NotOptimal, Outcome};
 use crate::output::outln;
-use admm_ta::runtime::process::member;
+use admm_ta::runtime::team::member;
 use anyhow::Result;
 
 /// Prints the team's assignment. Ends as `solve` does: with `--check` the centralized
@@ -12,7 +12,7 @@ use anyhow::Result;
 /// ends with 0, as `solve` does, while its text and JSON say it is not certified optimal.
 pub fn run(args: CollectArgs) -> Result<Outcome> {
     // A bad team file, missing results or results of another team: bad input (2).
-    let result = member::collect(&args.team, args.check).map_err(UsageError)?;
+    let result = member::collect(&args.team, args.check)?;
     if args.json {
         outln!("{}", serde_json::to_string(&result)?);
     } else {

@@ -7,7 +7,7 @@ use anyhow::Result;
 
 #[cfg(feature = "zenoh")]
 pub fn run(args: HostArgs) -> Result<()> {
-    let report = admm_ta::runtime::process::host::run_host(&args.team, &args.name)?;
+    let report = admm_ta::runtime::team::host::run_host(&args.team, &args.name)?;
     outln!("{}", serde_json::to_string(&report)?);
     Ok(())
 }

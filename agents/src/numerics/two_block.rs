@@ -46,7 +46,7 @@
 //! A lasso (`min ½‖D x − y‖² + κ‖z‖₁`, `x − z = 0`: a factored linear solve and soft
 //! thresholding) is worked in `agents/examples/two_block_lasso.rs`, which prints the
 //! recovered coefficients and the optimality conditions
-//! (`cargo run -p admm-ta-agents --example two_block_lasso`); `agents/tests/two_block_lasso.rs`
+//! (`cargo run -p admm-ta-agents --example two_block_lasso`); `agents/tests/all/two_block_lasso.rs`
 //! checks both multiplier forms against those conditions.
 
 use faer::{Mat, MatRef};

@@ -126,7 +126,8 @@ pub fn render_ratios(report: &RoundsReport) -> String {
     };
     // The transports measured, in the order of `Transport::ALL`.
     let measured: Vec<Transport> = Transport::ALL
-        .into_iter()
+        .iter()
+        .copied()
         .filter(|t| report.results.iter().any(|r| r.case.transport == *t))
         .collect();
     let against_threads: Vec<Transport> = measured

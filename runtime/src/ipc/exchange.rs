@@ -31,56 +31,32 @@
 //! holds at most two unread samples and borrows at most two; safe overflow is off, and a
 //! sample that does not reach every subscriber is an error, never a silently lost round.
 //!
-//! Size: one type, `IpcExchange` — its start-up rendezvous, its receive and send paths and
-//! its `Exchange` implementation all work on the same private ports, samples and board;
-//! split, they would have to expose them to each other.
+//! The start-up (node, ports, rendezvous) is in [`connect`], in named phases.
+//!
+//! Size: one type, `IpcExchange` — its receive and send paths and its `Exchange`
+//! implementation all work on the same private ports, samples and board; split, they would
+//! have to expose them to each other.
 
-use crate::board::{Board, BoardError, Rendezvous, arrivals_target};
-use crate::error_text::one_line;
+use crate::board::{Board, arrivals_target};
 use crate::exchange::header::{MessageFault, Placement, RoundHeader, check_message};
 use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::Fault;
 use crate::futex;
-use crate::ipc::nodes::{node_name, scan_dead_agents};
-use crate::ipc::services::{
-    SUBSCRIBER_BUFFER, ServiceError, Svc, open_bridge_wake_service, open_round_service,
-};
+use crate::ipc::nodes::scan_dead_agents;
+use crate::ipc::services::Svc;
 use crate::wait::WaitPolicy;
 use admm_ta_agents::agent::Inbox;
-use iceoryx2::port::DegradationAction;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
-use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
-type RoundSample = Sample<Svc, [f64], RoundHeader>;
+mod connect;
 
-/// What an agent process needs to know to connect.
-#[derive(Debug, Clone)]
-pub struct IpcEndpoint {
-    pub index: usize,
-    pub neighbours: Vec<usize>,
-    /// Degree of every agent of the run (service limits are sized from them).
-    pub degrees: Vec<usize>,
-    pub payload_len: usize,
-    /// Tasks of the team (checked against the running team's on the board).
-    pub tasks: usize,
-    pub policy: WaitPolicy,
-    /// Name of the run's board (shared memory created by the launcher: a [`Board`]).
-    pub board_shm: String,
-    pub global_barrier: bool,
-    /// Started by a launcher: stop when it is gone.
-    pub supervised: bool,
-    /// Some neighbours run on other hosts (a mixed team): wake the host's bridge after every
-    /// publish. The bridge then stands in for them on this host.
-    pub notify_bridge: bool,
-    /// The agents on this host's board (a mixed team), `None`: all of them.
-    pub local_agents: Option<Vec<usize>>,
-}
+type RoundSample = Sample<Svc, [f64], RoundHeader>;
 
 /// A waiting agent scans the run's iceoryx2 nodes for dead ones once it has waited this
 /// long for a round, and again at this interval. Scans read every node of the run, so they
@@ -164,185 +140,6 @@ fn transport(agent: usize, what: impl std::fmt::Display) -> ExchangeError {
 }
 
 impl IpcExchange {
-    /// Creates this agent's node and its ports on the services its launcher created, then
-    /// waits (until `deadline`) for every neighbour to subscribe, so that the round-0 message
-    /// reaches everybody.
-    pub fn connect(
-        endpoint: &IpcEndpoint,
-        config: &Config,
-        deadline: Instant,
-    ) -> Result<Self, ExchangeError> {
-        let i = endpoint.index;
-        let err = |what: String| transport(i, what);
-        let t0 = Instant::now();
-        // The run's board first: an agent of another team shape must not touch its services.
-        let board_err = |e: BoardError| err(one_line(&e));
-        let board = Board::open(&endpoint.board_shm, endpoint.degrees.len()).map_err(board_err)?;
-        board
-            .check_shape(endpoint.tasks, endpoint.payload_len)
-            .map_err(board_err)?;
-        board.set_registered(i);
-        let name =
-            NodeName::new(&node_name(i)).map_err(|e| err(format!("bad node name: {e:?}")))?;
-        let node = NodeBuilder::new()
-            .name(&name)
-            .signal_handling_mode(SignalHandlingMode::Disabled)
-            .config(config)
-            .create::<Svc>()
-            .map_err(|e| err(format!("cannot create the iceoryx2 node: {e:?}")))?;
-        let service_err = |e: ServiceError| err(one_line(&e));
-        // The services exist (the launcher created them before starting us): open only.
-        let round_of = |j: usize| open_round_service(&node, j, endpoint.degrees[j]);
-        let t_node = t0.elapsed();
-        let own_round = round_of(i).map_err(service_err)?;
-        // A connection to a subscriber that cannot be established is an error here (the
-        // default only warns and skips that subscriber for good): the rendezvous retries.
-        let new_publisher = || {
-            own_round
-                .publisher_builder()
-                .initial_max_slice_len(endpoint.payload_len)
-                .allocation_strategy(AllocationStrategy::Static)
-                .backpressure_strategy(BackpressureStrategy::DiscardData)
-                .set_degradation_handler(|_, _| DegradationAction::DegradeAndFail)
-                .create()
-        };
-        let mut publisher =
-            new_publisher().map_err(|e| err(format!("cannot create the publisher: {e:?}")))?;
-        let t_own = t0.elapsed();
-        let mut subscribers = Vec::with_capacity(endpoint.neighbours.len());
-        // Kept to name the neighbours that never show up.
-        let mut neighbour_services = Vec::with_capacity(endpoint.neighbours.len());
-        for &j in &endpoint.neighbours {
-            let service = round_of(j).map_err(service_err)?;
-            subscribers.push(
-                service
-                    .subscriber_builder()
-                    .buffer_size(SUBSCRIBER_BUFFER)
-                    .create()
-                    .map_err(|e| err(format!("cannot subscribe to agent {j}: {e:?}")))?,
-            );
-            neighbour_services.push(service);
-        }
-        let bridge = if endpoint.notify_bridge {
-            Some(
-                open_bridge_wake_service(&node, endpoint.degrees.len())
-                    .map_err(service_err)?
-                    .notifier_builder()
-                    .create()
-                    .map_err(|e| err(format!("cannot create the bridge's notifier: {e:?}")))?,
-            )
-        } else {
-            None
-        };
-        let t_ports = t0.elapsed();
-        // Start-up rendezvous: all neighbours subscribed to us.
-        let degree = endpoint.neighbours.len();
-        let started = Instant::now();
-        let mut last_scan = Instant::now();
-        let mut poll = Duration::from_micros(500);
-        while own_round.dynamic_config().number_of_subscribers() < degree {
-            if let Some(signal) = board.stop_signal() {
-                return Err(ExchangeError::Stopped { agent: i, signal });
-            }
-            if let Some(failed) = board.failed() {
-                return Err(ExchangeError::PeerFailed {
-                    agent: i,
-                    failed,
-                    round: 0,
-                    how: "failed during start-up".into(),
-                });
-            }
-            if last_scan.elapsed() >= DEAD_NODE_SCAN_EVERY {
-                last_scan = Instant::now();
-                if let Some(failed) = scan_dead_agents(config, i, &board) {
-                    return Err(ExchangeError::PeerFailed {
-                        agent: i,
-                        failed,
-                        round: 0,
-                        how: "died during start-up".into(),
-                    });
-                }
-            }
-            if Instant::now() >= deadline {
-                let team: Vec<usize> = match &endpoint.local_agents {
-                    Some(local) => local.clone(),
-                    None => (0..endpoint.degrees.len()).collect(),
-                };
-                // Marks the one to blame: an agent that never started, not its neighbours.
-                let _ = board.never_connected(&team);
-                // A neighbour that started has published its service.
-                let missing: Vec<usize> = endpoint
-                    .neighbours
-                    .iter()
-                    .zip(&neighbour_services)
-                    .filter(|(_, s)| s.dynamic_config().number_of_publishers() == 0)
-                    .map(|(&j, _)| j)
-                    .collect();
-                return Err(err(format!(
-                    "only {} of {degree} neighbours connected within {:.1?}; missing: agent(s) {missing:?} (not started, or started too late)",
-                    own_round.dynamic_config().number_of_subscribers(),
-                    started.elapsed()
-                )));
-            }
-            // Backing off (0.5 to 4 ms): while the last agents of a large team start, the
-            // waiting ones must not take their cores.
-            std::thread::sleep(poll);
-            poll = (poll * 2).min(Duration::from_millis(4));
-        }
-        // Every subscriber is there: connect to all of them now (not lazily in the first
-        // send), recreating the publisher if a connection cannot be established.
-        while let Err(e) = publisher.update_connections() {
-            if Instant::now() >= deadline {
-                return Err(err(format!(
-                    "cannot connect to the neighbours' subscribers before the start-up deadline: {e:?}"
-                )));
-            }
-            drop(publisher);
-            std::thread::sleep(Duration::from_millis(2));
-            publisher =
-                new_publisher().map_err(|e| err(format!("cannot create the publisher: {e:?}")))?;
-        }
-        for subscriber in &subscribers {
-            let _ = subscriber.update_connections();
-        }
-        board.set_connected(i);
-        await_team(endpoint, &board, deadline, started)?;
-        if std::env::var_os("ADMM_TA_STARTUP_TRACE").is_some() {
-            eprintln!(
-                "startup agent {i}: node {:?} own {:?} ports {:?} rendezvous {:?}",
-                t_node,
-                t_own,
-                t_ports,
-                t0.elapsed()
-            );
-        }
-        Ok(Self {
-            index: i,
-            neighbours: endpoint.neighbours.clone(),
-            payload_len: endpoint.payload_len,
-            policy: endpoint.policy,
-            publisher,
-            subscribers,
-            bridge,
-            held: (0..degree).map(|_| Held::empty()).collect(),
-            pending: (0..degree).map(|_| None).collect(),
-            missing: Vec::with_capacity(degree),
-            wake_seen: 0,
-            gathered: 0,
-            degrees: endpoint.degrees.clone(),
-            board,
-            global_barrier: endpoint.global_barrier,
-            watch: PeerWatch {
-                index: i,
-                config: config.clone(),
-                last_dead_node_scan: Instant::now(),
-                launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
-            },
-            fault: None,
-            _node: node,
-        })
-    }
-
     /// Marks agent `agent` as the one that failed (unless another was marked first), so that
     /// the launcher and every agent blame it.
     pub fn blame(&self, agent: usize) {
@@ -518,48 +315,6 @@ impl IpcExchange {
                 .map_err(|e| transport(i, format!("notifying the bridge failed: {e:?}")))?;
         }
         Ok(())
-    }
-}
-
-/// The second half of the start-up rendezvous ([`Board::await_connected`]) as an
-/// exchange error.
-fn await_team(
-    endpoint: &IpcEndpoint,
-    board: &Board,
-    deadline: Instant,
-    started: Instant,
-) -> Result<(), ExchangeError> {
-    let i = endpoint.index;
-    let team: Vec<usize> = match &endpoint.local_agents {
-        Some(local) => local.clone(),
-        None => (0..endpoint.degrees.len()).collect(),
-    };
-    board
-        .await_connected(&team, deadline)
-        .map_err(|waited| rendezvous_error(i, waited, started))
-}
-
-/// The error of an agent whose start-up rendezvous ended as `waited` says.
-pub(crate) fn rendezvous_error(
-    agent: usize,
-    waited: Rendezvous,
-    started: Instant,
-) -> ExchangeError {
-    match waited {
-        Rendezvous::Stopped(signal) => ExchangeError::Stopped { agent, signal },
-        Rendezvous::Failed(failed) => ExchangeError::PeerFailed {
-            agent,
-            failed,
-            round: 0,
-            how: "failed during start-up".into(),
-        },
-        Rendezvous::NeverConnected(missing) => transport(
-            agent,
-            format!(
-                "the team did not connect within {:.1?}; missing: agent(s) {missing:?} (not started, started too late, or stuck)",
-                started.elapsed()
-            ),
-        ),
     }
 }
 

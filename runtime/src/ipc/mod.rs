@@ -3,6 +3,8 @@
 //! * [`exchange`]: an agent's iceoryx2 ports (the [`crate::exchange::Exchange`]);
 //! * [`services`]: the run's iceoryx2 services, created by the launcher (or a team's first
 //!   member) before the agents start and only opened by them;
+//! * [`process`]: how the process orchestration runs it (the services before the agents,
+//!   the agents' connection and blame, the dead nodes' cleanup);
 //! * [`nodes`]: the run's iceoryx2 configuration, node names and dead-node scans.
 //!
 //! The run's shared board lives in [`crate::board`] (the `uds` transport and the process
@@ -10,4 +12,5 @@
 
 pub mod exchange;
 pub mod nodes;
+pub mod process;
 pub mod services;

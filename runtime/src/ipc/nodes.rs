@@ -12,14 +12,19 @@ const CREATION_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10)
 /// The iceoryx2 configuration of a run: its own prefix and root directory, and no dead-node
 /// scans (the launcher owns cleanup; the scans made start-up of a 50-agent complete graph
 /// several times slower).
-pub fn run_config(prefix: &str, root: &std::path::Path) -> Result<Config, String> {
+pub fn run_config(prefix: &str, root: &std::path::Path) -> Result<Config, RunNameError> {
     let mut config = Config::default();
-    config.global.prefix = FileName::new(prefix.as_bytes())
-        .map_err(|e| format!("bad iceoryx2 prefix {prefix:?}: {e:?}"))?;
+    config.global.prefix = FileName::new(prefix.as_bytes()).map_err(|e| RunNameError::Prefix {
+        prefix: prefix.to_string(),
+        detail: format!("{e:?}"),
+    })?;
     let root = format!("{}/", root.display());
-    config.global.set_root_path(
-        &Path::new(root.as_bytes()).map_err(|e| format!("bad iceoryx2 root {root:?}: {e:?}"))?,
-    );
+    config
+        .global
+        .set_root_path(&Path::new(root.as_bytes()).map_err(|e| RunNameError::Root {
+            detail: format!("{e:?}"),
+            root: root.clone(),
+        })?);
     // How long a process waits for another to finish creating a service or a connection:
     // iceoryx2's 1 s default was exceeded by teams starting at once on a loaded 2-core
     // machine, and a connection to a subscriber that times out is skipped for good (the
@@ -38,6 +43,15 @@ pub fn run_config(prefix: &str, root: &std::path::Path) -> Result<Config, String
         .publish_subscribe
         .subscriber_expired_connection_buffer = crate::ipc::services::SUBSCRIBER_BORROWED;
     Ok(config)
+}
+
+/// A run prefix or root that iceoryx2 cannot use as a file name or path.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum RunNameError {
+    #[error("bad iceoryx2 prefix {prefix:?}: {detail}")]
+    Prefix { prefix: String, detail: String },
+    #[error("bad iceoryx2 root {root:?}: {detail}")]
+    Root { root: String, detail: String },
 }
 
 /// iceoryx2 node name of agent `i` (how others recognise it among dead nodes).

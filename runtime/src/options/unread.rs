@@ -143,7 +143,8 @@ fn for_transport(
         option,
         transport: transport.name(),
         applies: Transport::ALL
-            .into_iter()
+            .iter()
+            .copied()
             .filter(|t| reads(t.capabilities().execution))
             .map(Transport::name)
             .collect(),

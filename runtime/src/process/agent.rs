@@ -5,7 +5,6 @@
 //! round loop and writes its outcome as `result-I.json` into the run directory. It always
 //! returns (never `process::exit`), so iceoryx2's `Drop`s release its shared memory.
 
-use crate::error_text::one_line;
 use crate::exchange::ExchangeError;
 use crate::exchange::round_loop::{AgentOutcome, run_agent};
 use crate::process::connect::connect;
@@ -72,9 +71,8 @@ pub fn run(
     let _signals = crate::signals::install();
     // Not a symlink, ours, mode 0600, and what the launcher wrote (its digest).
     let bytes = crate::process::private_dir::read_verified(scenario_path, scenario_digest)
-        .map_err(MemberError::Refused)?;
-    let scenario = Scenario::parse(&bytes, scenario_path, run_id)
-        .map_err(|e| MemberError::Refused(one_line(&e)))?;
+        .map_err(MemberError::refused)?;
+    let scenario = Scenario::parse(&bytes, scenario_path, run_id).map_err(MemberError::refused)?;
     let run_dir = scenario_path.parent().unwrap_or(Path::new("."));
     run_scenario(
         &scenario,
@@ -100,12 +98,8 @@ pub fn run_scenario(
 ) -> Result<AgentReport, MemberError> {
     let started_unix_ns = unix_ns();
     let started = Instant::now();
-    let graph = scenario
-        .graph()
-        .map_err(|e| MemberError::Refused(e.to_string()))?;
-    let plan = scenario
-        .plan(index)
-        .map_err(|e| MemberError::Refused(e.to_string()))?;
+    let graph = scenario.graph().map_err(MemberError::refused)?;
+    let plan = scenario.plan(index).map_err(MemberError::refused)?;
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
     let mut endpoint = connect(scenario, &graph, index, run_dir, supervised, deadline)
         .inspect_err(|_| record_stop(scenario))?;
@@ -119,7 +113,7 @@ pub fn run_scenario(
         _ => {
             let mut agent = scenario
                 .workload_agent(index)
-                .map_err(|e| MemberError::Refused(e.to_string()))?;
+                .map_err(MemberError::refused)?;
             run_agent(&mut *agent, endpoint.exchange(), &plan).map(|o| (o, Vec::new()))
         }
     };
@@ -140,7 +134,7 @@ pub fn run_scenario(
         } else {
             endpoint.blame_for(&e);
         }
-        e.to_string()
+        MemberError::failed(e)
     })?;
     // Release the ports before reporting: once the launcher sees the result it may clean up.
     drop(endpoint);
@@ -152,9 +146,23 @@ pub fn run_scenario(
         team,
     };
     let partial = result.with_extension("json.partial");
-    let text = serde_json::to_string(&report).map_err(|e| e.to_string())?;
+    let text = serde_json::to_string(&report).expect("a report serialises");
     std::fs::write(&partial, text)
         .and_then(|()| std::fs::rename(&partial, result))
-        .map_err(|e| format!("cannot write {}: {e}", result.display()))?;
+        .map_err(|source| {
+            MemberError::failed(CannotWrite {
+                path: result.to_path_buf(),
+                source,
+            })
+        })?;
     Ok(report)
+}
+
+/// The agent's result could not be written.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write {}", path.display())]
+struct CannotWrite {
+    path: std::path::PathBuf,
+    #[source]
+    source: std::io::Error,
 }

@@ -4,36 +4,40 @@
 //! the number to raise the limit to, instead of an opaque iceoryx2 error half-way through
 //! start-up.
 //!
-//! Open files per agent process, counted in `/proc/PID/fd` on real runs and fitted (degree
-//! `d`): iceoryx2 `19 + 11·d` (degree 1, 2, 9, 49: 30, 41, 118, 558 — each neighbour costs a
-//! subscriber, a notifier and their shared-memory connections and segments); Unix sockets
-//! `6 + d`; the shm slot table 6 (the board and the table, whatever the degree); Zenoh
-//! (threads and sockets of its runtime) about 64. One thread per agent process (shm, ipc,
-//! uds); a Zenoh agent runs its runtime's threads too.
+//! The open files and threads an agent process needs are declared by its transport
+//! ([`crate::endpoint::ProcessTransport`]; each transport's module says how it counted them).
 
 use crate::transport::Transport;
 
 /// Files no count covers (a margin for what the formulas do not see).
 const MARGIN: u64 = 16;
 
-/// Open files an agent process of `transport` with `degree` neighbours needs.
+/// Open files an agent process of `transport` with `degree` neighbours needs (none for a
+/// transport whose agents are not processes).
 pub fn files_per_agent(transport: Transport, degree: usize) -> u64 {
-    let d = degree as u64;
-    match transport {
-        Transport::Ipc => 19 + 11 * d,
-        Transport::Shm => 6,
-        Transport::Uds => 6 + d,
-        Transport::Zenoh => 64 + d,
-        Transport::Sim | Transport::Threads => 0,
-    }
+    transport
+        .processes()
+        .map_or(0, |p| p.files_per_agent(degree))
 }
 
 /// Threads an agent process of `transport` runs.
 pub fn threads_per_agent(transport: Transport) -> u64 {
-    match transport {
-        Transport::Zenoh => 16,
-        _ => 1,
-    }
+    transport.processes().map_or(1, |p| p.threads_per_agent())
+}
+
+/// A team the open-file or process limits cannot hold: what to raise, and to what.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum LimitError {
+    #[error(
+        "the team needs {needed} open files per agent but the limit is {limit}: raise it with ulimit -n {}",
+        needed.next_power_of_two()
+    )]
+    OpenFiles { needed: u64, limit: u64 },
+    #[error(
+        "the team needs {needed} processes (threads) but the limit is {limit}: raise it with ulimit -u {}",
+        (2 * needed).next_power_of_two()
+    )]
+    Processes { needed: u64, limit: u64 },
 }
 
 fn soft_limit(resource: libc::__rlimit_resource_t) -> Option<u64> {
@@ -53,24 +57,24 @@ fn soft_limit(resource: libc::__rlimit_resource_t) -> Option<u64> {
 /// Refuses a team of `agents` agent processes on `transport` whose largest degree is
 /// `max_degree` if the open-file or process limits cannot hold it; one line saying what to
 /// raise and to what.
-pub fn check(transport: Transport, agents: usize, max_degree: usize) -> Result<(), String> {
+pub fn check(transport: Transport, agents: usize, max_degree: usize) -> Result<(), LimitError> {
     let files = files_per_agent(transport, max_degree) + MARGIN;
     if let Some(limit) = soft_limit(libc::RLIMIT_NOFILE)
         && files > limit
     {
-        return Err(format!(
-            "the team needs {files} open files per agent but the limit is {limit}: raise it with ulimit -n {}",
-            files.next_power_of_two()
-        ));
+        return Err(LimitError::OpenFiles {
+            needed: files,
+            limit,
+        });
     }
     let threads = agents as u64 * threads_per_agent(transport) + 1;
     if let Some(limit) = soft_limit(libc::RLIMIT_NPROC)
         && threads > limit
     {
-        return Err(format!(
-            "the team needs {threads} processes (threads) but the limit is {limit}: raise it with ulimit -u {}",
-            (2 * threads).next_power_of_two()
-        ));
+        return Err(LimitError::Processes {
+            needed: threads,
+            limit,
+        });
     }
     Ok(())
 }

@@ -1,9 +1,9 @@
-//! A run's private namespace: an iceoryx2 prefix and a directory of its own, so that
+//! A run's private namespace: a shared-memory prefix and a directory of its own, so that
 //! concurrent runs and parallel tests never collide, and a cleanup that leaves nothing of
 //! the run behind — not even when an agent was killed and could not clean up itself.
 
 use crate::liveness::process_alive;
-use crate::process::private_dir::{self, create_unique_dir, write_private_file};
+use crate::process::private_dir::{self, PrivateDirError, create_unique_dir, write_private_file};
 use std::path::{Path, PathBuf};
 
 /// Where POSIX shared memory lives on Linux.
@@ -13,9 +13,9 @@ const SHM_DIR: &str = "/dev/shm";
 #[derive(Debug, Clone)]
 pub struct RunNamespace {
     pub id: String,
-    /// Prefix of every iceoryx2 file and shared-memory object of the run.
+    /// Prefix of every transport file and shared-memory object of the run.
     pub prefix: String,
-    /// The run directory: scenario, agent logs and results, and the iceoryx2 root.
+    /// The run directory: scenario, agent logs and results, and the transport root.
     pub dir: PathBuf,
     /// A private base made for this run alone (the user's was hostile): removed with it.
     pub own_base: Option<PathBuf>,
@@ -44,7 +44,10 @@ impl RunNamespace {
                 (runs, None)
             }
             Err(why) => {
-                eprintln!("warning: {why}; this run uses a private directory of its own");
+                eprintln!(
+                    "warning: {}; this run uses a private directory of its own",
+                    crate::error_text::one_line(&why)
+                );
                 let temp = std::env::temp_dir();
                 let (base, _) =
                     create_unique_dir(&temp, &format!("admm-ta-{}-", private_dir::euid()))
@@ -66,17 +69,17 @@ impl RunNamespace {
         })
     }
 
-    /// Creates the run's iceoryx2 root ([`RunNamespace::iceoryx_root`]) exclusively, with
+    /// Creates the run's transport root ([`RunNamespace::transport_root`]) exclusively, with
     /// mode 0700.
-    pub fn create_iceoryx_root(&self) -> std::io::Result<()> {
+    pub fn create_transport_root(&self) -> std::io::Result<()> {
         std::os::unix::fs::DirBuilderExt::mode(&mut std::fs::DirBuilder::new(), 0o700)
-            .create(self.iceoryx_root())
+            .create(self.transport_root())
     }
 
-    /// The iceoryx2 root directory of the run: on the shared-memory tmpfs when there is one,
-    /// because iceoryx2 writes and fsyncs several small files per service and port, and on a
+    /// The transport root directory of the run: on the shared-memory tmpfs when there is one,
+    /// because a transport (iceoryx2) writes and fsyncs several small files per service and port, and on a
     /// disk-backed `/tmp` that made start-up of a 50-agent complete graph several times slower.
-    pub fn iceoryx_root(&self) -> PathBuf {
+    pub fn transport_root(&self) -> PathBuf {
         if Path::new(SHM_DIR).is_dir() {
             Path::new(SHM_DIR).join(format!("{}root", self.prefix))
         } else {
@@ -91,7 +94,7 @@ impl RunNamespace {
 
     /// The namespace of an independently started team named `run` (letters, digits and
     /// dashes): every agent of the team derives the same one from the name.
-    pub fn for_team(run: &str) -> Result<Self, String> {
+    pub fn for_team(run: &str) -> Result<Self, TeamNamespaceError> {
         Self::check_team_name(run)?;
         let teams = private_dir::base_dir()?.join("teams");
         private_dir::ensure_private_dir(&teams)?;
@@ -111,14 +114,14 @@ impl RunNamespace {
     }
 
     /// Refuses team names that cannot name shared memory (or that would prefix another's).
-    pub fn check_team_name(run: &str) -> Result<(), String> {
+    pub fn check_team_name(run: &str) -> Result<(), BadTeamName> {
         if run.is_empty()
             || run.len() > 40
             || !run.chars().all(|c| c.is_ascii_alphanumeric() || c == '-')
         {
-            return Err(format!(
-                "run name '{run}': use 1 to 40 letters, digits and dashes"
-            ));
+            return Err(BadTeamName {
+                name: run.to_string(),
+            });
         }
         Ok(())
     }
@@ -149,9 +152,25 @@ impl RunNamespace {
     }
 }
 
+/// A team name that cannot name shared memory.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("run name '{name}': use 1 to 40 letters, digits and dashes")]
+pub struct BadTeamName {
+    pub name: String,
+}
+
+/// Why a team's namespace cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum TeamNamespaceError {
+    #[error(transparent)]
+    Name(#[from] BadTeamName),
+    #[error(transparent)]
+    Directory(#[from] PrivateDirError),
+}
+
 /// The user's directory of launcher runs (one subdirectory per run, named by its id),
 /// created and checked.
-pub fn private_runs_dir() -> Result<PathBuf, String> {
+pub fn private_runs_dir() -> Result<PathBuf, PrivateDirError> {
     let runs = private_dir::base_dir()?.join("runs");
     private_dir::ensure_private_dir(&runs)?;
     Ok(runs)
@@ -244,7 +263,7 @@ mod tests {
         let shm = PathBuf::from(SHM_DIR).join(format!("{}test", a.prefix));
         if PathBuf::from(SHM_DIR).is_dir() {
             std::fs::write(&shm, b"x").unwrap();
-            std::fs::create_dir_all(a.iceoryx_root().join("services")).unwrap();
+            std::fs::create_dir_all(a.transport_root().join("services")).unwrap();
         }
         std::fs::write(a.dir.join("file"), b"x").unwrap();
         assert!(!a.leftovers().is_empty());

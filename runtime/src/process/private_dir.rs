@@ -22,7 +22,7 @@ pub fn euid() -> u32 {
 }
 
 /// The user's base directory of runs and teams (created, and checked: [`check_private`]).
-pub fn base_dir() -> Result<PathBuf, String> {
+pub fn base_dir() -> Result<PathBuf, PrivateDirError> {
     if let Some(xdg) = std::env::var_os("XDG_RUNTIME_DIR").filter(|x| !x.is_empty()) {
         let xdg = PathBuf::from(xdg);
         if check_private(&xdg).is_ok() {
@@ -37,20 +37,82 @@ pub fn base_dir() -> Result<PathBuf, String> {
 }
 
 /// Creates `dir` with mode 0700 unless it exists, then checks it is private.
-pub fn ensure_private_dir(dir: &Path) -> Result<(), String> {
+pub fn ensure_private_dir(dir: &Path) -> Result<(), PrivateDirError> {
     match DirBuilder::new().mode(0o700).create(dir) {
         Ok(()) => {}
         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
-        Err(e) => return Err(format!("cannot create {}: {e}", dir.display())),
+        Err(source) => {
+            return Err(PrivateDirError::Create {
+                path: dir.to_path_buf(),
+                source,
+            });
+        }
     }
     check_private(dir)
 }
 
+/// A directory of runs that cannot be made or is not private.
+#[derive(Debug, thiserror::Error)]
+pub enum PrivateDirError {
+    #[error("cannot create {}", path.display())]
+    Create {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("cannot inspect {}", path.display())]
+    Inspect {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(
+        "refusing the run directory {}: it {why}; remove it, or set XDG_RUNTIME_DIR (or TMPDIR) to a directory only you can use",
+        path.display()
+    )]
+    NotPrivate { path: PathBuf, why: String },
+}
+
+/// A file that is not the private file it should be.
+#[derive(Debug, thiserror::Error)]
+pub enum VerifyError {
+    #[error("refusing {}: it is a symlink", path.display())]
+    Symlink { path: PathBuf },
+    #[error("cannot {what} {}", path.display())]
+    Io {
+        what: &'static str,
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("refusing {}: not a regular file", path.display())]
+    NotAFile { path: PathBuf },
+    #[error("refusing {}: owned by uid {owner}, not by this agent's (uid {ours})", path.display())]
+    Owner {
+        path: PathBuf,
+        owner: u32,
+        ours: u32,
+    },
+    #[error("refusing {}: mode {mode:o}, not 600", path.display())]
+    Mode { path: PathBuf, mode: u32 },
+    #[error(
+        "refusing {}: it was replaced (digest {found}… instead of the launcher's {expected}…)",
+        path.display()
+    )]
+    Replaced {
+        path: PathBuf,
+        found: String,
+        expected: String,
+    },
+}
+
 /// Refuses `dir` unless it is a directory (not a symlink) owned by us with no permission
 /// bits for group or others; the error says what is wrong and what to do.
-pub fn check_private(dir: &Path) -> Result<(), String> {
-    let meta = std::fs::symlink_metadata(dir)
-        .map_err(|e| format!("cannot inspect {}: {e}", dir.display()))?;
+pub fn check_private(dir: &Path) -> Result<(), PrivateDirError> {
+    let meta = std::fs::symlink_metadata(dir).map_err(|source| PrivateDirError::Inspect {
+        path: dir.to_path_buf(),
+        source,
+    })?;
     let what = if meta.file_type().is_symlink() {
         "is a symlink (another account may have planted it)".to_string()
     } else if !meta.is_dir() {
@@ -69,10 +131,10 @@ pub fn check_private(dir: &Path) -> Result<(), String> {
     } else {
         return Ok(());
     };
-    Err(format!(
-        "refusing the run directory {}: it {what}; remove it, or set XDG_RUNTIME_DIR (or TMPDIR) to a directory only you can use",
-        dir.display()
-    ))
+    Err(PrivateDirError::NotPrivate {
+        path: dir.to_path_buf(),
+        why: what,
+    })
 }
 
 /// Creates a fresh private directory `<parent>/<prefix><random>` (exclusively: a name that
@@ -107,45 +169,49 @@ pub fn write_private_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 
 /// Reads `path` if it is a regular file of ours with mode 0600, not a symlink, and its
 /// SHA-256 is `digest` (hex); the error names what is wrong.
-pub fn read_verified(path: &Path, digest: &str) -> Result<Vec<u8>, String> {
-    let shown = path.display();
+pub fn read_verified(path: &Path, digest: &str) -> Result<Vec<u8>, VerifyError> {
+    let at = || path.to_path_buf();
+    let io = |what| {
+        move |source| VerifyError::Io {
+            what,
+            path: path.to_path_buf(),
+            source,
+        }
+    };
     let mut file = OpenOptions::new()
         .read(true)
         .custom_flags(libc::O_NOFOLLOW)
         .open(path)
         .map_err(|e| match e.raw_os_error() {
-            Some(libc::ELOOP) => format!("refusing {shown}: it is a symlink"),
-            _ => format!("cannot open {shown}: {e}"),
+            Some(libc::ELOOP) => VerifyError::Symlink { path: at() },
+            _ => io("open")(e),
         })?;
-    let meta = file
-        .metadata()
-        .map_err(|e| format!("cannot inspect {shown}: {e}"))?;
+    let meta = file.metadata().map_err(io("inspect"))?;
     if !meta.is_file() {
-        return Err(format!("refusing {shown}: not a regular file"));
+        return Err(VerifyError::NotAFile { path: at() });
     }
     if meta.uid() != euid() {
-        return Err(format!(
-            "refusing {shown}: owned by uid {}, not by this agent's (uid {})",
-            meta.uid(),
-            euid()
-        ));
+        return Err(VerifyError::Owner {
+            path: at(),
+            owner: meta.uid(),
+            ours: euid(),
+        });
     }
     if meta.mode() & 0o777 != 0o600 {
-        return Err(format!(
-            "refusing {shown}: mode {:o}, not 600",
-            meta.mode() & 0o777
-        ));
+        return Err(VerifyError::Mode {
+            path: at(),
+            mode: meta.mode() & 0o777,
+        });
     }
     let mut bytes = Vec::new();
-    file.read_to_end(&mut bytes)
-        .map_err(|e| format!("cannot read {shown}: {e}"))?;
+    file.read_to_end(&mut bytes).map_err(io("read"))?;
     let found = sha256_hex(&bytes);
     if found != digest {
-        return Err(format!(
-            "refusing {shown}: it was replaced (digest {}… instead of the launcher's {}…)",
-            &found[..12],
-            &digest[..digest.len().min(12)]
-        ));
+        return Err(VerifyError::Replaced {
+            path: at(),
+            found: found[..12].to_string(),
+            expected: digest[..digest.len().min(12)].to_string(),
+        });
     }
     Ok(bytes)
 }
@@ -191,10 +257,20 @@ mod tests {
         DirBuilder::new().mode(0o777).create(&open).unwrap();
         std::fs::set_permissions(&open, std::os::unix::fs::PermissionsExt::from_mode(0o777))
             .unwrap();
-        assert!(check_private(&open).unwrap_err().contains("mode 777"));
+        assert!(
+            check_private(&open)
+                .unwrap_err()
+                .to_string()
+                .contains("mode 777")
+        );
         let link = dir.join("link");
         std::os::unix::fs::symlink(&dir, &link).unwrap();
-        assert!(check_private(&link).unwrap_err().contains("symlink"));
+        assert!(
+            check_private(&link)
+                .unwrap_err()
+                .to_string()
+                .contains("symlink")
+        );
         let file = dir.join("file");
         write_private_file(&file, b"x").unwrap();
         assert!(write_private_file(&file, b"y").is_err(), "created twice");
@@ -206,11 +282,13 @@ mod tests {
         assert!(
             read_verified(&planted, &digest)
                 .unwrap_err()
+                .to_string()
                 .contains("symlink")
         );
         assert!(
             read_verified(&file, &sha256_hex(b"y"))
                 .unwrap_err()
+                .to_string()
                 .contains("replaced")
         );
         std::fs::remove_dir_all(&dir).unwrap();

@@ -3,6 +3,7 @@
 //! problem, the graph, the method with its own settings (its settings type, serialised), the
 //! team's numbers and the run's names and limits.
 
+use crate::endpoint::RunPlace;
 use crate::exchange::round_loop::{AgentPlan, AgentStop};
 use crate::options::run::RunOptions;
 use crate::transport::Transport;
@@ -10,7 +11,6 @@ use crate::wait::WaitStrategy;
 use crate::workload::Workload;
 use crate::workload::episode::EpisodeSettings;
 use crate::workload::plan::AgentFactory;
-use crate::zenoh_net::links::ZenohLinks;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
 use admm_ta_agents::method::agent::MethodAgent;
@@ -42,8 +42,10 @@ pub enum ScenarioWorkload {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Scenario {
     pub run_id: String,
-    pub iceoryx_prefix: String,
-    pub iceoryx_root: PathBuf,
+    /// Prefix of the run's shared memory and transport files.
+    pub prefix: String,
+    /// The run's private root directory for transport files.
+    pub transport_root: PathBuf,
     pub robots: usize,
     pub tasks: usize,
     pub case: AssignmentCase,
@@ -85,9 +87,10 @@ pub struct Scenario {
     /// Rounds before latency is recorded.
     #[serde(default)]
     pub warmup_rounds: u64,
-    /// Where the agents' Zenoh sessions connect (the Zenoh transport).
+    /// What the transport put here for its agents (a Zenoh run's router links), as its own
+    /// type serialises it.
     #[serde(default)]
-    pub zenoh: Option<ZenohLinks>,
+    pub transport_config: Option<serde_json::Value>,
     /// The agents on this host, in a mixed team (the others are reached through the host's
     /// bridge); `None`: every agent is here.
     #[serde(default)]
@@ -116,7 +119,7 @@ pub enum ScenarioError {
 
 impl Scenario {
     /// The scenario of agent processes computing `workload` on `graph`, run as `options`
-    /// say; the run's names (id, iceoryx2 prefix and root, board) are left to whoever starts
+    /// say; the run's names (id, prefix, transport root, board) are left to whoever starts
     /// the run (the launcher, or the members of an independently started team).
     pub fn new(workload: Workload<'_>, graph: &Graph, options: &RunOptions) -> Self {
         let robots = graph.robots();
@@ -124,8 +127,8 @@ impl Scenario {
         // to the round limit.
         let blank = |tasks: usize| Self {
             run_id: String::new(),
-            iceoryx_prefix: String::new(),
-            iceoryx_root: PathBuf::new(),
+            prefix: String::new(),
+            transport_root: PathBuf::new(),
             robots,
             tasks,
             case: if robots == tasks {
@@ -155,7 +158,7 @@ impl Scenario {
             transport: options.transport(),
             wait: options.wait(),
             warmup_rounds: options.warmup_rounds(),
-            zenoh: None,
+            transport_config: None,
             local_agents: None,
         };
         let bits = |values: &[f64]| values.iter().map(|v| v.to_bits()).collect();
@@ -234,6 +237,16 @@ impl Scenario {
             .map_err(|e| ScenarioError::Inconsistent(e.to_string()))?;
         TaskAssignmentProblem::internal_from(costs, self.case)
             .map_err(|e| ScenarioError::Inconsistent(e.to_string()))
+    }
+
+    /// Where the run lives, for its transport (`dir`: the run directory).
+    pub fn place(&self, dir: &Path) -> RunPlace {
+        RunPlace {
+            prefix: self.prefix.clone(),
+            root: self.transport_root.clone(),
+            dir: dir.to_path_buf(),
+            board_shm: self.board_shm.clone(),
+        }
     }
 
     pub fn graph(&self) -> Result<Graph, ScenarioError> {

@@ -21,17 +21,17 @@ const PARTS: [(&str, &[&str]); 3] = [
     ("topology", &["edges", "topology", "diameter"]),
     (
         "method",
-        &["method", "workload", "qp_projection", "adaptive_rho"],
+        &["method", "settings", "workload", "adaptive_rho"],
     ),
 ];
 
 /// Fields that name one run or one host, not the team.
 const RUN_ONLY: [&str; 10] = [
     "run_id",
-    "iceoryx_prefix",
-    "iceoryx_root",
+    "prefix",
+    "transport_root",
     "board_shm",
-    "zenoh",
+    "transport_config",
     "local_agents",
     "round_timeout_ms",
     "startup_timeout_ms",
@@ -39,7 +39,7 @@ const RUN_ONLY: [&str; 10] = [
     "warmup_rounds",
 ];
 
-/// Names of the parts, then "parameters" (seed, ρ, γ, tolerance, stop rule, max rounds,
+/// Names of the parts, then "parameters" (seed, ρ, tolerance, stop rule, max rounds,
 /// transport, global barrier, payload length).
 const PART_NAMES: [&str; 4] = ["costs", "topology", "method", "parameters"];
 
@@ -119,35 +119,45 @@ impl TeamDigest {
 
     /// Refuses `who` (e.g. "host b") if the running team's digest `running` is another:
     /// names the parts that differ.
-    pub fn compare(&self, running: &Self, who: &str) -> Result<(), String> {
+    pub fn compare(&self, running: &Self, who: &str) -> Result<(), OtherTeam> {
         if running == self {
             return Ok(());
         }
-        let differs: Vec<&str> = PART_NAMES
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| self.words[4 + k] != running.words[4 + k])
-            .map(|(_, name)| *name)
-            .collect();
-        Err(format!(
-            "{who}'s team file differs from the running team's (digest {}… vs {}…): {} differ{}",
-            self.short(),
-            running.short(),
-            differs.join(" and "),
-            if differs.len() == 1 && !differs[0].ends_with('s') {
-                "s"
-            } else {
-                ""
-            }
-        ))
+        Err(OtherTeam {
+            who: who.to_string(),
+            ours: self.short(),
+            running: running.short(),
+            differs: PART_NAMES
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| self.words[4 + k] != running.words[4 + k])
+                .map(|(_, name)| *name)
+                .collect(),
+        })
     }
 
     /// Refuses agent `agent` if `board`'s team is another: names the first part that
     /// differs. A board without a digest yet (a team being created) is no team to compare.
-    pub fn check(&self, board: &Board, agent: usize) -> Result<(), String> {
+    pub fn check(&self, board: &Board, agent: usize) -> Result<(), OtherTeam> {
         let Some(running) = board.digest() else {
             return Ok(());
         };
         self.compare(&Self { words: running }, &format!("agent {agent}"))
     }
+}
+
+/// A member whose team file is not the running team's: who, both digests (short) and the
+/// parts that differ.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "{who}'s team file differs from the running team's (digest {ours}… vs {running}…): {} differ{}",
+    differs.join(" and "),
+    if differs.len() == 1 && !differs[0].ends_with('s') { "s" } else { "" }
+)]
+pub struct OtherTeam {
+    pub who: String,
+    pub ours: String,
+    pub running: String,
+    /// Names of the parts that differ ("costs", "topology", "method", "parameters").
+    pub differs: Vec<&'static str>,
 }

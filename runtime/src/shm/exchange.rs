@@ -19,35 +19,17 @@
 //! published the round `k` that was gathered.
 
 use crate::board::{Board, Rendezvous, arrivals_target};
+use crate::endpoint::ConnectRequest;
 use crate::error_text::one_line;
 use crate::exchange::header::RoundHeader;
 use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::Fault;
 use crate::futex;
-use crate::shm::table::SlotTable;
+use crate::shm::table::{SlotTable, table_name};
 use crate::wait::WaitPolicy;
 use admm_ta_agents::agent::Inbox;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
-
-/// What one agent process needs to join an `shm` run.
-#[derive(Debug, Clone)]
-pub struct ShmEndpoint {
-    pub index: usize,
-    pub neighbours: Vec<usize>,
-    /// Degree of every agent of the run (for the last-arrival rule).
-    pub degrees: Vec<usize>,
-    pub payload_len: usize,
-    /// Tasks of the team (checked against the running team's on the board).
-    pub tasks: usize,
-    pub policy: WaitPolicy,
-    /// Name of the run's board (created by the launcher).
-    pub board_shm: String,
-    /// Name of the run's slot table (created by the launcher).
-    pub table_shm: String,
-    /// Started by a launcher: stop when it is gone.
-    pub supervised: bool,
-}
 
 /// One agent's end of the `shm` transport.
 pub struct ShmExchange {
@@ -85,18 +67,22 @@ struct Waiting {
 impl ShmExchange {
     /// Opens the run's board and slot table, then waits (until `deadline`) for the whole
     /// team to do the same, so that no round deadline starts while an agent is starting.
-    pub fn connect(endpoint: &ShmEndpoint, deadline: Instant) -> Result<Self, ExchangeError> {
+    pub fn connect(endpoint: &ConnectRequest, deadline: Instant) -> Result<Self, ExchangeError> {
         let i = endpoint.index;
-        let agents = endpoint.degrees.len();
-        let board = Board::open(&endpoint.board_shm, agents)
+        let agents = endpoint.agents();
+        let board = Board::open(&endpoint.run.board_shm, agents)
             .and_then(|board| {
                 board.check_shape(endpoint.tasks, endpoint.payload_len)?;
                 Ok(board)
             })
             .map_err(|e| transport(i, one_line(&e)))?;
         board.set_registered(i);
-        let table = SlotTable::open(&endpoint.table_shm, agents, endpoint.payload_len)
-            .map_err(|e| transport(i, one_line(&e)))?;
+        let table = SlotTable::open(
+            &table_name(&endpoint.run.prefix),
+            agents,
+            endpoint.payload_len,
+        )
+        .map_err(|e| transport(i, one_line(&e)))?;
         board.set_connected(i);
         let started = Instant::now();
         let team: Vec<usize> = (0..agents).collect();
@@ -131,7 +117,7 @@ impl ShmExchange {
             table,
             board,
             gathered: 0,
-            fault: None,
+            fault: endpoint.fault,
             launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
         })
     }

@@ -7,6 +7,8 @@
 //! * [`table`]: the table (created by the launcher next to the run's board, owner-only,
 //!   pre-faulted, removed with the run): per agent a published-round word and two slots
 //!   (round parity), each a round header, a payload length and the payload.
+//! * [`process`]: how the process orchestration runs it (the slot table before the agents,
+//!   the agents' connection and blame);
 //! * [`exchange`]: one agent's end: it writes its next payload in place into its own slot
 //!   of the next parity, publishes it with a release store of its published-round word,
 //!   counts it at every neighbour (the board's arrival counters) and futex-wakes only the
@@ -14,4 +16,5 @@
 //!   load. Failures, deadlines, stop requests and blame work through the board as for `uds`.
 
 pub mod exchange;
+pub mod process;
 pub mod table;

@@ -27,10 +27,12 @@
 //! resends and its `Exchange` implementation share the same private slots and session;
 //! split, they would have to expose them to each other.
 
+use crate::endpoint::ConnectRequest;
 use crate::exchange::header::{RoundHeader, words_as_bytes, words_as_bytes_mut};
 use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::Fault;
 use crate::wait::WaitPolicy;
+use crate::zenoh_net::ZenohError;
 use crate::zenoh_net::links::{AGENT_LISTEN, ZenohLinks};
 use crate::zenoh_net::session::{
     self, Role, alive_agents, alive_keys, announce_failure, missing_hosts, watch_failures,
@@ -65,21 +67,6 @@ const RESEND_AT_MOST_EVERY: Duration = Duration::from_secs(1);
 
 /// How often start-up asks which neighbours are present.
 const PRESENCE_POLL: Duration = Duration::from_millis(50);
-
-/// What one agent needs to join a Zenoh run.
-#[derive(Debug, Clone)]
-pub struct ZenohEndpoint {
-    pub index: usize,
-    pub neighbours: Vec<usize>,
-    pub payload_len: usize,
-    pub policy: WaitPolicy,
-    pub links: ZenohLinks,
-    /// Started by a launcher: stop when it is gone.
-    pub supervised: bool,
-    /// The team's digest in hex (a member of a multi-host team): refused before round 0
-    /// if the running team's, that of the host that started first, is another.
-    pub team_digest: Option<String>,
-}
 
 /// A received message in its parity slot.
 struct Slot {
@@ -197,7 +184,7 @@ fn receive(
 
 /// The running team's digest (hex): that of the host that started first, if any host
 /// announced one.
-fn running_digest(session: &Session, links: &ZenohLinks) -> Result<Option<String>, String> {
+fn running_digest(session: &Session, links: &ZenohLinks) -> Result<Option<String>, ZenohError> {
     Ok(alive_keys(session, links.digest_all())?
         .iter()
         .filter_map(|k| links.of_digest_key(k))
@@ -208,10 +195,13 @@ fn running_digest(session: &Session, links: &ZenohLinks) -> Result<Option<String
 impl ZenohExchange {
     /// Opens this agent's Zenoh session, declares its subscriptions, publisher and token,
     /// and waits (until `deadline`) for every neighbour's token.
-    pub fn connect(endpoint: &ZenohEndpoint, deadline: Instant) -> Result<Self, ExchangeError> {
+    pub fn connect(
+        endpoint: &ConnectRequest,
+        links: &ZenohLinks,
+        deadline: Instant,
+    ) -> Result<Self, ExchangeError> {
         let i = endpoint.index;
         let err = |what: String| transport(i, what);
-        let links = &endpoint.links;
         let session = session::open(
             &Role::Agent {
                 within: deadline.saturating_duration_since(Instant::now()),
@@ -219,7 +209,7 @@ impl ZenohExchange {
             &[AGENT_LISTEN.to_string()],
             &links.connect,
         )
-        .map_err(err)?;
+        .map_err(|e| err(e.to_string()))?;
         let degree = endpoint.neighbours.len();
         let message_words = RoundHeader::WORDS + endpoint.payload_len;
         let slot = || Slot {
@@ -260,7 +250,7 @@ impl ZenohExchange {
                         inbound.stopped.get_or_insert(signal);
                     });
                 })
-                .map_err(err)?,
+                .map_err(|e| err(e.to_string()))?,
             );
         }
         {
@@ -271,7 +261,7 @@ impl ZenohExchange {
                         inbound.failed.get_or_insert(failed);
                     });
                 })
-                .map_err(err)?,
+                .map_err(|e| err(e.to_string()))?,
             );
         }
         {
@@ -311,7 +301,7 @@ impl ZenohExchange {
             .map_err(|e| err(format!("cannot declare the publisher: {e}")))?;
         // Every host up first: each watches the whole run from its start.
         loop {
-            let missing = missing_hosts(&session, links).map_err(err)?;
+            let missing = missing_hosts(&session, links).map_err(|e| err(e.to_string()))?;
             if missing.is_empty() {
                 break;
             }
@@ -338,9 +328,8 @@ impl ZenohExchange {
             }
             std::thread::sleep(PRESENCE_POLL);
         }
-        if let Some(ours) = &endpoint.team_digest
-            && let Some(running) = running_digest(&session, links).map_err(err)?
-            && &running != ours
+        if let Some(running) = running_digest(&session, links).map_err(|e| err(e.to_string()))?
+            && running != endpoint.team_digest
         {
             return Err(ExchangeError::OtherTeam { agent: i, running });
         }
@@ -362,7 +351,7 @@ impl ZenohExchange {
             sent: [(None, ZBytes::new()), (None, ZBytes::new())],
             resent: 0,
             gathered: 0,
-            fault: None,
+            fault: endpoint.fault,
             seen: 0,
             launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
             links: links.clone(),
@@ -382,7 +371,8 @@ impl ZenohExchange {
         loop {
             // The subscriber may miss tokens declared while it propagated: ask as well.
             drop(inbound);
-            let alive = alive_agents(&self.session, links).map_err(|e| transport(self.index, e))?;
+            let alive = alive_agents(&self.session, links)
+                .map_err(|e| transport(self.index, e.to_string()))?;
             inbound = self.shared.lock();
             for (k, j) in self.neighbours.iter().enumerate() {
                 inbound.present[k] |= alive.contains(j);

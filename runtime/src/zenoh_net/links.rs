@@ -108,15 +108,22 @@ pub const AGENT_LISTEN: &str = "tcp/127.0.0.1:0";
 
 /// Checks that `endpoint` is a Zenoh TCP endpoint `tcp/ADDRESS:PORT` (the only link this
 /// build carries).
-pub fn check_endpoint(endpoint: &str) -> Result<(), String> {
+pub fn check_endpoint(endpoint: &str) -> Result<(), NotAnEndpoint> {
     endpoint
         .strip_prefix("tcp/")
         .and_then(|address| address.rsplit_once(':'))
         .filter(|(host, port)| !host.is_empty() && port.parse::<u16>().is_ok())
         .map(|_| ())
-        .ok_or_else(|| {
-            format!("'{endpoint}' is not a Zenoh TCP endpoint like tcp/192.168.1.10:7447")
+        .ok_or_else(|| NotAnEndpoint {
+            endpoint: endpoint.to_string(),
         })
+}
+
+/// A text that is no Zenoh TCP endpoint.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("'{endpoint}' is not a Zenoh TCP endpoint like tcp/192.168.1.10:7447")]
+pub struct NotAnEndpoint {
+    pub endpoint: String,
 }
 
 #[cfg(test)]

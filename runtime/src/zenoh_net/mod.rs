@@ -10,13 +10,16 @@
 //!   launcher runs one on loopback for single-machine runs; `admm-ta host` runs one per
 //!   machine of a multi-host team).
 //!
-//! The hosts of a multi-host team and the mixed mode's bridge (iceoryx2 within a host, Zenoh
-//! between hosts) use both transports, so they live above them, in [`crate::process`].
+//! * [`process`] (always built): how the process orchestration runs it (the launcher's
+//!   loopback router, the agents' connection and blame, failures announced on Zenoh).
 //!
-//! Built without the `zenoh` feature, every Zenoh entry point fails with
-//! [`crate::transport::ZenohNotBuilt`].
+//! The hosts of a multi-host team and the mixed mode's bridge (iceoryx2 within a host, Zenoh
+//! between hosts) use both transports, so they live above them, in [`crate::team`].
+//!
+//! Built without the `zenoh` feature, every Zenoh entry point fails with [`ZenohNotBuilt`].
 
 pub mod links;
+pub mod process;
 
 #[cfg(feature = "zenoh")]
 pub mod exchange;
@@ -24,3 +27,29 @@ pub mod exchange;
 pub mod router;
 #[cfg(feature = "zenoh")]
 pub(crate) mod session;
+
+/// A Zenoh entry point in a build without the `zenoh` feature.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "this admm-ta was built without Zenoh support: rebuild with `cargo build --release --features zenoh`"
+)]
+pub struct ZenohNotBuilt;
+
+/// What Zenoh refused, with Zenoh's own words.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{what}: {detail}")]
+pub struct ZenohError {
+    /// What was tried.
+    pub what: String,
+    /// Zenoh's error, as its text (Zenoh's errors are neither `Clone` nor `PartialEq`).
+    pub detail: String,
+}
+
+impl ZenohError {
+    pub fn new(what: impl Into<String>, error: impl std::fmt::Display) -> Self {
+        Self {
+            what: what.into(),
+            detail: error.to_string(),
+        }
+    }
+}

@@ -2,6 +2,7 @@
 //! routers. Agents of one host then link to each other directly (Zenoh's gossip introduces
 //! them), so the router carries start-up discovery and the cross-host traffic.
 
+use crate::zenoh_net::ZenohError;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::session::{self, Role};
 use std::net::TcpListener;
@@ -17,7 +18,7 @@ pub struct HostRouter {
 impl HostRouter {
     /// A router listening on `endpoint` and linking to the routers at `others` (retried in
     /// the background until they come up).
-    pub fn open(endpoint: &str, others: &[String]) -> Result<Self, String> {
+    pub fn open(endpoint: &str, others: &[String]) -> Result<Self, ZenohError> {
         let session = session::open(&Role::Router, &[endpoint.to_string()], others)?;
         Ok(Self {
             endpoint: endpoint.to_string(),
@@ -26,21 +27,21 @@ impl HostRouter {
     }
 
     /// A router on a free port of the loopback interface, for a single-machine run.
-    pub fn open_on_loopback() -> Result<Self, String> {
+    pub fn open_on_loopback() -> Result<Self, ZenohError> {
         // The port is free when asked; another process may take it before Zenoh binds it,
         // so try a few.
-        let mut last = String::new();
+        let mut last = None;
         for _ in 0..5 {
             let port = TcpListener::bind("127.0.0.1:0")
                 .and_then(|l| l.local_addr())
-                .map_err(|e| format!("cannot find a free loopback port: {e}"))?
+                .map_err(|e| ZenohError::new("cannot find a free loopback port", e))?
                 .port();
             match Self::open(&format!("tcp/127.0.0.1:{port}"), &[]) {
                 Ok(router) => return Ok(router),
-                Err(e) => last = e,
+                Err(e) => last = Some(e),
             }
         }
-        Err(last)
+        Err(last.expect("five tries"))
     }
 
     /// Announces `agent` as failed on the run of `links`, so that its Zenoh agents stop.

@@ -5,6 +5,7 @@
 //! on a ring); routers link the hosts and carry the traffic between them. Multicast scouting is off everywhere: a team names its endpoints (robot networks
 //! often drop multicast, and a test must not find another test's sessions).
 
+use crate::zenoh_net::ZenohError;
 use std::time::Duration;
 use zenoh::{Config, Session, Wait};
 
@@ -16,10 +17,10 @@ pub(crate) enum Role {
     Router,
 }
 
-fn set(config: &mut Config, key: &str, value: &str) -> Result<(), String> {
+fn set(config: &mut Config, key: &str, value: &str) -> Result<(), ZenohError> {
     config
         .insert_json5(key, value)
-        .map_err(|e| format!("Zenoh configuration {key} = {value}: {e}"))
+        .map_err(|e| ZenohError::new(format!("Zenoh configuration {key} = {value}"), e))
 }
 
 fn list(items: &[String]) -> String {
@@ -28,7 +29,11 @@ fn list(items: &[String]) -> String {
 
 /// The configuration of a session of `role` listening on `listen` and connecting to
 /// `connect`.
-pub(crate) fn config(role: &Role, listen: &[String], connect: &[String]) -> Result<Config, String> {
+pub(crate) fn config(
+    role: &Role,
+    listen: &[String],
+    connect: &[String],
+) -> Result<Config, ZenohError> {
     let mut config = Config::default();
     let mode = match role {
         Role::Agent { .. } => "\"peer\"",
@@ -53,21 +58,28 @@ pub(crate) fn config(role: &Role, listen: &[String], connect: &[String]) -> Resu
 }
 
 /// Opens a session of `role`.
-pub(crate) fn open(role: &Role, listen: &[String], connect: &[String]) -> Result<Session, String> {
+pub(crate) fn open(
+    role: &Role,
+    listen: &[String],
+    connect: &[String],
+) -> Result<Session, ZenohError> {
     let config = config(role, listen, connect)?;
     zenoh::open(config).wait().map_err(|e| {
-        format!("cannot open a Zenoh session (listen {listen:?}, connect {connect:?}): {e}")
+        ZenohError::new(
+            format!("cannot open a Zenoh session (listen {listen:?}, connect {connect:?})"),
+            e,
+        )
     })
 }
 
 /// The keys below `key` with a liveliness token on the network now.
-pub(crate) fn alive_keys(session: &Session, key: String) -> Result<Vec<String>, String> {
+pub(crate) fn alive_keys(session: &Session, key: String) -> Result<Vec<String>, ZenohError> {
     let replies = session
         .liveliness()
         .get(&key)
         .timeout(Duration::from_secs(1))
         .wait()
-        .map_err(|e| format!("cannot ask for the liveliness tokens {key}: {e}"))?;
+        .map_err(|e| ZenohError::new(format!("cannot ask for the liveliness tokens {key}"), e))?;
     let mut keys = Vec::new();
     while let Ok(reply) = replies.recv() {
         if let Ok(sample) = reply.result() {
@@ -81,7 +93,7 @@ pub(crate) fn alive_keys(session: &Session, key: String) -> Result<Vec<String>, 
 pub(crate) fn missing_hosts(
     session: &Session,
     links: &crate::zenoh_net::links::ZenohLinks,
-) -> Result<Vec<String>, String> {
+) -> Result<Vec<String>, ZenohError> {
     let up = alive_keys(session, links.host_all())?;
     Ok(links
         .hosts
@@ -98,7 +110,7 @@ pub(crate) fn missing_hosts(
 pub(crate) fn alive_agents(
     session: &Session,
     links: &crate::zenoh_net::links::ZenohLinks,
-) -> Result<Vec<usize>, String> {
+) -> Result<Vec<usize>, ZenohError> {
     Ok(alive_keys(session, links.alive_all())?
         .iter()
         .filter_map(|k| links.agent_of_alive_key(k))
@@ -136,7 +148,7 @@ pub(crate) fn watch_stops(
     session: &Session,
     links: &crate::zenoh_net::links::ZenohLinks,
     on_stop: impl Fn(i32) + Send + Sync + 'static,
-) -> Result<zenoh::pubsub::Subscriber<()>, String> {
+) -> Result<zenoh::pubsub::Subscriber<()>, ZenohError> {
     session
         .declare_subscriber(links.failure_key())
         .callback(move |sample| {
@@ -150,7 +162,7 @@ pub(crate) fn watch_stops(
             }
         })
         .wait()
-        .map_err(|e| format!("cannot watch the run's stop requests: {e}"))
+        .map_err(|e| ZenohError::new("cannot watch the run's stop requests", e))
 }
 
 /// Calls `on_failure` with every agent announced as failed on the run of `links`.
@@ -158,7 +170,7 @@ pub(crate) fn watch_failures(
     session: &Session,
     links: &crate::zenoh_net::links::ZenohLinks,
     on_failure: impl Fn(usize) + Send + Sync + 'static,
-) -> Result<zenoh::pubsub::Subscriber<()>, String> {
+) -> Result<zenoh::pubsub::Subscriber<()>, ZenohError> {
     session
         .declare_subscriber(links.failure_key())
         .callback(move |sample| {
@@ -170,5 +182,5 @@ pub(crate) fn watch_failures(
             }
         })
         .wait()
-        .map_err(|e| format!("cannot watch the run's failure announcements: {e}"))
+        .map_err(|e| ZenohError::new("cannot watch the run's failure announcements", e))
 }

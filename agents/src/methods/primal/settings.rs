@@ -191,7 +191,7 @@ pub struct FastParams {
     /// Size `ε` of the tie-break matrix `E` (entries `ε · U[0, 1)`, the same at every
     /// robot) added to `G_i` by the readout: with exact ties (duplicate robots, integer
     /// costs) robots could read different optima forever without it (every duplicate-robot
-    /// instance of `runtime/tests/fast_primal.rs` certifies with it). The readout then minimises `G_i + E` exactly, so its
+    /// instance of `runtime/tests/all/fast_primal.rs` certifies with it). The readout then minimises `G_i + E` exactly, so its
     /// certificate slack for `G_i` is at most `n ε`; [`FastParams::new`] takes
     /// `ε = tolerance / (2 n²)`, half of a robot's share `tolerance / n`. 0: no tie-break
     /// (and no certificate, for runs without a tolerance).

@@ -9,8 +9,8 @@
 //! and one task, so an empty matrix is refused as bad input ("the cost file is empty" or "the
 //! problem has zero robots/tasks").
 
+use crate::common;
 use admm_ta::agents::problem::{AssignmentCase, IDLE, ProblemError};
-mod common;
 
 use admm_ta::{CaseChoice, CostMatrix, Method, TaskAssignmentProblem};
 use common::solve_checked as solve;

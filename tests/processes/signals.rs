@@ -8,7 +8,7 @@
 //! Deadlines for "finishes" are generous (a loaded 2-core CI machine); the assertions on
 //! what happened are exact. The measured times are printed.
 
-mod common;
+use crate::common;
 
 use common::{children_of, leftovers_of, wait_with_deadline};
 use std::os::unix::process::CommandExt;

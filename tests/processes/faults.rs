@@ -4,7 +4,7 @@
 //! other agent stopped, every child reaped and nothing of the run left in `/dev/shm` or the
 //! run directory.
 
-mod common;
+use crate::common;
 
 use common::{children_of, leftovers_of, wait_with_deadline};
 use std::process::{Child, Command, Stdio};

@@ -1,6 +1,6 @@
 //! Agents started independently, in any order, by any supervisor (systemd, a shell script, a
 //! ROS launch file): `admm-ta agent --team FILE --id I`. No launcher: every agent reads the
-//! same team file ([`crate::process::team_file`]), derives the same problem, graph, settings
+//! same team file ([`crate::team::team_file`]), derives the same problem, graph, settings
 //! and namespace from it, finds its neighbours through iceoryx2 service discovery, waits for
 //! them until the start-up deadline (naming the ones that never came), runs, and writes
 //! `result-I.json` into the team's results directory; `admm-ta collect --team FILE`
@@ -13,18 +13,16 @@
 //! taken over by the next team of that name. One team per name at a time.
 
 use crate::board::Board;
-use crate::error_text::one_line;
 use crate::exchange::round_loop::{AgentStop, merge_outcomes};
-use crate::ipc::nodes::{cleanup_dead_nodes, run_config};
 use crate::latency::LatencySummary;
-use crate::options::given::FrontEnd;
 use crate::process::agent::{AgentReport, run_scenario};
-use crate::process::connect::RunResources;
+use crate::process::connect::{RunResources, cleanup_dead};
 use crate::process::member_error::MemberError;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::process::team_digest::TeamDigest;
-use crate::process::team_file::{HostEntry, Team};
+use crate::team::errors::{CollectError, JoinError, TeamFileError};
+use crate::team::team_file::{HostEntry, Team};
 use crate::workload::Workload;
 use crate::workload::plan::prepare;
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
@@ -44,23 +42,25 @@ pub fn member_result(results: &Path, id: usize) -> PathBuf {
 struct FileLock(std::fs::File);
 
 impl FileLock {
-    fn acquire(path: &Path, deadline: Instant) -> Result<Self, String> {
+    fn acquire(path: &Path, deadline: Instant) -> Result<Self, JoinError> {
         let file = std::fs::OpenOptions::new()
             .create(true)
             .truncate(false)
             .write(true)
             .open(path)
-            .map_err(|e| format!("cannot open the team lock {}: {e}", path.display()))?;
+            .map_err(|source| JoinError::Lock {
+                path: path.to_path_buf(),
+                source,
+            })?;
         loop {
             // SAFETY: flock on a descriptor this function owns.
             if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } == 0 {
                 return Ok(Self(file));
             }
             if Instant::now() >= deadline {
-                return Err(format!(
-                    "the team lock {} stayed taken until the start-up deadline",
-                    path.display()
-                ));
+                return Err(JoinError::LockTaken {
+                    path: path.to_path_buf(),
+                });
             }
             std::thread::sleep(Duration::from_millis(2));
         }
@@ -76,22 +76,18 @@ impl Drop for FileLock {
 
 /// The scenario every agent of the team derives from the team file, before the names of
 /// one machine's run (what the team's digest is over).
-pub(crate) fn team_scenario(team: &Team) -> Result<Scenario, String> {
+pub(crate) fn team_scenario(team: &Team) -> Result<Scenario, TeamFileError> {
     let (problem, graph) = team.problem_and_graph()?;
-    let options = team
-        .solve_options()
-        .map_err(|e| e.in_terms_of(FrontEnd::TeamFile))?;
+    let options = team.solve_options().map_err(TeamFileError::Options)?;
     // The options refused a centralized method on the team's process transport.
-    let setup = options.method_setup().ok_or_else(|| {
-        format!(
-            "method {} is solved centrally: it has no agents",
-            options.method().name()
-        )
-    })?;
+    let setup = options
+        .method_setup()
+        .ok_or_else(|| TeamFileError::Centralized {
+            method: options.method().name(),
+        })?;
     // The agents solve the normalised problem, as a solve's do.
-    let plan = prepare(problem.internal(), &graph, &options, setup).map_err(|e| e.to_string())?;
-    let stop = LocalCertifiedStop::new(plan.diameter, problem.robots(), plan.tolerance)
-        .map_err(|e| e.to_string())?
+    let plan = prepare(problem.internal(), &graph, &options, setup)?;
+    let stop = LocalCertifiedStop::new(plan.diameter, problem.robots(), plan.tolerance)?
         .with_cadence(plan.stop_cadence);
     let scenario = Scenario::new(
         Workload::Solve {
@@ -105,20 +101,21 @@ pub(crate) fn team_scenario(team: &Team) -> Result<Scenario, String> {
     Ok(scenario)
 }
 
-/// The scenario every agent of the team derives from the team file, in the iceoryx2
-/// namespace of its machine (`host`, in a mixed team: each host has its own).
+/// The scenario every agent of the team derives from the team file, in the namespace of
+/// its machine (`host`, in a mixed team: each host has its own); a refusal.
 pub(crate) fn member_scenario(
     team: &Team,
     host: Option<&HostEntry>,
-) -> Result<(Scenario, RunNamespace), String> {
-    let mut scenario = team_scenario(team)?;
+) -> Result<(Scenario, RunNamespace), MemberError> {
+    let mut scenario = team_scenario(team).map_err(MemberError::refused)?;
     let namespace = match host {
-        Some(host) => RunNamespace::for_team(&format!("{}-{}", team.file.run, host.name))?,
-        None => RunNamespace::for_team(&team.file.run)?,
-    };
+        Some(host) => RunNamespace::for_team(&format!("{}-{}", team.file.run, host.name)),
+        None => RunNamespace::for_team(&team.file.run),
+    }
+    .map_err(MemberError::refused)?;
     scenario.run_id = namespace.id.clone();
-    scenario.iceoryx_prefix = namespace.prefix.clone();
-    scenario.iceoryx_root = namespace.iceoryx_root();
+    scenario.prefix = namespace.prefix.clone();
+    scenario.transport_root = namespace.transport_root();
     scenario.board_shm = namespace.board_shm();
     scenario.local_agents = host.map(|h| h.agents.clone());
     Ok((scenario, namespace))
@@ -143,7 +140,7 @@ impl Membership {
         namespace: &RunNamespace,
         slots: &[usize],
         deadline: Instant,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, JoinError> {
         let _lock = FileLock::acquire(&namespace.dir.join("lock"), deadline)?;
         let n = scenario.robots;
         let (board, fresh) = Board::open_or_create_for_team(
@@ -151,8 +148,7 @@ impl Membership {
             n,
             scenario.tasks,
             scenario.payload_len(),
-        )
-        .map_err(|e| one_line(&e))?;
+        )?;
         // The first member writes the team's digest; the others must match it.
         let digest = TeamDigest::of(scenario);
         if board.digest().is_none() {
@@ -166,28 +162,23 @@ impl Membership {
         // runs on; so is a copy of one that already took part in this run.
         for &slot in slots {
             if let Some(pid) = board.member_pid(slot).filter(|_| board.member_alive(slot)) {
-                return Err(format!(
-                    "agent {slot} of this team is already running (pid {pid}): one process per agent"
-                ));
+                return Err(JoinError::AlreadyRunning { slot, pid });
             }
             if !fresh && board.registered(slot) {
-                return Err(format!(
-                    "agent {slot} already took part in this team's run: it cannot join it twice"
-                ));
+                return Err(JoinError::TookPart { slot });
             }
         }
         for &slot in slots {
             board.set_member_pid(slot, std::process::id());
         }
         // Mode 0700, ours, not a symlink (its name in /dev/shm is predictable).
-        crate::process::private_dir::ensure_private_dir(&scenario.iceoryx_root)?;
+        crate::process::private_dir::ensure_private_dir(&scenario.transport_root)?;
         let resources = if fresh {
             // Nodes of a dead team of this name.
-            let _ = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)
-                .map(|c| cleanup_dead_nodes(&c));
+            let _ = cleanup_dead(scenario, &namespace.dir);
             // The first member creates every service of the team before anybody opens one
             // (the others wait for the lock we hold).
-            Some(RunResources::create(scenario)?)
+            Some(RunResources::create(scenario, &namespace.dir)?)
         } else {
             None
         };
@@ -241,12 +232,13 @@ impl Membership {
 pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberError> {
     let _signals = crate::signals::install();
     let started = Instant::now();
-    let team = Team::read(team_path).map_err(MemberError::Refused)?;
+    let team = Team::read(team_path).map_err(MemberError::refused)?;
     let n = team.file.robots;
     if id >= n {
-        return Err(MemberError::Refused(format!(
-            "--id {id} is out of range for a team of {n} robots"
-        )));
+        return Err(MemberError::refused(JoinError::NoSuchAgent {
+            id,
+            robots: n,
+        }));
     }
     let host = team
         .file
@@ -254,12 +246,16 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
         .bridged()
         .then(|| team.host_of(id))
         .flatten();
-    let (mut scenario, namespace) = member_scenario(&team, host).map_err(MemberError::Refused)?;
+    let (mut scenario, namespace) = member_scenario(&team, host)?;
     let degree = scenario.graph().map_or(n, |g| g.degree(id));
-    crate::process::limits::check(scenario.transport, 1, degree).map_err(MemberError::Refused)?;
+    crate::process::limits::check(scenario.transport, 1, degree).map_err(MemberError::refused)?;
     let results = team.results_dir();
-    std::fs::create_dir_all(&results)
-        .map_err(|e| MemberError::Refused(format!("cannot create {}: {e}", results.display())))?;
+    std::fs::create_dir_all(&results).map_err(|source| {
+        MemberError::refused(JoinError::Results {
+            path: results.clone(),
+            source,
+        })
+    })?;
     let result = member_result(&results, id);
     let digest = Some(TeamDigest::of(&scenario).to_hex());
     // A result of an earlier run must not pass for this one's.
@@ -267,7 +263,7 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
     if !team.file.transport.host_board() {
         // No shared memory: presence, failures and cleanup are Zenoh's.
         let host = team.host_of(id).expect("checked: every robot is on a host");
-        scenario.zenoh = Some(team.zenoh_links(host));
+        scenario.transport_config = serde_json::to_value(team.zenoh_links(host)).ok();
         let startup =
             Duration::from_millis(scenario.startup_timeout_ms).saturating_sub(started.elapsed());
         scenario.startup_timeout_ms = startup.as_millis() as u64;
@@ -279,7 +275,7 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
     }
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
     let membership =
-        Membership::join(&scenario, &namespace, &[id], deadline).map_err(MemberError::Refused)?;
+        Membership::join(&scenario, &namespace, &[id], deadline).map_err(MemberError::refused)?;
     let report = run_scenario(&scenario, id, &namespace.dir, &result, false, digest);
     if let Some(signal) = crate::signals::received() {
         // A termination signal (to us, or to another member: then it is on the board
@@ -321,7 +317,7 @@ pub struct TeamResult {
 }
 
 /// Reads every agent's result and checks they describe one feasible assignment.
-pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
+pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, CollectError> {
     let team = Team::read(team_path)?;
     let n = team.file.robots;
     let (problem, _) = team.problem_and_graph()?;
@@ -332,49 +328,54 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
     for id in 0..n {
         let path = member_result(&results, id);
         match std::fs::read_to_string(&path) {
-            Ok(text) => reports.push(
-                serde_json::from_str::<AgentReport>(&text)
-                    .map_err(|e| format!("{} is not an agent result: {e}", path.display()))?,
-            ),
+            Ok(text) => reports.push(serde_json::from_str::<AgentReport>(&text).map_err(
+                |source| CollectError::NotAResult {
+                    path: path.clone(),
+                    source,
+                },
+            )?),
             Err(_) => missing.push(id),
         }
     }
     if !missing.is_empty() {
-        return Err(format!(
-            "agent(s) {missing:?} left no result in {} (still running, failed, or never started; see their output)",
-            results.display()
-        ));
+        return Err(CollectError::Missing {
+            missing,
+            dir: results,
+        });
     }
     if let Some((id, report)) = reports
         .iter()
         .enumerate()
         .find(|(id, r)| r.outcome.index != *id)
     {
-        return Err(format!(
-            "{} is agent {}'s result, not agent {id}'s",
-            member_result(&results, id).display(),
-            report.outcome.index
-        ));
+        return Err(CollectError::WrongAgent {
+            path: member_result(&results, id),
+            found: report.outcome.index,
+            id,
+        });
     }
     if let Some(id) = reports
         .iter()
         .position(|r| r.team.as_deref() != Some(digest.as_str()))
     {
-        return Err(format!(
-            "{} is not a result of this team (another team file, or the team file changed since the run)",
-            member_result(&results, id).display()
-        ));
+        return Err(CollectError::OtherTeam {
+            path: member_result(&results, id),
+        });
     }
     let rounds: Vec<u64> = reports.iter().map(|r| r.outcome.rounds).collect();
     let certified: Vec<Option<u64>> = reports.iter().map(|r| r.outcome.certified_round).collect();
     if rounds.iter().any(|&r| r != rounds[0]) || certified.iter().any(|c| *c != certified[0]) {
-        return Err(format!(
-            "the results in {} come from different runs (rounds {rounds:?})",
-            results.display()
-        ));
+        return Err(CollectError::DifferentRuns {
+            dir: results,
+            rounds,
+        });
     }
-    let (latency, _) = merge_outcomes(reports.iter().map(|r| &r.outcome))
-        .map_err(|e| format!("agent {}'s result: {}", e.agent, e.source))?;
+    let (latency, _) = merge_outcomes(reports.iter().map(|r| &r.outcome)).map_err(|e| {
+        CollectError::Unreadable {
+            agent: e.agent,
+            source: e.source,
+        }
+    })?;
     let internal: Vec<usize> = reports.iter().map(|r| r.outcome.task).collect();
     let decisions = problem.from_internal(&internal);
     let (assignment, repaired) = if problem.is_feasible(&decisions) {
@@ -384,13 +385,11 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, String> {
         // assignment that changes the fewest robots, as `solve` reports (uncertified).
         rounding::repair(&problem, &decisions)
     } else {
-        return Err(format!(
-            "the agents' tasks {decisions:?} are not a feasible assignment"
-        ));
+        return Err(CollectError::Infeasible(decisions));
     };
-    let cost = problem.cost_of(&assignment).map_err(|e| e.to_string())?;
+    let cost = problem.cost_of(&assignment)?;
     let optimum = if check {
-        Some(oracle::solve(&problem).map_err(|e| e.to_string())?.cost)
+        Some(oracle::solve(&problem)?.cost)
     } else {
         None
     };

@@ -3,7 +3,7 @@
 //! oracle's optimum. A missing agent fails the team with a line naming it, after the
 //! start-up deadline, and nothing is left in shared memory.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};

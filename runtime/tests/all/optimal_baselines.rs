@@ -3,7 +3,7 @@
 //! optimal conflict-free assignment, whatever the connected graph (including ties and
 //! Case 2).
 
-mod common;
+use crate::common;
 
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::methods::Method;

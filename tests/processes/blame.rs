@@ -3,10 +3,10 @@
 //! in bounded time. Faults: SIGKILL and SIGSTOP from outside, an agent that never starts
 //! (with a round deadline shorter than the start-up deadline), one that exits early, one
 //! that sends a garbage (NaN) payload. (An agent of another team is refused before it joins:
-//! `tests/faults.rs` and `tests/team.rs`.) The measured times to stop are printed; the bound
+//! `tests/processes/faults.rs` and `tests/teams/team.rs`.) The measured times to stop are printed; the bound
 //! is generous (a loaded 2-core CI machine), the name is exact.
 
-mod common;
+use crate::common;
 
 use common::{children_of, leftovers_of, wait_with_deadline};
 use std::process::{Command, Stdio};

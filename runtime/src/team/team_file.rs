@@ -1,5 +1,5 @@
 //! The team file of agents started independently (`admm-ta agent --team FILE --id I`, see
-//! [`crate::process::member`]): its format, its checks, and what every agent derives from it
+//! [`crate::team::member`]): its format, its checks, and what every agent derives from it
 //! alike — the problem, the graph, the settings, the hosts of a team across machines.
 //!
 //! ```toml
@@ -33,9 +33,9 @@
 //! ```
 
 use crate::options::error::ConfigError;
-use crate::options::given::FrontEnd;
 use crate::options::{SolveOptions, StopRule};
 use crate::process::namespace::RunNamespace;
+use crate::team::errors::{HostsError, TeamFileError};
 use crate::transport::Transport;
 use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
 use admm_ta_agents::method::settings::{GivenSettings, SettingValue};
@@ -178,12 +178,15 @@ pub struct Team {
 }
 
 impl Team {
-    pub fn read(path: &Path) -> Result<Self, String> {
+    pub fn read(path: &Path) -> Result<Self, TeamFileError> {
         // A regular file of bounded size, like every input file.
-        let text = admm_ta_agents::problem::read_bounded(path, 16 << 20)
-            .map_err(|e| format!("cannot read team file: {e}"))?;
-        let in_file = |e: &dyn std::fmt::Display| format!("team file {}: {e}", path.display());
-        let mut table: toml::Table = toml::from_str(&text).map_err(|e| in_file(&e.message()))?;
+        let text =
+            admm_ta_agents::problem::read_bounded(path, 16 << 20).map_err(TeamFileError::Read)?;
+        let syntax = |message: &str| TeamFileError::Syntax {
+            path: path.to_path_buf(),
+            message: message.to_string(),
+        };
+        let mut table: toml::Table = toml::from_str(&text).map_err(|e| syntax(e.message()))?;
         // The methods' own settings, by key; the rest is the team file's own keys.
         let mut settings = GivenSettings::default();
         for spec in Method::all_settings() {
@@ -193,10 +196,11 @@ impl Team {
                     toml::Value::Float(v) => SettingValue::Number(v),
                     toml::Value::Integer(v) => SettingValue::Number(v as f64),
                     other => {
-                        return Err(in_file(&format_args!(
-                            "{} must be a number or a name, got {other}",
-                            spec.key
-                        )));
+                        return Err(TeamFileError::SettingKind {
+                            path: path.to_path_buf(),
+                            key: spec.key,
+                            got: other.to_string(),
+                        });
                     }
                 };
                 settings = settings.set(spec, value);
@@ -204,20 +208,18 @@ impl Team {
         }
         let mut file: TeamFile = table
             .try_into()
-            .map_err(|e: toml::de::Error| in_file(&e.message()))?;
+            .map_err(|e: toml::de::Error| syntax(e.message()))?;
         file.settings = settings;
         let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         RunNamespace::check_team_name(&file.run)?;
         check_hosts(&file)?;
         let team = Self { file, base };
         // The settings' checks, named by the file's keys.
-        team.solve_options().map_err(|e| {
-            format!(
-                "team file {}: {}",
-                path.display(),
-                e.in_terms_of(FrontEnd::TeamFile)
-            )
-        })?;
+        team.solve_options()
+            .map_err(|error| TeamFileError::Settings {
+                path: path.to_path_buf(),
+                error,
+            })?;
         Ok(team)
     }
 
@@ -227,14 +229,14 @@ impl Team {
     }
 
     /// The host called `name`.
-    pub fn host(&self, name: &str) -> Result<&HostEntry, String> {
+    pub fn host(&self, name: &str) -> Result<&HostEntry, TeamFileError> {
         self.file
             .hosts
             .iter()
             .find(|h| h.name == name)
-            .ok_or_else(|| {
-                let names: Vec<&str> = self.file.hosts.iter().map(|h| h.name.as_str()).collect();
-                format!("the team file has no host '{name}' (hosts: {names:?})")
+            .ok_or_else(|| TeamFileError::NoHost {
+                name: name.to_string(),
+                hosts: self.file.hosts.iter().map(|h| h.name.clone()).collect(),
             })
     }
 
@@ -261,38 +263,38 @@ impl Team {
     }
 
     /// The problem and graph every agent derives from the file.
-    pub fn problem_and_graph(&self) -> Result<(TaskAssignmentProblem, Graph), String> {
+    pub fn problem_and_graph(&self) -> Result<(TaskAssignmentProblem, Graph), TeamFileError> {
         let f = &self.file;
+        let in_file = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| TeamFileError::File { path, source }
+        };
         let costs = if f.costs == "random" {
-            let tasks = f
-                .tasks
-                .ok_or("costs = \"random\" needs tasks = M in the team file")?;
-            CostMatrix::uniform(f.robots, tasks, f.seed).map_err(|e| e.to_string())?
+            let tasks = f.tasks.ok_or(TeamFileError::RandomNeedsTasks)?;
+            CostMatrix::uniform(f.robots, tasks, f.seed)?
         } else {
             let path = self.path(Path::new(&f.costs));
-            CostMatrix::read_csv(&path).map_err(|e| format!("{}: {e}", path.display()))?
+            CostMatrix::read_csv(&path).map_err(in_file(&path))?
         };
         if costs.robots() != f.robots {
-            return Err(format!(
-                "the team file says {} robots but the costs have {} rows",
-                f.robots,
-                costs.robots()
-            ));
+            return Err(TeamFileError::Robots {
+                file: f.robots,
+                costs: costs.robots(),
+            });
         }
         // A team runs the paper's cases (1 and 2): every robot works.
         if costs.robots() < costs.tasks() {
-            return Err(format!(
-                "{} robots cannot cover {} tasks: a team file's problem needs at least as many robots as tasks",
-                costs.robots(),
-                costs.tasks()
-            ));
+            return Err(TeamFileError::TooFewRobots {
+                robots: costs.robots(),
+                tasks: costs.tasks(),
+            });
         }
         let costs = match &f.forbidden {
             Some(file) => {
                 let path = self.path(file);
                 let pairs = forbidden::read(&path, costs.robots(), costs.tasks())
-                    .map_err(|e| format!("{}: {e}", path.display()))?;
-                forbidden::apply(&costs, &pairs, f.maximize).map_err(|e| e.to_string())?
+                    .map_err(in_file(&path))?;
+                forbidden::apply(&costs, &pairs, f.maximize)?
             }
             None => costs,
         };
@@ -300,25 +302,26 @@ impl Team {
             TaskAssignmentProblem::maximizing(costs, CaseChoice::Auto)
         } else {
             TaskAssignmentProblem::new(costs, CaseChoice::Auto)
-        }
-        .map_err(|e| e.to_string())?;
+        }?;
         let graph = if f.topology.ends_with(".toml") {
             let path = self.path(Path::new(&f.topology));
-            let graph = topology_file::read(&path).map_err(|e| e.to_string())?;
+            let graph = topology_file::read(&path).map_err(TeamFileError::TopologyFile)?;
             if graph.robots() != f.robots {
-                return Err(format!(
-                    "topology {} has {} robots, the team {}",
-                    path.display(),
-                    graph.robots(),
-                    f.robots
-                ));
+                return Err(TeamFileError::TopologyRobots {
+                    path,
+                    found: graph.robots(),
+                    robots: f.robots,
+                });
             }
             graph
         } else {
             f.topology
                 .parse::<TopologySpec>()
                 .and_then(|t| t.build(f.robots, f.seed))
-                .map_err(|e| format!("topology '{}': {e}", f.topology))?
+                .map_err(|source| TeamFileError::Topology {
+                    spec: f.topology.clone(),
+                    source,
+                })?
         };
         Ok((problem, graph))
     }
@@ -347,51 +350,47 @@ impl Team {
 
 /// Checks the hosts of a team file: a zenoh or mixed team puts every robot on exactly one
 /// named host with a distinct TCP endpoint; an iceoryx2 team has no hosts.
-fn check_hosts(file: &TeamFile) -> Result<(), String> {
+fn check_hosts(file: &TeamFile) -> Result<(), HostsError> {
     if !file.transport.across_hosts() {
         if !file.hosts.is_empty() {
-            return Err(
-                "[[hosts]] are for teams across machines: add transport = \"zenoh\" or \"mixed\""
-                    .into(),
-            );
+            return Err(HostsError::NotAcrossHosts);
         }
         return Ok(());
     }
     if file.hosts.is_empty() {
-        return Err(
-            "a zenoh or mixed team needs [[hosts]] entries (name, agents, endpoint)".into(),
-        );
+        return Err(HostsError::None);
     }
     let mut host_of = vec![None; file.robots];
     for (h, host) in file.hosts.iter().enumerate() {
         if RunNamespace::check_team_name(&host.name).is_err() {
-            return Err(format!(
-                "host name '{}': use 1 to 40 letters, digits and dashes",
-                host.name
-            ));
+            return Err(HostsError::BadName(host.name.clone()));
         }
-        check_endpoint(&host.endpoint).map_err(|e| format!("host '{}': {e}", host.name))?;
+        check_endpoint(&host.endpoint).map_err(|source| HostsError::Endpoint {
+            host: host.name.clone(),
+            source,
+        })?;
         if let Some(other) = file.hosts[..h].iter().find(|o| o.name == host.name) {
-            return Err(format!("two hosts are called '{}'", other.name));
+            return Err(HostsError::SameName(other.name.clone()));
         }
         if let Some(other) = file.hosts[..h].iter().find(|o| o.endpoint == host.endpoint) {
-            return Err(format!(
-                "hosts '{}' and '{}' have the same endpoint {}",
-                other.name, host.name, host.endpoint
-            ));
+            return Err(HostsError::SameEndpoint {
+                first: other.name.clone(),
+                second: host.name.clone(),
+                endpoint: host.endpoint.clone(),
+            });
         }
         for &a in &host.agents {
-            let slot = host_of.get_mut(a).ok_or_else(|| {
-                format!(
-                    "host '{}' lists robot {a}, but the team has {} robots (0..{})",
-                    host.name, file.robots, file.robots
-                )
+            let slot = host_of.get_mut(a).ok_or_else(|| HostsError::NoSuchRobot {
+                host: host.name.clone(),
+                robot: a,
+                robots: file.robots,
             })?;
             if let Some(other) = slot.replace(h) {
-                return Err(format!(
-                    "robot {a} is on two hosts: '{}' and '{}'",
-                    file.hosts[other].name, host.name
-                ));
+                return Err(HostsError::TwoHosts {
+                    robot: a,
+                    first: file.hosts[other].name.clone(),
+                    second: host.name.clone(),
+                });
             }
         }
     }
@@ -401,14 +400,14 @@ fn check_hosts(file: &TeamFile) -> Result<(), String> {
             .iter()
             .find(|h| file.run.len() + 1 + h.name.len() > 40)
     {
-        return Err(format!(
-            "a mixed team's run name and host name together must fit 40 characters ('{}-{}' does not): each host's shared memory is named after both",
-            file.run, host.name
-        ));
+        return Err(HostsError::NameTooLong {
+            run: file.run.clone(),
+            host: host.name.clone(),
+        });
     }
     let homeless: Vec<usize> = (0..file.robots).filter(|&a| host_of[a].is_none()).collect();
     if !homeless.is_empty() {
-        return Err(format!("robot(s) {homeless:?} are on no host"));
+        return Err(HostsError::Homeless(homeless));
     }
     Ok(())
 }

@@ -3,7 +3,7 @@
 //! `admm-ta` binary to start agents from; this test has), and the same problem on threads
 //! and in the simulation, bit for bit.
 
-mod common;
+use crate::common;
 
 use admm_ta::{
     CaseChoice, CostMatrix, Error, SolveError, Solver, TaskAssignmentProblem, Transport,

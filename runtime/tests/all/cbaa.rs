@@ -2,7 +2,7 @@
 //! with a conflict-free assignment, whatever the graph; its optimality gap is measured, not
 //! assumed.
 
-mod common;
+use crate::common;
 
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::methods::Method;

@@ -3,7 +3,7 @@
 //! and leave nothing in `/dev/shm` or the run directory. Longer soaks are `#[ignore]`d
 //! (`cargo test --release --test stress -- --ignored`).
 
-mod common;
+use crate::common;
 
 use common::leftovers_of;
 use std::process::{Child, Command, Stdio};

@@ -4,7 +4,7 @@
 //! scenario that is a symlink, readable by others, or replaced; and a real second account
 //! (uid 65534, when the tests run as root) neither blocks nor sees the runs of another.
 
-mod common;
+use crate::common;
 
 use std::os::unix::fs::PermissionsExt;
 use std::os::unix::process::CommandExt;

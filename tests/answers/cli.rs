@@ -923,7 +923,7 @@ fn exit_codes_follow_the_documented_outcomes() {
     let (code, stdout, _) = solve_code("--robots 10 --tasks 10 --method cbaa --check");
     assert_eq!(code, Some(6));
     assert!(stdout.contains("NOT optimal"), "{stdout}");
-    // (4, agent failure, is asserted by tests/faults.rs; 1 is for internal errors.)
+    // (4, agent failure, is asserted by tests/processes/faults.rs; 1 is for internal errors.)
 }
 
 fn assert_clear_error_text(stderr: &str, needle: &str) {

@@ -1,8 +1,8 @@
 //! The decentralized stop never certifies a non-optimal assignment: every method, Case 1
 //! and Case 2, complete and random graphs, many seeds. (The oracle instances are checked in
-//! the workspace's `tests/oracle_instances.rs`.)
+//! the workspace's `tests/answers/oracle_instances.rs`.)
 
-mod common;
+use crate::common;
 
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::methods::Method;

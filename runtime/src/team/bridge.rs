@@ -27,13 +27,13 @@
 //! them to each other.
 
 use crate::board::{Board, arrivals_target};
-use crate::error_text::one_line;
 use crate::exchange::header::{RoundHeader, words_as_bytes};
 use crate::ipc::nodes::run_config;
 use crate::ipc::services::{ServiceError, Svc, open_bridge_wake_service, open_round_service};
-use crate::process::member::{Membership, member_scenario};
+use crate::process::member_error::MemberError;
 use crate::process::scenario::Scenario;
-use crate::process::team_file::{HostEntry, Team};
+use crate::team::member::{Membership, member_scenario};
+use crate::team::team_file::{HostEntry, Team};
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::{announce_failure, missing_hosts, watch_failures};
@@ -53,6 +53,53 @@ use zenoh::{Session, Wait};
 /// Longest sleep of either thread between two looks at failures and the stop flag.
 const SLICE: Duration = Duration::from_millis(20);
 
+/// Why a mixed host's bridge stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum BridgeError {
+    #[error("bridge")]
+    Board(#[source] crate::board::BoardError),
+    #[error("bridge")]
+    Service(#[source] ServiceError),
+    #[error(transparent)]
+    Names(#[from] crate::ipc::nodes::RunNameError),
+    #[error(transparent)]
+    Zenoh(#[from] crate::zenoh_net::ZenohError),
+    #[error("bridge: cannot start a thread")]
+    Thread(#[source] std::io::Error),
+    /// An iceoryx2 or Zenoh call failed (their errors, as their text).
+    #[error("bridge: {what}: {detail}")]
+    Call { what: String, detail: String },
+    #[error("bridge: host(s) {0:?} did not come up within the start-up deadline")]
+    HostsMissing(Vec<String>),
+    #[error("bridge: agent {agent} sent {got} values, expected {expected}")]
+    WrongLength {
+        agent: usize,
+        got: usize,
+        expected: usize,
+    },
+    #[error(
+        "bridge: the local neighbours {local:?} of agent {agent} did not all start within the start-up deadline"
+    )]
+    LocalNeighbours { agent: usize, local: Vec<usize> },
+    #[error("bridge: agent {agent} sent a message of {got} bytes, expected {expected}")]
+    WrongBytes {
+        agent: usize,
+        got: usize,
+        expected: usize,
+    },
+}
+
+/// A bridge that stops ends its host's run as a failure.
+impl From<BridgeError> for MemberError {
+    fn from(error: BridgeError) -> Self {
+        MemberError::failed(error)
+    }
+}
+
+fn call(what: String, detail: String) -> BridgeError {
+    BridgeError::Call { what, detail }
+}
+
 /// No agent failed yet (in [`Shared::announced`]).
 const NONE: usize = usize::MAX;
 
@@ -61,13 +108,13 @@ struct Shared {
     stop: AtomicBool,
     /// The first failure announced on Zenoh.
     announced: AtomicUsize,
-    error: Mutex<Option<String>>,
+    error: Mutex<Option<BridgeError>>,
     forwarded_out: AtomicU64,
     forwarded_in: AtomicU64,
 }
 
 impl Shared {
-    fn fail(&self, what: String) {
+    fn fail(&self, what: BridgeError) {
         self.error
             .lock()
             .unwrap_or_else(|e| e.into_inner())
@@ -129,10 +176,10 @@ impl Layout {
 impl Bridge {
     /// Joins the host's board for the remote agents, subscribes to their Zenoh keys and
     /// starts the two forwarding threads.
-    pub fn start(team: &Team, host: &HostEntry, router: &HostRouter) -> Result<Self, String> {
+    pub fn start(team: &Team, host: &HostEntry, router: &HostRouter) -> Result<Self, MemberError> {
         let started = Instant::now();
         let (scenario, namespace) = member_scenario(team, Some(host))?;
-        let graph = scenario.graph().map_err(|e| e.to_string())?;
+        let graph = scenario.graph().map_err(MemberError::failed)?;
         let n = scenario.robots;
         let layout = Layout {
             local: host.agents.clone(),
@@ -142,7 +189,8 @@ impl Bridge {
         };
         let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
         let remote: Vec<usize> = (0..n).filter(|&a| !layout.is_local(a)).collect();
-        let membership = Membership::join(&scenario, &namespace, &remote, deadline)?;
+        let membership = Membership::join(&scenario, &namespace, &remote, deadline)
+            .map_err(MemberError::failed)?;
         let links = team.zenoh_links(host);
         let session = router.session().clone();
         let shared = Arc::new(Shared {
@@ -165,19 +213,22 @@ impl Bridge {
                         let _ = to_in.send((r, sample.payload().clone()));
                     })
                     .wait()
-                    .map_err(|e| format!("bridge: cannot subscribe to agent {r}: {e}"))?,
+                    .map_err(|e| call(format!("cannot subscribe to agent {r}"), e.to_string()))?,
             );
         }
         {
             let shared = Arc::clone(&shared);
-            subscribers.push(watch_failures(&session, &links, move |failed| {
-                let _ = shared.announced.compare_exchange(
-                    NONE,
-                    failed,
-                    Ordering::AcqRel,
-                    Ordering::Acquire,
-                );
-            })?);
+            subscribers.push(
+                watch_failures(&session, &links, move |failed| {
+                    let _ = shared.announced.compare_exchange(
+                        NONE,
+                        failed,
+                        Ordering::AcqRel,
+                        Ordering::Acquire,
+                    );
+                })
+                .map_err(BridgeError::from)?,
+            );
         }
         let forwarder = Forwarder {
             shared: Arc::clone(&shared),
@@ -201,13 +252,13 @@ impl Bridge {
     }
 
     /// The first error of a forwarding thread.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), BridgeError> {
         match self
             .shared
             .error
             .lock()
             .unwrap_or_else(|e| e.into_inner())
-            .clone()
+            .take()
         {
             Some(e) => Err(e),
             None => Ok(()),
@@ -250,20 +301,19 @@ impl Drop for Bridge {
     }
 }
 
-fn node(scenario: &Scenario, name: &str) -> Result<Node<Svc>, String> {
-    let config = run_config(&scenario.iceoryx_prefix, &scenario.iceoryx_root)?;
-    let name = NodeName::new(name).map_err(|e| format!("bad node name: {e:?}"))?;
+fn node(scenario: &Scenario, name: &str) -> Result<Node<Svc>, BridgeError> {
+    let config = run_config(&scenario.prefix, &scenario.transport_root)?;
+    let name = NodeName::new(name).map_err(|e| call("bad node name".into(), format!("{e:?}")))?;
     NodeBuilder::new()
         .name(&name)
         .signal_handling_mode(SignalHandlingMode::Disabled)
         .config(&config)
         .create::<Svc>()
-        .map_err(|e| format!("bridge: cannot create an iceoryx2 node: {e:?}"))
+        .map_err(|e| call("cannot create an iceoryx2 node".into(), format!("{e:?}")))
 }
 
-fn board(scenario: &Scenario) -> Result<Board, String> {
-    Board::open(&scenario.board_shm, scenario.robots)
-        .map_err(|e| format!("bridge: {}", one_line(&e)))
+fn board(scenario: &Scenario) -> Result<Board, BridgeError> {
+    Board::open(&scenario.board_shm, scenario.robots).map_err(BridgeError::Board)
 }
 
 /// What the two forwarding threads own.
@@ -281,8 +331,8 @@ impl Forwarder {
     fn spawn(
         self,
         name: &str,
-        body: impl FnOnce(&Self) -> Result<(), String> + Send + 'static,
-    ) -> Result<JoinHandle<()>, String> {
+        body: impl FnOnce(&Self) -> Result<(), BridgeError> + Send + 'static,
+    ) -> Result<JoinHandle<()>, BridgeError> {
         std::thread::Builder::new()
             .name(name.into())
             .spawn(move || {
@@ -290,12 +340,12 @@ impl Forwarder {
                     self.shared.fail(e);
                 }
             })
-            .map_err(|e| format!("bridge: cannot start a thread: {e}"))
+            .map_err(BridgeError::Thread)
     }
 
     /// Local agents' messages out to Zenoh.
-    fn forward_out(&self, deadline: Instant) -> Result<(), String> {
-        let text = |e: ServiceError| format!("bridge: {}", one_line(&e));
+    fn forward_out(&self, deadline: Instant) -> Result<(), BridgeError> {
+        let text = BridgeError::Service;
         // Every host (so every other bridge) subscribed to our agents before we let them
         // start: a host declares its token after its bridge's subscriptions.
         loop {
@@ -311,9 +361,7 @@ impl Forwarder {
                 return Ok(());
             }
             if Instant::now() >= deadline {
-                return Err(format!(
-                    "bridge: host(s) {missing:?} did not come up within the start-up deadline"
-                ));
+                return Err(BridgeError::HostsMissing(missing));
             }
             std::thread::sleep(Duration::from_millis(10));
         }
@@ -323,7 +371,7 @@ impl Forwarder {
             .map_err(text)?
             .listener_builder()
             .create()
-            .map_err(|e| format!("bridge: cannot create its listener: {e:?}"))?;
+            .map_err(|e| call("cannot create its listener".into(), format!("{e:?}")))?;
         // Per local agent with remote neighbours: one subscriber per remote neighbour.
         let mut senders = Vec::new();
         for i in self.layout.local_senders() {
@@ -334,7 +382,9 @@ impl Forwarder {
                         .subscriber_builder()
                         .buffer_size(2)
                         .create()
-                        .map_err(|e| format!("bridge: cannot subscribe to agent {i}: {e:?}"))
+                        .map_err(|e| {
+                            call(format!("cannot subscribe to agent {i}"), format!("{e:?}"))
+                        })
                 })
                 .collect::<Result<Vec<_>, _>>()?;
             let publisher = self
@@ -343,7 +393,12 @@ impl Forwarder {
                 .congestion_control(CongestionControl::Block)
                 .express(true)
                 .wait()
-                .map_err(|e| format!("bridge: cannot publish agent {i}'s messages: {e}"))?;
+                .map_err(|e| {
+                    call(
+                        format!("cannot publish agent {i}'s messages"),
+                        e.to_string(),
+                    )
+                })?;
             senders.push((subscribers, publisher));
         }
         let message_bytes = 8 * (RoundHeader::WORDS + self.layout.payload_len);
@@ -360,22 +415,21 @@ impl Forwarder {
                 for spare in spares {
                     while spare
                         .receive()
-                        .map_err(|e| format!("bridge: receive failed: {e:?}"))?
+                        .map_err(|e| call("receive failed".into(), format!("{e:?}")))?
                         .is_some()
                     {}
                 }
                 while let Some(sample) = first
                     .receive()
-                    .map_err(|e| format!("bridge: receive failed: {e:?}"))?
+                    .map_err(|e| call("receive failed".into(), format!("{e:?}")))?
                 {
                     let payload = sample.payload();
                     if payload.len() != self.layout.payload_len {
-                        return Err(format!(
-                            "bridge: agent {} sent {} values, expected {}",
-                            sample.user_header().sender,
-                            payload.len(),
-                            self.layout.payload_len
-                        ));
+                        return Err(BridgeError::WrongLength {
+                            agent: sample.user_header().sender as usize,
+                            got: payload.len(),
+                            expected: self.layout.payload_len,
+                        });
                     }
                     // Straight from the shared-memory sample into the buffer Zenoh owns.
                     sample.user_header().write_words(&mut header_words);
@@ -385,7 +439,7 @@ impl Forwarder {
                     publisher
                         .put(message)
                         .wait()
-                        .map_err(|e| format!("bridge: forwarding failed: {e}"))?;
+                        .map_err(|e| call("forwarding failed".into(), e.to_string()))?;
                     self.shared.forwarded_out.fetch_add(1, Ordering::Relaxed);
                 }
             }
@@ -399,7 +453,7 @@ impl Forwarder {
             }
             match listener.timed_wait(|_| {}, SLICE) {
                 Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
-                Err(e) => return Err(format!("bridge: waiting failed: {e:?}")),
+                Err(e) => return Err(call("waiting failed".into(), format!("{e:?}"))),
             }
         }
     }
@@ -409,8 +463,8 @@ impl Forwarder {
         &self,
         inbox: &Receiver<(usize, ZBytes)>,
         deadline: Instant,
-    ) -> Result<(), String> {
-        let text = |e: ServiceError| format!("bridge: {}", one_line(&e));
+    ) -> Result<(), BridgeError> {
+        let text = BridgeError::Service;
         let node = node(&self.scenario, "bridge-in")?;
         let board = board(&self.scenario)?;
         let layout = &self.layout;
@@ -422,7 +476,7 @@ impl Forwarder {
                 .initial_max_slice_len(layout.payload_len)
                 .allocation_strategy(AllocationStrategy::Static)
                 .create()
-                .map_err(|e| format!("bridge: cannot publish for agent {r}: {e:?}"))?;
+                .map_err(|e| call(format!("cannot publish for agent {r}"), format!("{e:?}")))?;
             publishers.insert(r, (service, publisher, layout.local_neighbours(r)));
         }
         let mut pending: VecDeque<(usize, ZBytes)> = VecDeque::new();
@@ -449,9 +503,10 @@ impl Forwarder {
                     || service.dynamic_config().number_of_subscribers() < local.len()
                 {
                     if Instant::now() >= deadline {
-                        return Err(format!(
-                            "bridge: the local neighbours {local:?} of agent {r} did not all start within the start-up deadline"
-                        ));
+                        return Err(BridgeError::LocalNeighbours {
+                            agent: r,
+                            local: local.clone(),
+                        });
                     }
                     blocked.insert(r);
                     kept.push_back((r, message));
@@ -459,11 +514,11 @@ impl Forwarder {
                 }
                 let bytes = message.to_bytes();
                 if bytes.len() != words * 8 {
-                    return Err(format!(
-                        "bridge: agent {r} sent a message of {} bytes, expected {}",
-                        bytes.len(),
-                        words * 8
-                    ));
+                    return Err(BridgeError::WrongBytes {
+                        agent: r,
+                        got: bytes.len(),
+                        expected: words * 8,
+                    });
                 }
                 let word = |k: usize| {
                     f64::from_ne_bytes(bytes[8 * k..8 * k + 8].try_into().expect("8 bytes"))
@@ -475,12 +530,12 @@ impl Forwarder {
                 let header = RoundHeader::from_words(&header_words);
                 let mut sample = publisher
                     .loan_slice_uninit(layout.payload_len)
-                    .map_err(|e| format!("bridge: cannot loan a sample: {e:?}"))?
+                    .map_err(|e| call("cannot loan a sample".into(), format!("{e:?}")))?
                     .write_from_fn(|k| word(RoundHeader::WORDS + k));
                 *sample.user_header_mut() = header;
                 sample
                     .send()
-                    .map_err(|e| format!("bridge: send failed: {e:?}"))?;
+                    .map_err(|e| call("send failed".into(), format!("{e:?}")))?;
                 board.set_published_round(r, header.round);
                 for &j in local {
                     let arrived = board
@@ -505,7 +560,9 @@ impl Forwarder {
                         .liveliness()
                         .declare_token(self.links.alive_key(i))
                         .wait()
-                        .map_err(|e| format!("bridge: cannot declare agent {i}'s token: {e}"))?;
+                        .map_err(|e| {
+                            call(format!("cannot declare agent {i}'s token"), e.to_string())
+                        })?;
                     tokens.insert(i, token);
                 } else if !alive && let Some(token) = tokens.remove(&i) {
                     let _ = token.undeclare().wait();

@@ -2,7 +2,7 @@
 //! saying what it was): every method on each, through the library on `sim`, and the command
 //! line's exit codes and lines for a sample (the primal on `ipc` where it used to panic).
 
-mod common;
+use crate::common;
 
 use admm_ta::agents::problem::{IDLE, ProblemError};
 use admm_ta::{CaseChoice, CostMatrix, Method, SolveError, TaskAssignmentProblem};

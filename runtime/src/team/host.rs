@@ -14,10 +14,12 @@
 //! It waits for the first agents until the team's start-up deadline (naming those that never
 //! came) and for the run no longer than every round's deadline allows.
 
-use crate::process::member::team_scenario;
 use crate::process::member_error::MemberError;
 use crate::process::team_digest::TeamDigest;
-use crate::process::team_file::Team;
+use crate::team::errors::HostError;
+use crate::team::member::team_scenario;
+use crate::team::team_file::Team;
+use crate::zenoh_net::ZenohError;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::{
@@ -83,15 +85,12 @@ const STOP_GRACE: Duration = Duration::from_secs(2);
 pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError> {
     let _signals = crate::signals::install();
     let started = Instant::now();
-    let team = Team::read(team_path).map_err(MemberError::Refused)?;
+    let team = Team::read(team_path).map_err(MemberError::refused)?;
     if !team.file.transport.across_hosts() {
-        return Err(MemberError::Refused(
-            "this team runs on one machine over iceoryx2 (transport = \"iceoryx2\"): it has no hosts"
-                .into(),
-        ));
+        return Err(MemberError::refused(HostError::NoHosts));
     }
     let n = team.file.robots;
-    let host = team.host(name).map_err(MemberError::Refused)?.clone();
+    let host = team.host(name).map_err(MemberError::refused)?.clone();
     let others: Vec<String> = team
         .file
         .hosts
@@ -99,7 +98,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         .filter(|h| h.name != host.name)
         .map(|h| h.endpoint.clone())
         .collect();
-    let router = HostRouter::open(&host.endpoint, &others)?;
+    let router = HostRouter::open(&host.endpoint, &others).map_err(MemberError::failed)?;
     let links: ZenohLinks = team.zenoh_links(&host);
     let watch = Arc::new(TeamWatch {
         presence: Mutex::new(Presence {
@@ -134,7 +133,9 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
                 });
             })
             .wait()
-            .map_err(|e| format!("cannot watch the team's agents: {e}"))?
+            .map_err(|e| {
+                MemberError::failed(ZenohError::new("cannot watch the team's agents", e))
+            })?
     };
     let _stops = {
         let watch = Arc::clone(&watch);
@@ -142,7 +143,8 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             watch.update(|p| {
                 p.stopped.get_or_insert(signal);
             });
-        })?
+        })
+        .map_err(MemberError::failed)?
     };
     // The other hosts: one whose token vanishes without a goodbye is lost. Both are
     // liveliness declarations of its router's session, so they arrive in order.
@@ -162,7 +164,9 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
                 }
             })
             .wait()
-            .map_err(|e| format!("cannot watch the other hosts' goodbyes: {e}"))?
+            .map_err(|e| {
+                MemberError::failed(ZenohError::new("cannot watch the other hosts' goodbyes", e))
+            })?
     };
     let _hosts = {
         let watch = Arc::clone(&watch);
@@ -185,7 +189,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
                 }
             })
             .wait()
-            .map_err(|e| format!("cannot watch the other hosts: {e}"))?
+            .map_err(|e| MemberError::failed(ZenohError::new("cannot watch the other hosts", e)))?
     };
     let _failures = {
         let watch = Arc::clone(&watch);
@@ -193,12 +197,11 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             watch.update(|p| {
                 p.failed.get_or_insert(failed);
             });
-        })?
+        })
+        .map_err(MemberError::failed)?
     };
     let bridge = if team.file.transport.bridged() {
-        Some(crate::process::bridge::Bridge::start(
-            &team, &host, &router,
-        )?)
+        Some(crate::team::bridge::Bridge::start(&team, &host, &router)?)
     } else {
         None
     };
@@ -212,7 +215,12 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         .liveliness()
         .declare_token(links.host_key(&host.name))
         .wait()
-        .map_err(|e| format!("cannot declare the host's liveliness token: {e}"))?;
+        .map_err(|e| {
+            MemberError::failed(ZenohError::new(
+                "cannot declare the host's liveliness token",
+                e,
+            ))
+        })?;
     // Dropped before the token (whatever way this function returns): the other hosts then
     // know this host left on purpose.
     let _goodbye = Goodbye {
@@ -244,16 +252,16 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             let running = presence.alive.iter().filter(|&&a| a).count();
             if running == 0 || Instant::now() >= until {
                 let seen = presence.seen.iter().filter(|&&s| s).count();
-                return Err(MemberError::Failed(format!(
-                    "host {}: stopped by {}: {} agent(s) stopped, {running} still leaving",
-                    host.name,
-                    crate::signals::name(signal),
-                    seen - running,
-                )));
+                return Err(MemberError::failed(HostError::Stopped {
+                    host: host.name.clone(),
+                    signal,
+                    stopped: seen - running,
+                    leaving: running,
+                }));
             }
         }
         if let Some(bridge) = &bridge {
-            bridge.check()?;
+            bridge.check().map_err(MemberError::failed)?;
         }
         let all_seen = presence.seen.iter().all(|&s| s);
         let none_alive = presence.alive.iter().all(|&a| !a);
@@ -289,18 +297,18 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         let now = Instant::now();
         if !all_seen && presence.failed.is_none() && now >= startup_deadline {
             let missing: Vec<usize> = (0..n).filter(|&a| !presence.seen[a]).collect();
-            return Err(MemberError::Failed(format!(
-                "host {}: agent(s) {missing:?} never joined the team's Zenoh network within {:.1?} (not started, or their host unreachable)",
-                host.name,
-                started.elapsed()
-            )));
+            return Err(MemberError::failed(HostError::NeverJoined {
+                host: host.name.clone(),
+                missing,
+                waited: started.elapsed(),
+            }));
         }
         if now >= run_deadline {
             let running: Vec<usize> = (0..n).filter(|&a| presence.alive[a]).collect();
-            return Err(MemberError::Failed(format!(
-                "host {}: agent(s) {running:?} still ran after every round's deadline",
-                host.name
-            )));
+            return Err(MemberError::failed(HostError::Overran {
+                host: host.name.clone(),
+                running,
+            }));
         }
         presence = watch
             .changed
@@ -324,16 +332,16 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
                 .any(|h| h.name == lost && h.agents.contains(&f))
         })
     {
-        return Err(MemberError::Failed(format!(
-            "host {}: host {lost} left the team during the run without a goodbye (killed, crashed or cut off): its agents were out of reach, the team stopped",
-            host.name
-        )));
+        return Err(MemberError::failed(HostError::HostLost {
+            host: host.name,
+            lost,
+        }));
     }
     if let Some(failed) = failed {
-        return Err(MemberError::Failed(format!(
-            "host {}: the team's run failed: agent {failed} failed (see its output)",
-            host.name
-        )));
+        return Err(MemberError::failed(HostError::AgentFailed {
+            host: host.name,
+            failed,
+        }));
     }
     Ok(HostReport {
         host: host.name,
@@ -371,7 +379,7 @@ fn check_team_digest(
     session: &zenoh::Session,
     deadline: Instant,
 ) -> Result<zenoh::liveliness::LivelinessToken, MemberError> {
-    let digest = TeamDigest::of(&team_scenario(team).map_err(MemberError::Refused)?);
+    let digest = TeamDigest::of(&team_scenario(team).map_err(MemberError::refused)?);
     let started_ms = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_millis() as u64);
@@ -379,10 +387,16 @@ fn check_team_digest(
         .liveliness()
         .declare_token(links.digest_key(&digest.to_hex(), started_ms, name))
         .wait()
-        .map_err(|e| format!("cannot declare the host's team-digest token: {e}"))?;
+        .map_err(|e| {
+            MemberError::failed(ZenohError::new(
+                "cannot declare the host's team-digest token",
+                e,
+            ))
+        })?;
     let others = team.file.hosts.len().saturating_sub(1);
     loop {
-        let mut seen: Vec<(String, u64, String)> = alive_keys(session, links.digest_all())?
+        let mut seen: Vec<(String, u64, String)> = alive_keys(session, links.digest_all())
+            .map_err(MemberError::failed)?
             .iter()
             .filter_map(|k| links.of_digest_key(k))
             .filter(|(_, _, host)| host != name)
@@ -394,10 +408,10 @@ fn check_team_digest(
         });
         if let Some((hex, _, _)) = earlier_differing {
             let running = TeamDigest::from_hex(hex)
-                .ok_or_else(|| format!("a host announced a malformed team digest {hex}"))?;
+                .ok_or_else(|| MemberError::failed(HostError::MalformedDigest(hex.clone())))?;
             digest
                 .compare(&running, &format!("host {name}"))
-                .map_err(MemberError::Refused)?;
+                .map_err(MemberError::refused)?;
         }
         if seen.len() >= others || Instant::now() >= deadline {
             return Ok(token);

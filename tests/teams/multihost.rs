@@ -9,11 +9,11 @@
 
 #![cfg(feature = "zenoh")]
 
-mod common;
+use crate::common;
 
-use admm_ta_runtime::process::team_file::Team;
 use admm_ta_runtime::solve::report::SolveReport;
 use admm_ta_runtime::solve::solve;
+use admm_ta_runtime::team::team_file::Team;
 use admm_ta_runtime::transport::Transport;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};

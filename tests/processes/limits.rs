@@ -2,8 +2,6 @@
 //! refused before anything is spawned, with one line and the number to raise the limit to;
 //! one that fits runs under the same limit.
 
-mod common;
-
 use std::process::Command;
 
 /// `admm-ta ARGS` under `ulimit -n files`.

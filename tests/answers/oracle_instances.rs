@@ -2,7 +2,7 @@
 //! methods (primal, dual, inexact dual; sim transport, decentralized stop) reach the known
 //! optimum.
 
-mod common;
+use crate::common;
 
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::methods::Method;

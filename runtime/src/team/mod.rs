@@ -1,0 +1,19 @@
+//! Teams of independently started agents: a team file names the team, its method, its
+//! transport and (across machines) its hosts; each agent, host and bridge derives its run
+//! from it.
+//!
+//! * [`team_file`]: the team file, and what every member derives from it;
+//! * [`errors`]: their errors, one type per operation;
+//! * [`member`]: agents started independently from a team file (joining, leaving, collecting);
+//! * `host` and `bridge` (feature `zenoh`): one machine of a multi-host team — its Zenoh
+//!   router, and the bridge that carries a mixed team's messages between a host's iceoryx2
+//!   services and the other hosts (the one place that uses two transports at once).
+
+pub mod errors;
+pub mod member;
+pub mod team_file;
+
+#[cfg(feature = "zenoh")]
+pub mod bridge;
+#[cfg(feature = "zenoh")]
+pub mod host;
