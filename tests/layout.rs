@@ -31,8 +31,10 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// The transports: none may name another.
-const TRANSPORTS: [&str; 6] = ["sim", "threads", "shm", "ipc", "uds", "zenoh_net"];
+/// Stands in [`LAYERS`] for the transports: the modules the registry of
+/// `runtime/src/transport.rs` names ([`transports`]), so a new transport is placed by its
+/// registry line alone.
+const TRANSPORT_MODULES: &str = "<the transports of the registry>";
 
 /// The runtime's layers, top to bottom, by top-level module (with their submodules).
 const LAYERS: [&[&str]; 6] = [
@@ -45,7 +47,7 @@ const LAYERS: [&[&str]; 6] = [
     // Configuration: the transport registry, options, workloads.
     &["transport", "options", "workload"],
     // The transports.
-    &TRANSPORTS,
+    &[TRANSPORT_MODULES],
     // Shared mechanisms below every transport.
     &[
         "exchange",
@@ -575,10 +577,33 @@ fn find_cycle(graph: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>>
     None
 }
 
+/// The transports: the top-level modules the registry in `runtime/src/transport.rs` names,
+/// from its lines `Variant => crate::MODULE::…::INFO,`. None may name another.
+fn transports() -> &'static [String] {
+    static MODULES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    MODULES.get_or_init(read_transports)
+}
+
+fn read_transports() -> Vec<String> {
+    let text = std::fs::read_to_string(root().join("runtime/src/transport.rs")).unwrap();
+    let code = code_only(&text);
+    let start = code.find("transports! {").expect("the transport registry");
+    let body = &code[start..start + code[start..].find('}').unwrap()];
+    let modules: Vec<String> = body
+        .lines()
+        .filter_map(|line| {
+            let path = line.split_once("=> crate::")?.1;
+            Some(path.split("::").next()?.to_string())
+        })
+        .collect();
+    assert!(modules.len() >= 5, "found only {modules:?}");
+    modules
+}
+
 /// The transport a module belongs to, if any.
-fn transport_of(module: &str) -> Option<&'static str> {
+fn transport_of(module: &str) -> Option<String> {
     let top = module.split("::").next().unwrap_or(module);
-    TRANSPORTS.into_iter().find(|t| *t == top)
+    transports().iter().find(|t| *t == top).cloned()
 }
 
 #[test]
@@ -641,6 +666,11 @@ fn layer_of(module: &str) -> Option<usize> {
     if top == "crate" {
         return None;
     }
+    let top = if transports().iter().any(|t| t == top) {
+        TRANSPORT_MODULES
+    } else {
+        top
+    };
     let layer = LAYERS.iter().position(|layer| layer.contains(&top));
     assert!(
         layer.is_some(),
