@@ -361,13 +361,38 @@ pub enum Experiment {
     },
 }
 
+/// A cost file's delimiter.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Delimiter {
+    Comma,
+    Tab,
+    Semicolon,
+}
+
+impl Delimiter {
+    pub fn byte(self) -> u8 {
+        match self {
+            Self::Comma => b',',
+            Self::Tab => b'\t',
+            Self::Semicolon => b';',
+        }
+    }
+}
+
 #[derive(Args, Debug)]
 pub struct SolveArgs {
-    /// Cost CSV: one row per robot, one column per task, no header; `inf` marks a forbidden
-    /// pair (`-inf` with --maximize).
+    /// Cost file, `-` for standard input: CSV (one row per robot, one column per task;
+    /// comma, tab or semicolon; quoted or not; an optional header row of task names and
+    /// first column of robot names, as pandas' to_csv writes) or JSON (a list of rows, or
+    /// {"costs": [[…]], "robots": […], "tasks": […]} with null for a forbidden pair). `inf`
+    /// marks a forbidden pair (`-inf` with --maximize).
     #[arg(long, conflicts_with_all = ["robots", "tasks"])]
     pub costs: Option<PathBuf>,
-    /// File of forbidden robot–task pairs, one `robot,task` per line (0-based).
+    /// The cost file's delimiter (default: detected from its first row).
+    #[arg(long, value_enum, requires = "costs")]
+    pub delimiter: Option<Delimiter>,
+    /// File of forbidden robot–task pairs (`-` for standard input), one `robot,task` per
+    /// line: 0-based indices, or names when the cost file has them.
     #[arg(long)]
     pub forbidden: Option<PathBuf>,
     /// The matrix holds profits to maximise (scipy's maximize=True): `-inf` is forbidden.

@@ -9,7 +9,7 @@ use anyhow::Result;
 /// Standard output could not be written (a full disk, a closed pipe): exit 1, or quietly
 /// when the reader closed the pipe (`admm-ta topology | head -1`), as a Unix tool ends.
 #[derive(Debug, thiserror::Error)]
-#[error("cannot write the output: {0}")]
+#[error("cannot write the output")]
 pub struct WriteError(#[from] pub std::io::Error);
 
 /// `println!` that returns a [`WriteError`] from the enclosing function instead of panicking.
@@ -119,6 +119,29 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         })
         .collect();
     outln!("assignment (robot→task): {}", pairs.join(" "));
+    if report.robot_names.is_some() || report.task_names.is_some() {
+        let name = |names: &Option<Vec<String>>, k: usize| {
+            names
+                .as_ref()
+                .and_then(|n| n.get(k))
+                .cloned()
+                .unwrap_or_else(|| k.to_string())
+        };
+        let named: Vec<String> = report
+            .assignment
+            .iter()
+            .enumerate()
+            .map(|(robot, &task)| {
+                let task = if task == IDLE {
+                    "-".to_string()
+                } else {
+                    name(&report.task_names, task)
+                };
+                format!("{} → {task}", name(&report.robot_names, robot))
+            })
+            .collect();
+        outln!("by name: {}", named.join(", "));
+    }
     if !report.idle_robots.is_empty() {
         outln!("idle robots: {:?}", report.idle_robots);
     }

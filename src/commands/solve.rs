@@ -4,16 +4,30 @@ use crate::cli::SolveArgs;
 use crate::commands::shared::agent_program;
 use crate::exit::{Outcome, UsageError};
 use crate::output;
-use admm_ta::agents::problem::forbidden;
-use admm_ta::{CostMatrix, Perturbation, SolveOptions, TaskAssignmentProblem, TopologySpec};
+use admm_ta::agents::problem::{cost_file, forbidden, read_cost_text};
+use admm_ta::{Perturbation, SolveOptions, TaskAssignmentProblem, TopologySpec};
 use anyhow::{Context, Result};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
 
 /// Solves as `args` say; `matches` (the command line's) tells which options the user gave.
 pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
+    if args.costs.as_deref() == Some(std::path::Path::new("-"))
+        && args.forbidden.as_deref() == Some(std::path::Path::new("-"))
+    {
+        return Err(UsageError(
+            "--costs - and --forbidden - cannot both read standard input".into(),
+        )
+        .into());
+    }
+    // Pairs the cost file itself marks forbidden (JSON nulls).
+    let mut marked = Vec::new();
     let costs = match (&args.costs, args.robots, args.tasks) {
-        (Some(path), _, _) => CostMatrix::read_csv(path)?,
+        (Some(path), _, _) => {
+            let file = cost_file::parse(&read_cost_text(path)?, args.delimiter.map(|d| d.byte()))?;
+            marked = file.forbidden;
+            file.costs
+        }
         (None, Some(robots), Some(tasks)) => args.cost_model.costs(robots, tasks, args.seed)?,
         _ => {
             return Err(UsageError(
@@ -23,12 +37,13 @@ pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
             .into());
         }
     };
-    let costs = match &args.forbidden {
-        Some(path) => {
-            let pairs = forbidden::read(path, costs.robots(), costs.tasks())?;
-            forbidden::apply(&costs, &pairs, args.maximize)?
-        }
-        None => costs,
+    if let Some(path) = &args.forbidden {
+        marked.extend(forbidden::read(path, &costs)?);
+    }
+    let costs = if marked.is_empty() {
+        costs
+    } else {
+        forbidden::apply(&costs, &marked, args.maximize)?
     };
     let problem = if args.maximize {
         TaskAssignmentProblem::maximizing(costs, args.case)?

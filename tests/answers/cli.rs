@@ -205,10 +205,10 @@ fn bad_input_gives_one_clear_line() {
         ),
         (
             "--robots 2 --tasks 2 --forbidden /dev/zero".into(),
-            "regular file",
+            "not a text file",
         ),
-        ("--costs /dev/zero".into(), "regular file"),
-        ("--costs /tmp".into(), "regular file"),
+        ("--costs /dev/zero".into(), "not a text file"),
+        ("--costs /tmp".into(), "directory"),
         (format!("--costs {}", file("empty.csv", "")), "empty"),
         (
             format!("--costs {}", file("ragged.csv", "1,2\n3\n")),
@@ -219,8 +219,12 @@ fn bad_input_gives_one_clear_line() {
             "not a number",
         ),
         (
-            format!("--costs {}", file("header.csv", "a,b\n1,2\n3,4\n")),
-            "no header",
+            format!("--costs {}", file("typo.csv", "1,2x\n1,2\n")),
+            "line 1, column 2: '2x' is not a number",
+        ),
+        (
+            format!("--costs {}", file("comma.csv", "1;2,5\n3;4\n")),
+            "decimal comma",
         ),
         (
             format!("--costs {} --case 2", file("wide2.csv", "1,2,3\n4,5,6\n")),

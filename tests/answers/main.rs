@@ -8,6 +8,7 @@ mod common;
 mod any_cost_matrix;
 mod cli;
 mod corpus;
+mod cost_files;
 mod library;
 mod oracle_instances;
 mod scipy_lsap;

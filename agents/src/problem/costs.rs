@@ -16,9 +16,7 @@ pub enum ProblemError {
     Io { path: String, reason: String },
     #[error("the cost file is empty (expected one row per robot, one column per task)")]
     Empty,
-    #[error(
-        "line {line}, column {column}: '{text}' is not a number (cost files are plain comma-separated numbers, no header)"
-    )]
+    #[error("line {line}, column {column}: '{text}' is not a number")]
     NotANumber {
         line: usize,
         column: usize,
@@ -56,6 +54,12 @@ pub enum ProblemError {
     Forbidden { robot: usize, task: usize },
     #[error("{0}")]
     Forbid(String),
+    /// Robot or task names that cannot name them.
+    #[error("{0}")]
+    Names(String),
+    /// A cost file's cell or shape, with where it is.
+    #[error("{0}")]
+    Format(String),
     #[error("the problem has zero {0}")]
     Zero(&'static str),
     #[error(
@@ -105,6 +109,17 @@ pub struct CostMatrix {
     values: Vec<f64>,
     /// `Some` when some stored (finite) values stand for forbidden pairs.
     allowed: Option<Vec<bool>>,
+    /// The robots' and tasks' names, when the cost file has them.
+    names: Option<Box<Names>>,
+}
+
+/// Robot and task names, as a cost file's first column and header row give them.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Names {
+    /// One per robot, or none.
+    pub robots: Option<Vec<String>>,
+    /// One per task, or none.
+    pub tasks: Option<Vec<String>>,
 }
 
 impl CostMatrix {
@@ -137,7 +152,32 @@ impl CostMatrix {
             tasks,
             values,
             allowed: None,
+            names: None,
         })
+    }
+
+    /// The same costs with `names` (each list as long as the robots or tasks, each name
+    /// unique and not empty).
+    pub fn with_names(mut self, names: Names) -> Result<Self, ProblemError> {
+        check_names("robot", names.robots.as_deref(), self.robots)?;
+        check_names("task", names.tasks.as_deref(), self.tasks)?;
+        self.names = (names.robots.is_some() || names.tasks.is_some()).then(|| Box::new(names));
+        Ok(self)
+    }
+
+    /// The robots' names, when the costs came with them.
+    pub fn robot_names(&self) -> Option<&[String]> {
+        self.names.as_ref()?.robots.as_deref()
+    }
+
+    /// The tasks' names, when the costs came with them.
+    pub fn task_names(&self) -> Option<&[String]> {
+        self.names.as_ref()?.tasks.as_deref()
+    }
+
+    /// The names, if any.
+    pub fn names(&self) -> Option<&Names> {
+        self.names.as_deref()
     }
 
     /// Finite values plus a mask of allowed pairs (`None`: all allowed), as the normalised
@@ -167,78 +207,6 @@ impl CostMatrix {
         }
         matrix.allowed = allowed.filter(|m| m.iter().any(|a| !a));
         Ok(matrix)
-    }
-
-    /// Parses a cost CSV: one line per robot, comma-separated costs per task, no header.
-    /// Blank lines and lines starting with `#` are skipped; `inf`, `+inf`, `-inf`,
-    /// `Infinity` (any case) are infinities, `nan` is refused.
-    pub fn from_csv_str(text: &str) -> Result<Self, ProblemError> {
-        let mut values = Vec::new();
-        let mut tasks = None;
-        let mut robots = 0;
-        // A UTF-8 byte-order mark (spreadsheets write one) is not part of the first number.
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        for (index, raw) in text.lines().enumerate() {
-            let line = raw.trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
-            }
-            let mut count = 0;
-            for (column, cell) in line.split(',').enumerate() {
-                let cell = cell.trim();
-                let value: f64 = cell.parse().map_err(|_| ProblemError::NotANumber {
-                    line: index + 1,
-                    column: column + 1,
-                    text: cell.chars().take(40).collect(),
-                })?;
-                let spelled_infinite = matches!(
-                    cell.trim_start_matches(['+', '-'])
-                        .to_ascii_lowercase()
-                        .as_str(),
-                    "inf" | "infinity"
-                );
-                if value.is_infinite() && !spelled_infinite {
-                    return Err(ProblemError::OutOfRange {
-                        line: index + 1,
-                        column: column + 1,
-                        text: cell.chars().take(40).collect(),
-                    });
-                }
-                if value.is_nan() {
-                    return Err(ProblemError::NonFinite {
-                        robot: robots,
-                        task: column,
-                        value,
-                    });
-                }
-                values.push(value);
-                count += 1;
-            }
-            match tasks {
-                None => tasks = Some(count),
-                Some(expected) if expected != count => {
-                    return Err(ProblemError::Ragged {
-                        line: index + 1,
-                        found: count,
-                        expected,
-                    });
-                }
-                Some(_) => {}
-            }
-            robots += 1;
-            check_size(robots, count)?;
-        }
-        let tasks = tasks.ok_or(ProblemError::Empty)?;
-        Self::new(robots, tasks, values)
-    }
-
-    /// Reads a cost CSV file (see [`CostMatrix::from_csv_str`]): a regular file, read with a
-    /// size bound.
-    pub fn read_csv(path: &Path) -> Result<Self, ProblemError> {
-        // A full-precision cost with its separator fits in 32 bytes; allow twice that for
-        // padding, and refuse bigger files before reading them into memory.
-        let text = read_bounded(path, 64 * MAX_COST_ENTRIES as u64)?;
-        Self::from_csv_str(&text)
     }
 
     /// Uniform `[0, 1)` costs drawn from `seed`.
@@ -337,38 +305,85 @@ impl CostMatrix {
     }
 }
 
-/// Reads a text file that must be a regular file of at most `limit` bytes (FIFOs, devices
-/// and directories are refused, and nothing beyond the limit is read).
+/// The text of a cost file (`-`: standard input), bounded: a full-precision cost with its
+/// separator fits in 32 bytes; twice that is allowed for padding.
+pub fn read_cost_text(path: &Path) -> Result<String, ProblemError> {
+    read_bounded(path, 64 * MAX_COST_ENTRIES as u64)
+}
+
+/// Reads a text file of at most `limit` bytes: a regular file, a pipe or a terminal
+/// (`/dev/stdin`), or standard input for `-`. Directories are refused; nothing beyond the
+/// limit is read, and a stream with NUL bytes (`/dev/zero`, a binary file) is refused at
+/// its first block.
 pub fn read_bounded(path: &Path, limit: u64) -> Result<String, ProblemError> {
     use std::io::Read;
     let io = |reason: String| ProblemError::Io {
         path: path.display().to_string(),
         reason,
     };
-    let meta = std::fs::metadata(path).map_err(|e| io(e.to_string()))?;
-    if !meta.is_file() {
-        return Err(io("not a regular file".into()));
-    }
     let too_large = |bytes: u64| ProblemError::FileTooLarge {
         path: path.display().to_string(),
         bytes,
         limit: MAX_COST_ENTRIES,
     };
-    if meta.len() > limit {
-        return Err(too_large(meta.len()));
-    }
-    let file = std::fs::File::open(path).map_err(|e| io(e.to_string()))?;
+    let mut source: Box<dyn Read> = if path == Path::new("-") {
+        Box::new(std::io::stdin().lock())
+    } else {
+        let meta = std::fs::metadata(path).map_err(|e| io(e.to_string()))?;
+        if meta.is_dir() {
+            return Err(io("it is a directory".into()));
+        }
+        if meta.is_file() && meta.len() > limit {
+            return Err(too_large(meta.len()));
+        }
+        Box::new(std::fs::File::open(path).map_err(|e| io(e.to_string()))?)
+    };
     let mut bytes = Vec::new();
-    file.take(limit + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| io(e.to_string()))?;
-    if bytes.len() as u64 > limit {
-        return Err(too_large(bytes.len() as u64));
+    let mut block = vec![0u8; 1 << 16];
+    loop {
+        let n = match source.read(&mut block) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(io(e.to_string())),
+        };
+        if block[..n].contains(&0) {
+            return Err(io("not a text file (it holds NUL bytes)".into()));
+        }
+        bytes.extend_from_slice(&block[..n]);
+        if bytes.len() as u64 > limit {
+            return Err(too_large(bytes.len() as u64));
+        }
     }
     String::from_utf8(bytes).map_err(|_| io("not UTF-8 text".into()))
 }
 
-fn check_size(robots: usize, tasks: usize) -> Result<(), ProblemError> {
+/// Refuses a list of `what` names that is not one per item, unique and not empty.
+fn check_names(what: &str, names: Option<&[String]>, count: usize) -> Result<(), ProblemError> {
+    let Some(names) = names else {
+        return Ok(());
+    };
+    if names.len() != count {
+        return Err(ProblemError::Names(format!(
+            "{} {what} names for {count} {what}s",
+            names.len()
+        )));
+    }
+    let mut seen = std::collections::HashSet::new();
+    for (k, name) in names.iter().enumerate() {
+        if name.trim().is_empty() {
+            return Err(ProblemError::Names(format!("{what} {k} has an empty name")));
+        }
+        if !seen.insert(name.as_str()) {
+            return Err(ProblemError::Names(format!(
+                "two {what}s are called '{name}': names must be unique"
+            )));
+        }
+    }
+    Ok(())
+}
+
+pub(crate) fn check_size(robots: usize, tasks: usize) -> Result<(), ProblemError> {
     match robots.checked_mul(tasks) {
         Some(entries) if entries <= MAX_COST_ENTRIES => Ok(()),
         _ => Err(ProblemError::TooLarge {

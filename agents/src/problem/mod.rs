@@ -20,8 +20,10 @@
 //!
 //! The cost data and its errors live in [`crate::problem::costs`] (re-exported here).
 
+pub mod cost_file;
 pub mod cost_model;
 pub mod costs;
+pub mod csv_text;
 pub mod feasibility;
 pub mod forbidden;
 pub mod general;
@@ -30,7 +32,7 @@ pub mod surveillance;
 pub mod ties;
 
 pub use crate::problem::costs::{
-    AssignmentCase, CostMatrix, MAX_COST_ENTRIES, ProblemError, read_bounded,
+    AssignmentCase, CostMatrix, MAX_COST_ENTRIES, Names, ProblemError, read_bounded, read_cost_text,
 };
 
 /// How to pick the case: from the shape, or forced.
@@ -392,11 +394,15 @@ mod tests {
                 expected: 2
             })
         ));
+        // A header row of task names.
+        let named = CostMatrix::from_csv_str("task0,task1\n1,2\n").unwrap();
+        assert_eq!(named.task_names().unwrap(), ["task0", "task1"]);
+        // A first row of costs with a bad cell is no header.
         assert!(matches!(
-            CostMatrix::from_csv_str("task0,task1\n1,2\n"),
+            CostMatrix::from_csv_str("1,2x\n1,2\n"),
             Err(ProblemError::NotANumber {
                 line: 1,
-                column: 1,
+                column: 2,
                 ..
             })
         ));

@@ -1,8 +1,10 @@
 //! Resource checks before anything is spawned: the open files an agent process needs for its
-//! transport and degree, and the processes (threads) a team needs, against the soft limits
-//! (`getrlimit`) the agents inherit. A team that cannot fit fails at once with one line and
-//! the number to raise the limit to, instead of an opaque iceoryx2 error half-way through
-//! start-up.
+//! transport and degree, and the processes (threads) a team needs, against the limits
+//! (`getrlimit`) the agents inherit. A soft limit below the need is raised up to the hard
+//! limit first (as Go's runtime and many servers do: the usual soft `ulimit -n` of 1024
+//! would refuse 100 agents over iceoryx2 on a complete graph where the hard limit allows
+//! them); a team that still cannot fit fails at once with one line and the number to raise
+//! the hard limit to, instead of an opaque iceoryx2 error half-way through start-up.
 //!
 //! The open files and threads an agent process needs are declared by its transport
 //! ([`crate::endpoint::ProcessTransport`]; each transport's module says how it counted them).
@@ -28,19 +30,25 @@ pub fn threads_per_agent(transport: Transport) -> u64 {
 /// A team the open-file or process limits cannot hold: what to raise, and to what.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum LimitError {
+    /// `limit`: the hard limit (the soft one is raised up to it first).
     #[error(
-        "the team needs {needed} open files per agent but the limit is {limit}: raise it with ulimit -n {}",
+        "the team needs {needed} open files per agent but the hard limit is {limit} (ulimit -Hn): raise it to {} (as root: ulimit -Hn {}, or in /etc/security/limits.conf)",
+        needed.next_power_of_two(),
         needed.next_power_of_two()
     )]
     OpenFiles { needed: u64, limit: u64 },
     #[error(
-        "the team needs {needed} processes (threads) but the limit is {limit}: raise it with ulimit -u {}",
+        "the team needs {needed} processes (threads) but the hard limit is {limit} (ulimit -Hu): raise it to {} (as root: ulimit -Hu {}, or in /etc/security/limits.conf)",
+        (2 * needed).next_power_of_two(),
         (2 * needed).next_power_of_two()
     )]
     Processes { needed: u64, limit: u64 },
 }
 
-fn soft_limit(resource: libc::__rlimit_resource_t) -> Option<u64> {
+/// Makes the soft limit of `resource` at least `needed` if the hard limit allows it (it is
+/// raised to the hard limit, so the agents, which inherit it, have room too); returns the
+/// limit that stays too low (the hard one), `None` when `needed` fits (or nothing limits).
+fn fit_limit(resource: libc::__rlimit_resource_t, needed: u64) -> Option<u64> {
     let mut limit = libc::rlimit {
         rlim_cur: 0,
         rlim_max: 0,
@@ -48,10 +56,22 @@ fn soft_limit(resource: libc::__rlimit_resource_t) -> Option<u64> {
     // SAFETY: getrlimit writes into our struct.
     if unsafe { libc::getrlimit(resource, &mut limit) } != 0
         || limit.rlim_cur == libc::RLIM_INFINITY
+        || needed <= limit.rlim_cur
     {
         return None;
     }
-    Some(limit.rlim_cur)
+    if limit.rlim_max != libc::RLIM_INFINITY && limit.rlim_max < needed {
+        return Some(limit.rlim_max);
+    }
+    let raised = libc::rlimit {
+        rlim_cur: limit.rlim_max,
+        rlim_max: limit.rlim_max,
+    };
+    // SAFETY: setrlimit reads our struct; raising a soft limit up to the hard one is allowed.
+    if unsafe { libc::setrlimit(resource, &raised) } != 0 {
+        return Some(limit.rlim_cur);
+    }
+    None
 }
 
 /// Refuses a team of `agents` agent processes on `transport` whose largest degree is
@@ -59,18 +79,14 @@ fn soft_limit(resource: libc::__rlimit_resource_t) -> Option<u64> {
 /// raise and to what.
 pub fn check(transport: Transport, agents: usize, max_degree: usize) -> Result<(), LimitError> {
     let files = files_per_agent(transport, max_degree) + MARGIN;
-    if let Some(limit) = soft_limit(libc::RLIMIT_NOFILE)
-        && files > limit
-    {
+    if let Some(limit) = fit_limit(libc::RLIMIT_NOFILE, files) {
         return Err(LimitError::OpenFiles {
             needed: files,
             limit,
         });
     }
     let threads = agents as u64 * threads_per_agent(transport) + 1;
-    if let Some(limit) = soft_limit(libc::RLIMIT_NPROC)
-        && threads > limit
-    {
+    if let Some(limit) = fit_limit(libc::RLIMIT_NPROC, threads) {
         return Err(LimitError::Processes {
             needed: threads,
             limit,

@@ -73,6 +73,8 @@ pub fn solve(
             report.assignment = assignment;
             report.idle_robots = report.idle_robots.iter().map(|&k| survivors[k]).collect();
             report.robots = problem.robots();
+            report.robot_names = problem.costs().robot_names().map(<[String]>::to_vec);
+            report.task_names = problem.costs().task_names().map(<[String]>::to_vec);
             report.degraded = Some(Degraded {
                 failure: first.to_string(),
                 failed_robot: failed,
@@ -228,6 +230,8 @@ fn solve_user(
     };
     let mut report = user::to_user(problem, report, exact.as_ref())?;
     report.topology = graph.name().to_string();
+    report.robot_names = problem.costs().robot_names().map(<[String]>::to_vec);
+    report.task_names = problem.costs().task_names().map(<[String]>::to_vec);
     if centralized {
         // The centralized solver's work is the exact optimum.
         report.wall_time_ms += oracle_ms;
@@ -389,6 +393,9 @@ fn solve_once(
     };
     Ok(SolveReport {
         degraded: None,
+        // The user's problem names them (`solve_user`).
+        robot_names: None,
+        task_names: None,
         assignment,
         cost,
         iterations: run.rounds,

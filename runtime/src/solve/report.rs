@@ -130,6 +130,12 @@ pub struct SolveReport {
     /// numbers, the failed robot without a task (`null`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub degraded: Option<Degraded>,
+    /// The robots' names, when the cost file has them (`assignment` stays by index).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub robot_names: Option<Vec<String>>,
+    /// The tasks' names, when the cost file has them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub task_names: Option<Vec<String>>,
 }
 
 fn tasks_or_null<S: Serializer>(assignment: &[usize], s: S) -> Result<S::Ok, S::Error> {

@@ -40,8 +40,8 @@ use crate::transport::Transport;
 use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
 use admm_ta_agents::method::settings::{GivenSettings, SettingValue};
 use admm_ta_agents::methods::Method;
-use admm_ta_agents::problem::forbidden;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_agents::problem::{cost_file, forbidden, read_cost_text};
 use admm_ta_topologies::{Graph, TopologySpec, file as topology_file};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -269,12 +269,18 @@ impl Team {
             let path = path.to_path_buf();
             move |source| TeamFileError::File { path, source }
         };
+        // Pairs the cost file itself marks forbidden (JSON nulls).
+        let mut marked = Vec::new();
         let costs = if f.costs == "random" {
             let tasks = f.tasks.ok_or(TeamFileError::RandomNeedsTasks)?;
             CostMatrix::uniform(f.robots, tasks, f.seed)?
         } else {
             let path = self.path(Path::new(&f.costs));
-            CostMatrix::read_csv(&path).map_err(in_file(&path))?
+            let file = read_cost_text(&path)
+                .and_then(|text| cost_file::parse(&text, None))
+                .map_err(in_file(&path))?;
+            marked = file.forbidden;
+            file.costs
         };
         if costs.robots() != f.robots {
             return Err(TeamFileError::Robots {
@@ -289,14 +295,14 @@ impl Team {
                 tasks: costs.tasks(),
             });
         }
-        let costs = match &f.forbidden {
-            Some(file) => {
-                let path = self.path(file);
-                let pairs = forbidden::read(&path, costs.robots(), costs.tasks())
-                    .map_err(in_file(&path))?;
-                forbidden::apply(&costs, &pairs, f.maximize)?
-            }
-            None => costs,
+        if let Some(file) = &f.forbidden {
+            let path = self.path(file);
+            marked.extend(forbidden::read(&path, &costs).map_err(in_file(&path))?);
+        }
+        let costs = if marked.is_empty() {
+            costs
+        } else {
+            forbidden::apply(&costs, &marked, f.maximize)?
         };
         let problem = if f.maximize {
             TaskAssignmentProblem::maximizing(costs, CaseChoice::Auto)
