@@ -156,8 +156,7 @@ pub fn launch(
     fault_injection: bool,
 ) -> Result<ProcessRun, LaunchError> {
     let _signals = signals::install();
-    let (guard, scenario_file) = prepare(&mut scenario)?;
-    let mut guard = guard;
+    let (mut guard, scenario_file) = prepare(&mut scenario)?;
     let spawned_unix_ns = unix_ns();
     spawn_agents(&mut guard, &scenario_file, agent_program, fault_injection)?;
     let guard = match supervise(guard, scenario.robots)? {
