@@ -3,6 +3,7 @@
 //! strategies, …) come from the library's own types.
 
 use crate::method_flags::MethodFlags;
+use admm_ta::topologies::RobotRef;
 use admm_ta::{CaseChoice, CostModel, Method, OnFailure, StopRule, Transport, WaitStrategy};
 use admm_ta_bench::rounds::case::{Barrier, StepKind};
 use clap::{Args, Parser, Subcommand};
@@ -68,9 +69,10 @@ pub struct AgentArgs {
     /// The team file (TOML) naming the run, the robots, the topology and the costs.
     #[arg(long, conflicts_with_all = ["run", "index", "scenario"], requires = "id")]
     pub team: Option<PathBuf>,
-    /// This agent's robot number in the team (0-based).
+    /// This agent's robot: its number in the team (0-based), or its name when the cost
+    /// file names the robots.
     #[arg(long)]
-    pub id: Option<usize>,
+    pub id: Option<RobotRef>,
     /// The run's id (it must match the scenario's).
     #[arg(long, requires_all = ["index", "scenario"])]
     pub run: Option<String>,

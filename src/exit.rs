@@ -17,7 +17,9 @@ use admm_ta::runtime::process::member_error::MemberError;
 use admm_ta::runtime::runner::RunError;
 use admm_ta::runtime::solve::report::SolveReport;
 use admm_ta::runtime::team::errors::CollectError;
+use admm_ta::runtime::team::errors::TeamFileError;
 use admm_ta::runtime::transport::ZenohNotBuilt;
+use admm_ta::topologies::RobotNameError;
 use admm_ta::{ConfigError, SolveError, StopRule, TopologyError};
 
 /// A bad command line or input found by the command itself (exit 2).
@@ -106,6 +108,8 @@ pub fn code_of(error: &anyhow::Error) -> u8 {
             || cause.is::<UsageError>()
             || cause.is::<ZenohNotBuilt>()
             || cause.is::<CollectError>()
+            || cause.is::<TeamFileError>()
+            || cause.is::<RobotNameError>()
         {
             return 2;
         }

@@ -5,7 +5,9 @@ use crate::exit::{Outcome, usage_bail};
 use crate::output::outln;
 use admm_ta::runtime::process::agent;
 use admm_ta::runtime::team::member;
-use anyhow::Result;
+use admm_ta::runtime::team::team_file::Team;
+use admm_ta::topologies::RobotRef;
+use anyhow::{Context, Result};
 
 /// Runs the agent. An independently started agent whose team reached the round limit before
 /// any certificate ends with [`Outcome::Uncertified`] (5), as `solve` and `collect` do; an
@@ -15,9 +17,15 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
     let (index, result) = match args {
         AgentArgs {
             team: Some(team),
-            id: Some(id),
+            id: Some(robot),
             ..
         } => {
+            let id = match robot {
+                RobotRef::Index(id) => id,
+                named => Team::read(&team)
+                    .and_then(|t| t.robot(&named))
+                    .with_context(|| format!("agent {named}"))?,
+            };
             let report = member::run_member(&team, id);
             if let Ok(r) = &report {
                 if !r.outcome.converged {

@@ -52,7 +52,7 @@ pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
     };
     let spec: TopologySpec = args.topology.parse()?;
     let graph = spec
-        .build(problem.robots(), args.seed)
+        .build_named(problem.robots(), args.seed, problem.costs().robot_names())
         .with_context(|| format!("topology '{}'", args.topology))?;
     // Only the options the user gave are set: an option given that the run never reads
     // is refused by the options' own rule (`refuse_unread`), as for team files.

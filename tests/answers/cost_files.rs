@@ -121,6 +121,52 @@ fn names_show_in_the_text_report_and_name_forbidden_pairs() {
 }
 
 #[test]
+fn a_topology_file_names_robots_as_the_cost_file_does() {
+    let pandas = ",dock_A,dock_B,dock_C,dock_D\nuav1,62.29,74.18,11.5,40\nuav2,10,20,30,40\nuav3,7.5,3.25,99,1e1\nuav4,5,6,7,8\n";
+    let costs = file("chain-costs.csv", pandas);
+    let plain = report(&solve(&["--costs", &file("chain-plain.csv", PLAIN)], None));
+    // A chain uav2 – uav1 – uav4 – uav3, names and numbers mixed.
+    let chain = file(
+        "named-chain.toml",
+        "robots = 4\nedges = [[\"uav2\", \"uav1\"], [\"uav1\", 3], [\"uav4\", \"uav3\"]]\n",
+    );
+    let named = report(&solve(&["--costs", &costs, "--topology", &chain], None));
+    assert_eq!(named["cost"], plain["cost"]);
+    assert_eq!(named["check"]["optimal"], true);
+    // The same edges by number: the same graph, so the same rounds.
+    let numbered = file(
+        "numbered-chain.toml",
+        "robots = 4\nedges = [[1, 0], [0, 3], [3, 2]]\n",
+    );
+    let by_number = report(&solve(&["--costs", &costs, "--topology", &numbered], None));
+    assert_eq!(by_number["iterations"], named["iterations"]);
+    assert_eq!(by_number["assignment"], named["assignment"]);
+    // A name the costs do not have, or names with unnamed costs: exit 2, one line naming
+    // the edge and the name.
+    let typo = file(
+        "typo-chain.toml",
+        "robots = 4\nedges = [[\"uav1\", \"uav2\"], [\"uav2\", \"uva3\"], [2, 3]]\n",
+    );
+    let plain_costs = file("chain-plain2.csv", PLAIN);
+    for (costs, needle) in [
+        (
+            &costs,
+            "edge 1: no robot is named 'uva3' (the robots are uav1, uav2, uav3, uav4)",
+        ),
+        (
+            &plain_costs,
+            "edge 0: robot 'uav1' is named, but the costs name no robots",
+        ),
+    ] {
+        let out = solve(&["--costs", costs, "--topology", &typo], None);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(needle), "{stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    }
+}
+
+#[test]
 fn bad_cost_files_are_refused_naming_line_and_column() {
     for (text, needle) in [
         ("1,2\n3,x\n", "line 2, column 2: 'x' is not a number"),

@@ -151,6 +151,104 @@ fn independently_started_agents_reach_the_oracle_optimum() {
     }
 }
 
+/// A team whose cost file names its robots: the topology file and the agents' `--id` use the
+/// names, and a zenoh team's hosts list them by name.
+#[test]
+fn robots_go_by_the_cost_files_names_in_team_and_topology_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("n{}", std::process::id());
+    let names = ["uav1", "uav2", "uav3", "uav4"];
+    std::fs::write(
+        dir.path().join("costs.csv"),
+        ",dock_A,dock_B,dock_C\nuav1,4,1,3\nuav2,2,0,5\nuav3,3,2,2\nuav4,1,1,1\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("net.toml"),
+        "robots = 4\nedges = [[\"uav1\", \"uav2\"], [\"uav2\", \"uav3\"], [\"uav3\", \"uav4\"]]\n",
+    )
+    .unwrap();
+    let team = team_file(
+        dir.path(),
+        &run,
+        4,
+        &dir.path().join("costs.csv"),
+        "net.toml",
+        60.0,
+    );
+    let children: Vec<(usize, Child)> = names
+        .iter()
+        .enumerate()
+        .map(|(id, name)| {
+            let child = admm_ta()
+                .args(["agent", "--team", team.to_str().unwrap(), "--id", name])
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap();
+            (id, child)
+        })
+        .collect();
+    for (id, child) in children {
+        let out = child.wait_with_output().unwrap();
+        assert!(
+            out.status.success(),
+            "agent {id}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(line["id"], id);
+    }
+    let out = collect(&team, &["--check", "--json"]);
+    let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(result["optimal"], true, "{result}");
+    // Case 2 (every robot works, every task is covered), by hand: uav1→B (1), uav2→B (0),
+    // uav3→C (2), uav4→A (1).
+    assert_eq!(result["cost"].as_f64().unwrap(), 4.0, "{result}");
+    assert_eq!(result["assignment"], serde_json::json!([1, 1, 2, 0]));
+    assert!(team_shm_left(&run).is_empty());
+    // A name the costs do not have: exit 2, one line, nothing started.
+    let out = admm_ta()
+        .args(["agent", "--team", team.to_str().unwrap(), "--id", "uav9"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("no robot is named 'uav9'"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+
+    // Hosts by name, names and numbers mixed.
+    let hosts = |second: &str| {
+        format!(
+            "run = \"h{run}\"\nrobots = 4\ncosts = \"costs.csv\"\ntransport = \"zenoh\"\n\
+             [[hosts]]\nname = \"alpha\"\nagents = [\"uav1\", 1]\nendpoint = \"tcp/127.0.0.1:7447\"\n\
+             [[hosts]]\nname = \"beta\"\nagents = {second}\nendpoint = \"tcp/127.0.0.1:7448\"\n"
+        )
+    };
+    let path = dir.path().join("hosts.toml");
+    std::fs::write(&path, hosts("[\"uav4\", \"uav3\"]")).unwrap();
+    let read = admm_ta_runtime::team::team_file::Team::read(&path).unwrap();
+    assert_eq!(read.file.hosts[0].agents, [0, 1]);
+    assert_eq!(read.file.hosts[1].agents, [3, 2]);
+    for (second, needle) in [
+        (
+            "[\"uav4\", \"uav5\"]",
+            "host 'beta': no robot is named 'uav5'",
+        ),
+        ("[\"uav4\", \"uav1\"]", "robot 0 is on two hosts"),
+    ] {
+        std::fs::write(&path, hosts(second)).unwrap();
+        let out = admm_ta()
+            .args(["agent", "--team", path.to_str().unwrap(), "--id", "uav1"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains(needle), "{second}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
+
 #[test]
 fn a_missing_agent_fails_the_team_after_the_deadline_naming_it() {
     let instance = common::oracle_instances()

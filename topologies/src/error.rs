@@ -46,6 +46,12 @@ pub enum TopologyError {
     Io { path: PathBuf, reason: String },
     #[error("topology file {}: {reason}", .path.display())]
     Parse { path: PathBuf, reason: String },
+    #[error("topology file {}, edge {edge}", .path.display())]
+    RobotName {
+        path: PathBuf,
+        edge: usize,
+        source: Box<crate::RobotNameError>,
+    },
 }
 
 fn describe_components(components: &[Vec<usize>]) -> String {

@@ -18,8 +18,10 @@ pub mod file;
 pub mod generate;
 mod graph;
 pub mod rng;
+mod robot_ref;
 mod spec;
 
 pub use error::TopologyError;
 pub use graph::Graph;
+pub use robot_ref::{RobotNameError, RobotRef};
 pub use spec::TopologySpec;

@@ -23,6 +23,17 @@ impl TopologySpec {
     /// Builds the graph for `robots` robots; random families draw from `seed`. The result
     /// is always connected (Assumption 1) and sized for `robots`, or an error says why not.
     pub fn build(&self, robots: usize, seed: u64) -> Result<Graph, TopologyError> {
+        self.build_named(robots, seed, None)
+    }
+
+    /// As [`TopologySpec::build`], where a topology file may name robots by `robot_names`
+    /// (the cost file's, in row order; see [`crate::file::parse_named`]).
+    pub fn build_named(
+        &self,
+        robots: usize,
+        seed: u64,
+        robot_names: Option<&[String]>,
+    ) -> Result<Graph, TopologyError> {
         let graph = match self {
             Self::Complete => generate::complete(robots)?,
             Self::Chain => generate::chain(robots)?,
@@ -32,7 +43,7 @@ impl TopologySpec {
             Self::Random(p) => generate::random_connected(robots, *p, seed)?,
             Self::Geometric(r) => generate::random_geometric(robots, *r, seed)?.0,
             Self::File(path) => {
-                let g = file::read(path)?;
+                let g = file::read_named(path, robot_names)?;
                 if g.robots() != robots {
                     return Err(TopologyError::SizeMismatch {
                         expected: robots,

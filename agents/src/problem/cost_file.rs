@@ -9,6 +9,22 @@
 //! `+inf`, `-inf`, `Infinity` (any case); `NaN`, a number beyond double precision, an empty
 //! cell, ragged rows and an empty matrix are refused, naming line and column. A decimal
 //! comma is never guessed.
+//!
+//! ```
+//! use admm_ta_agents::problem::{cost_file, forbidden};
+//! // pandas' `df.to_csv()`: a header of task names, a first column of robot names.
+//! let file = cost_file::parse(",dock_A,dock_B\nuav3,9,1\nuav4,2,8\n", None).unwrap();
+//! assert_eq!(file.costs.robot_names().unwrap(), ["uav3", "uav4"]);
+//! assert_eq!(file.costs.task_names().unwrap(), ["dock_A", "dock_B"]);
+//! assert_eq!(file.costs.values(), [9.0, 1.0, 2.0, 8.0]);
+//! // Forbidden pairs by name; JSON with `null` marks them in the file itself.
+//! assert_eq!(forbidden::parse("uav3,dock_A\n", &file.costs).unwrap(), [(0, 0)]);
+//! let json = cost_file::parse(r#"{"costs": [[9, null], [2, 8]]}"#, None).unwrap();
+//! assert_eq!(json.forbidden, [(0, 1)]);
+//! // Refusals name line and column.
+//! let bad = cost_file::parse("1,2\n3,x\n", None).unwrap_err().to_string();
+//! assert!(bad.contains("line 2, column 2"), "{bad}");
+//! ```
 
 use crate::problem::costs::{CostMatrix, Names, ProblemError, read_cost_text};
 use crate::problem::csv_text::{detect_delimiter, line_at, line_starts};

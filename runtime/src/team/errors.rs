@@ -16,7 +16,7 @@ use crate::zenoh_net::links::NotAnEndpoint;
 use admm_ta_agents::certify::local_stop::LocalStopError;
 use admm_ta_agents::numerics::lsap::LsapError;
 use admm_ta_agents::problem::ProblemError;
-use admm_ta_topologies::TopologyError;
+use admm_ta_topologies::{RobotNameError, TopologyError};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -64,6 +64,17 @@ pub enum TeamFileError {
     TooFewRobots { robots: usize, tasks: usize },
     #[error(transparent)]
     TopologyFile(TopologyError),
+    /// A host's `agents` names a robot the costs do not name.
+    #[error("team file {}: host '{host}'", path.display())]
+    HostRobot {
+        path: PathBuf,
+        host: String,
+        #[source]
+        source: Box<RobotNameError>,
+    },
+    /// `agent --id NAME` names a robot the costs do not name.
+    #[error("--id")]
+    Id(#[source] Box<RobotNameError>),
     #[error("topology {} has {found} robots, the team {robots}", path.display())]
     TopologyRobots {
         path: PathBuf,

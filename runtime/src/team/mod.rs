@@ -4,12 +4,14 @@
 //!
 //! * [`team_file`]: the team file, and what every member derives from it;
 //! * [`errors`]: their errors, one type per operation;
+//! * `hosts`: a team file's hosts (robots by name or number, one host per robot);
 //! * [`member`]: agents started independently from a team file (joining, leaving, collecting);
 //! * `host` and `bridge` (feature `zenoh`): one machine of a multi-host team — its Zenoh
 //!   router, and the bridge that carries a mixed team's messages between a host's iceoryx2
 //!   services and the other hosts (the one place that uses two transports at once).
 
 pub mod errors;
+mod hosts;
 pub mod member;
 pub mod team_file;
 

@@ -31,18 +31,23 @@
 //! agents = [5, 6, 7, 8, 9]
 //! endpoint = "tcp/192.168.1.11:7447"
 //! ```
+//!
+//! When the cost file names its robots (a first column of names), a host's `agents` may list
+//! them by name (`agents = ["uav1", "uav2", 2]`), a topology file may name them in its edges,
+//! and `admm-ta agent --id uav1` starts a robot by name.
 
 use crate::options::error::ConfigError;
 use crate::options::{SolveOptions, StopRule};
 use crate::process::namespace::RunNamespace;
-use crate::team::errors::{HostsError, TeamFileError};
-use crate::transport::Transport;
-use crate::zenoh_net::links::{ZenohLinks, check_endpoint};
+use crate::team::errors::TeamFileError;
+pub use crate::team::hosts::{Deployment, HostEntry};
+use crate::team::hosts::{check_hosts, cost_robot_names, number_host_agents};
+use crate::zenoh_net::links::ZenohLinks;
 use admm_ta_agents::method::settings::{GivenSettings, SettingValue};
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::problem::{cost_file, forbidden, read_cost_text};
-use admm_ta_topologies::{Graph, TopologySpec, file as topology_file};
+use admm_ta_topologies::{Graph, RobotRef, TopologySpec, file as topology_file};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -92,68 +97,6 @@ pub struct TeamFile {
     pub hosts: Vec<HostEntry>,
 }
 
-/// How an independently started team is deployed: on one machine or across several, and
-/// what carries its messages (a team file's `transport` key).
-///
-/// It is not a [`Transport`]: `mixed` is two transports at once (iceoryx2 among the agents of
-/// a host, Zenoh between hosts through each host's bridge), and a deployment decides more
-/// than an agent's exchange — whether the team has hosts, a shared board per host, bridges.
-/// [`Deployment::agent_transport`] is the exchange each agent runs. The `shm` and `uds`
-/// transports run under a launcher only (`solve --transport shm`): a team file names no
-/// such deployment and is refused (the launcher creates and removes the shm slot table,
-/// and finds dead agents by `waitpid`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Deployment {
-    /// Every agent on this machine, iceoryx2 zero-copy (`iceoryx2`, or `ipc` as on the
-    /// command line).
-    #[default]
-    #[serde(alias = "ipc")]
-    Iceoryx2,
-    /// Every agent a Zenoh peer of its host's router.
-    Zenoh,
-    /// iceoryx2 among the agents of a host; the host's bridge carries what crosses hosts.
-    Mixed,
-}
-
-impl Deployment {
-    /// The transport every agent's exchange runs.
-    pub fn agent_transport(self) -> Transport {
-        match self {
-            Self::Iceoryx2 | Self::Mixed => Transport::Ipc,
-            Self::Zenoh => Transport::Zenoh,
-        }
-    }
-
-    /// The team spans machines, named by its `[[hosts]]`.
-    pub fn across_hosts(self) -> bool {
-        self != Self::Iceoryx2
-    }
-
-    /// The agents of a host share a board in shared memory (iceoryx2 and mixed teams); a
-    /// Zenoh team's presence, failures and cleanup travel on Zenoh instead.
-    pub fn host_board(self) -> bool {
-        self != Self::Zenoh
-    }
-
-    /// Each host runs a bridge between its agents' iceoryx2 services and the other hosts.
-    pub fn bridged(self) -> bool {
-        self == Self::Mixed
-    }
-}
-
-/// One machine of a multi-host team.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct HostEntry {
-    /// Letters, digits and dashes (`admm-ta host --name NAME`).
-    pub name: String,
-    /// The robots that run on it.
-    pub agents: Vec<usize>,
-    /// Where its Zenoh router listens, `tcp/ADDRESS:PORT`, reachable from the other hosts.
-    pub endpoint: String,
-}
-
 fn complete() -> String {
     "complete".into()
 }
@@ -187,6 +130,8 @@ impl Team {
             message: message.to_string(),
         };
         let mut table: toml::Table = toml::from_str(&text).map_err(|e| syntax(e.message()))?;
+        let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+        number_host_agents(&mut table, &base, path)?;
         // The methods' own settings, by key; the rest is the team file's own keys.
         let mut settings = GivenSettings::default();
         for spec in Method::all_settings() {
@@ -210,9 +155,8 @@ impl Team {
             .try_into()
             .map_err(|e: toml::de::Error| syntax(e.message()))?;
         file.settings = settings;
-        let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         RunNamespace::check_team_name(&file.run)?;
-        check_hosts(&file)?;
+        check_hosts(&file.run, file.robots, file.transport, &file.hosts)?;
         let team = Self { file, base };
         // The settings' checks, named by the file's keys.
         team.solve_options()
@@ -221,6 +165,22 @@ impl Team {
                 error,
             })?;
         Ok(team)
+    }
+
+    /// The robots' names, when the cost file names them (read from the file).
+    pub fn robot_names(&self) -> Result<Option<Vec<String>>, TeamFileError> {
+        cost_robot_names(&self.base, &self.file.costs)
+    }
+
+    /// The number of the robot `robot` refers to: an index as it is, a name looked up in
+    /// the cost file's robot names (`admm-ta agent --id uav3`).
+    pub fn robot(&self, robot: &RobotRef) -> Result<usize, TeamFileError> {
+        match robot {
+            RobotRef::Index(i) => Ok(*i),
+            RobotRef::Name(_) => robot
+                .resolve(self.robot_names()?.as_deref())
+                .map_err(|e| TeamFileError::Id(Box::new(e))),
+        }
     }
 
     /// The host agent `id` runs on (zenoh and mixed teams).
@@ -309,9 +269,11 @@ impl Team {
         } else {
             TaskAssignmentProblem::new(costs, CaseChoice::Auto)
         }?;
+        let names = problem.costs().robot_names();
         let graph = if f.topology.ends_with(".toml") {
             let path = self.path(Path::new(&f.topology));
-            let graph = topology_file::read(&path).map_err(TeamFileError::TopologyFile)?;
+            let graph =
+                topology_file::read_named(&path, names).map_err(TeamFileError::TopologyFile)?;
             if graph.robots() != f.robots {
                 return Err(TeamFileError::TopologyRobots {
                     path,
@@ -323,7 +285,7 @@ impl Team {
         } else {
             f.topology
                 .parse::<TopologySpec>()
-                .and_then(|t| t.build(f.robots, f.seed))
+                .and_then(|t| t.build_named(f.robots, f.seed, names))
                 .map_err(|source| TeamFileError::Topology {
                     spec: f.topology.clone(),
                     source,
@@ -352,68 +314,4 @@ impl Team {
             .startup_timeout_secs(f.startup_timeout)
             .build()
     }
-}
-
-/// Checks the hosts of a team file: a zenoh or mixed team puts every robot on exactly one
-/// named host with a distinct TCP endpoint; an iceoryx2 team has no hosts.
-fn check_hosts(file: &TeamFile) -> Result<(), HostsError> {
-    if !file.transport.across_hosts() {
-        if !file.hosts.is_empty() {
-            return Err(HostsError::NotAcrossHosts);
-        }
-        return Ok(());
-    }
-    if file.hosts.is_empty() {
-        return Err(HostsError::None);
-    }
-    let mut host_of = vec![None; file.robots];
-    for (h, host) in file.hosts.iter().enumerate() {
-        if RunNamespace::check_team_name(&host.name).is_err() {
-            return Err(HostsError::BadName(host.name.clone()));
-        }
-        check_endpoint(&host.endpoint).map_err(|source| HostsError::Endpoint {
-            host: host.name.clone(),
-            source,
-        })?;
-        if let Some(other) = file.hosts[..h].iter().find(|o| o.name == host.name) {
-            return Err(HostsError::SameName(other.name.clone()));
-        }
-        if let Some(other) = file.hosts[..h].iter().find(|o| o.endpoint == host.endpoint) {
-            return Err(HostsError::SameEndpoint {
-                first: other.name.clone(),
-                second: host.name.clone(),
-                endpoint: host.endpoint.clone(),
-            });
-        }
-        for &a in &host.agents {
-            let slot = host_of.get_mut(a).ok_or_else(|| HostsError::NoSuchRobot {
-                host: host.name.clone(),
-                robot: a,
-                robots: file.robots,
-            })?;
-            if let Some(other) = slot.replace(h) {
-                return Err(HostsError::TwoHosts {
-                    robot: a,
-                    first: file.hosts[other].name.clone(),
-                    second: host.name.clone(),
-                });
-            }
-        }
-    }
-    if file.transport.bridged()
-        && let Some(host) = file
-            .hosts
-            .iter()
-            .find(|h| file.run.len() + 1 + h.name.len() > 40)
-    {
-        return Err(HostsError::NameTooLong {
-            run: file.run.clone(),
-            host: host.name.clone(),
-        });
-    }
-    let homeless: Vec<usize> = (0..file.robots).filter(|&a| host_of[a].is_none()).collect();
-    if !homeless.is_empty() {
-        return Err(HostsError::Homeless(homeless));
-    }
-    Ok(())
 }
