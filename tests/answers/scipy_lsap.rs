@@ -216,3 +216,52 @@ fn sparse_random_matrices_feasibility_agrees_with_the_exact_solver() {
     eprintln!("{feasible} feasible, {infeasible} infeasible");
     assert!(feasible > 10 && infeasible > 10);
 }
+
+/// Sparse 40 × 40 integer matrices in which most pairs are forbidden (15% allowed, plus a
+/// hidden permutation that keeps them feasible): both dual methods certify the exact optimum
+/// (forbidden pairs are bounds of each robot's own problem, not a penalty its multipliers
+/// must climb to — before, every one ended at the round limit, repaired and not optimal).
+#[test]
+fn dual_methods_certify_sparse_forbidden_matrices() {
+    let mut state = 4321u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let n = 40;
+    for trial in 0..3 {
+        let mut permutation: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            permutation.swap(i, (next() * (i + 1) as f64) as usize % (i + 1));
+        }
+        let values: Vec<f64> = (0..n * n)
+            .map(|k| {
+                if permutation[k / n] == k % n || next() < 0.15 {
+                    (next() * 101.0).floor().min(100.0)
+                } else {
+                    INF
+                }
+            })
+            .collect();
+        let exact = admm_ta::agents::numerics::lsap::solve(&values, n, n).unwrap();
+        let optimum: f64 = exact
+            .iter()
+            .enumerate()
+            .map(|(r, c)| values[r * n + c.unwrap()])
+            .sum();
+        let p =
+            TaskAssignmentProblem::new(CostMatrix::new(n, n, values).unwrap(), CaseChoice::Auto)
+                .unwrap();
+        for method in [Method::Dual, Method::InexactDual] {
+            let report = solve(&p, method).unwrap();
+            assert!(
+                report.certified,
+                "trial {trial} {}: {report:?}",
+                method.name()
+            );
+            assert_eq!(report.cost, optimum, "trial {trial} {}", method.name());
+        }
+    }
+}

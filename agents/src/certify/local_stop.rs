@@ -110,7 +110,7 @@ impl LocalCertifiedStop {
     /// Checks the certificate on rounds that are multiples of `every` once the robot has
     /// agreed with its neighbours for more than `after` rounds (defaults [`CHECK_EVERY`],
     /// [`CHECK_AFTER`]; a method's cadence is
-    /// [`crate::methods::AgentSettings::stop_cadence`]). Every robot must use the same.
+    /// [`crate::method::team::TeamMethod::stop_cadence`]). Every robot must use the same.
     pub fn with_cadence(mut self, (every, after): (u64, u32)) -> Self {
         self.every = every.max(1);
         self.after = after;

@@ -144,7 +144,12 @@ impl TeamMethod for DualMethod {
         Box::new(DualTeam {
             params: team.params,
             update: DualUpdate::Exact,
+            costs: team.problem.costs(),
         })
+    }
+
+    fn stop_cadence(&self, _: &NoSettings) -> (u64, u32) {
+        CADENCE
     }
 }
 
@@ -174,9 +179,19 @@ impl TeamMethod for InexactDualMethod {
             update: DualUpdate::Inexact {
                 gamma_factor: settings.gamma_factor,
             },
+            costs: team.problem.costs(),
         })
     }
+
+    fn stop_cadence(&self, _: &InexactDualSettings) -> (u64, u32) {
+        CADENCE
+    }
 }
+
+/// The certificate is checked every round: its disagreement level changes every round (see
+/// [`agent`]), and a robot never sees the team's assignment, so there is no agreement
+/// streak to wait for.
+const CADENCE: (u64, u32) = (1, 0);
 
 const RULE: RhoRule = RhoRule::Dual {
     factor: DUAL_RHO_FACTOR,
@@ -186,25 +201,33 @@ const INEXACT_RULE: RhoRule = RhoRule::Dual {
 };
 
 /// Builds a dual team's agents.
-struct DualTeam {
+struct DualTeam<'a> {
     params: TeamParams,
     update: DualUpdate,
+    /// The team's costs, for each robot's own forbidden pairs.
+    costs: &'a CostMatrix,
 }
 
-impl TeamBuilder for DualTeam {
+impl TeamBuilder for DualTeam<'_> {
     fn agent(&self, init: AgentInit) -> Box<dyn AgentAlgorithm> {
-        Box::new(DualAgent::new(
-            init.index,
-            init.costs,
-            init.robots,
-            init.case,
-            init.degree,
-            DualParams {
-                rho: self.params.rho,
-                update: self.update,
-                diameter: self.params.diameter,
-                tolerance: self.params.tolerance,
-            },
-        ))
+        let allowed = (0..self.costs.tasks())
+            .map(|t| self.costs.is_allowed(init.index, t))
+            .collect();
+        Box::new(
+            DualAgent::new(
+                init.index,
+                init.costs,
+                init.robots,
+                init.case,
+                init.degree,
+                DualParams {
+                    rho: self.params.rho,
+                    update: self.update,
+                    diameter: self.params.diameter,
+                    tolerance: self.params.tolerance,
+                },
+            )
+            .with_allowed(allowed),
+        )
     }
 }

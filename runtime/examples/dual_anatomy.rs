@@ -1,0 +1,107 @@
+//! Where the dual methods' rounds go: per seed, the first round from which the robots'
+//! rounded tasks stay optimal, the neighbour disagreement and the smallest price margin at
+//! that point, and the round the certificate fires.
+//! `cargo run --release -p admm-ta-runtime --example dual_anatomy -- ROBOTS TASKS TOPOLOGY uniform|distance SEEDS exact|inexact [ROUNDS]`.
+use admm_ta_agents::agent::ConsensusAgent;
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::method::agent::MethodAgent;
+use admm_ta_agents::method::team::{AgentInit, TeamContext, TeamParams};
+use admm_ta_agents::methods::Method;
+use admm_ta_agents::problem::cost_model::CostModel;
+use admm_ta_agents::problem::{CaseChoice, TaskAssignmentProblem};
+use admm_ta_runtime::sim::LockstepSim;
+use admm_ta_topologies::TopologySpec;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let n: usize = args[1].parse().unwrap();
+    let m: usize = args[2].parse().unwrap();
+    let spec: TopologySpec = args[3].parse().unwrap();
+    let model = match args[4].as_str() {
+        "uniform" => CostModel::Uniform,
+        _ => CostModel::Geometric,
+    };
+    let seeds: u64 = args[5].parse().unwrap();
+    let method = if args[6] == "exact" {
+        Method::Dual
+    } else {
+        Method::InexactDual
+    };
+    let max_rounds: usize = args.get(7).map_or(5000, |a| a.parse().unwrap());
+    let mut certified = Vec::new();
+    let mut settled = Vec::new();
+    for seed in 1..=seeds {
+        let costs = model.costs(n, m, seed).unwrap();
+        let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
+        let graph = spec.build(n, seed).unwrap();
+        let optimum = oracle::solve(&problem).unwrap();
+        let setup = method.setup(&Default::default()).unwrap().unwrap();
+        let rho = setup
+            .default_rho(problem.costs(), graph.mean_degree())
+            .unwrap()
+            * std::env::var("RHO_SCALE").map_or(1.0, |v| v.parse().unwrap());
+        let params = TeamParams {
+            rho,
+            diameter: graph.diameter().unwrap(),
+            tolerance: 1e-9 * problem.costs().spread() * n as f64,
+        };
+        let team = setup.team(TeamContext {
+            problem: &problem,
+            graph: &graph,
+            params,
+        });
+        let agents: Vec<_> = (0..n)
+            .map(|i| {
+                MethodAgent::new(team.agent(AgentInit {
+                    index: i,
+                    costs: problem.costs().row(i).to_vec(),
+                    robots: n,
+                    case: problem.case(),
+                    degree: graph.degree(i),
+                }))
+            })
+            .collect();
+        let mut sim = LockstepSim::new(agents, &graph);
+        let tol = params.tolerance / n as f64;
+        let (mut since, mut cert_at) = (None, None);
+        let mut at_settle = (0.0, 0.0);
+        for round in 1..=max_rounds {
+            let reports = sim.step_round().to_vec();
+            let agents = sim.agents();
+            let decisions: Vec<usize> = agents.iter().map(|a| a.decide()).collect();
+            let optimal = problem.is_feasible(&decisions)
+                && problem.cost_of(&decisions).unwrap() <= optimum.cost + 1e-9;
+            let disagreement = reports.iter().map(|r| r.disagreement).fold(0.0, f64::max);
+            if optimal {
+                if since.is_none() {
+                    since = Some(round);
+                    at_settle = (disagreement, 0.0);
+                }
+            } else {
+                since = None;
+            }
+            if cert_at.is_none() && agents.iter().all(|a| a.certificate_slack() <= tol) {
+                cert_at = Some(round);
+                if !optimal {
+                    println!("seed {seed}: WRONG certificate at {round}");
+                }
+                break;
+            }
+        }
+        println!(
+            "seed {seed}: optimal from {since:?} (disagreement then {:.2e}), certified {cert_at:?}",
+            at_settle.0
+        );
+        certified.push(cert_at.unwrap_or(max_rounds) as f64);
+        settled.push(since.unwrap_or(max_rounds) as f64);
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    println!(
+        "median: optimal from {}, certified {}",
+        median(&mut settled),
+        median(&mut certified)
+    );
+}
