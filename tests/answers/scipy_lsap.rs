@@ -162,18 +162,23 @@ fn scipys_constant_matrix_and_input_validation() {
     assert!(CostMatrix::from_csv_str("").is_err());
 }
 
+/// Uniform `[0, 1)` numbers from a seeded linear congruential generator (no RNG crate).
+fn uniforms(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 /// scipy's sparse comparison: 100 × 100 with 6% allowed integer costs in 1..100, `inf`
 /// elsewhere; about a third are infeasible. The feasibility check (Hall's condition) must agree
 /// with the exact solver, and a sample of the feasible ones is solved by every optimal method.
 #[test]
 fn sparse_random_matrices_feasibility_agrees_with_the_exact_solver() {
-    let mut state = 1234u64;
-    let mut next = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = uniforms(1234);
     let (mut feasible, mut infeasible) = (0, 0);
     for trial in 0..100 {
         let values: Vec<f64> = (0..100 * 100)
@@ -223,13 +228,7 @@ fn sparse_random_matrices_feasibility_agrees_with_the_exact_solver() {
 /// must climb to — before, every one ended at the round limit, repaired and not optimal).
 #[test]
 fn dual_methods_certify_sparse_forbidden_matrices() {
-    let mut state = 4321u64;
-    let mut next = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = uniforms(4321);
     let n = 40;
     for trial in 0..3 {
         let mut permutation: Vec<usize> = (0..n).collect();
