@@ -1,6 +1,6 @@
 //! Where the dual methods' rounds go: per seed, the first round from which the robots'
-//! rounded tasks stay optimal, the neighbour disagreement and the smallest price margin at
-//! that point, and the round the certificate fires.
+//! rounded tasks stay optimal, the neighbours' largest disagreement at that point, and the
+//! round every robot's certificate holds. `RHO_SCALE=F` multiplies the default ρ.
 //! `cargo run --release -p admm-ta-runtime --example dual_anatomy -- ROBOTS TASKS TOPOLOGY uniform|distance SEEDS exact|inexact [ROUNDS]`.
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::oracle;
