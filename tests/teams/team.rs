@@ -47,7 +47,8 @@ fn gcd(a: usize, b: usize) -> usize {
     if b == 0 { a } else { gcd(b, a % b) }
 }
 
-fn start(team: &Path, id: usize) -> Child {
+/// Starts agent `id` of `team` (a robot number, or a name when the costs name robots).
+fn start(team: &Path, id: impl std::fmt::Display) -> Child {
     admm_ta()
         .args([
             "agent",
@@ -71,6 +72,21 @@ fn all_succeed(agents: impl IntoIterator<Item = (usize, Child)>) {
             "agent {id}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
+    }
+}
+
+/// Waits for every agent; each must succeed, report its own number and have converged.
+fn all_converge(agents: impl IntoIterator<Item = (usize, Child)>) {
+    for (id, child) in agents {
+        let out = child.wait_with_output().unwrap();
+        assert!(
+            out.status.success(),
+            "agent {id}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(line["id"], id);
+        assert_eq!(line["converged"], true);
     }
 }
 
@@ -109,17 +125,7 @@ fn independently_started_agents_reach_the_oracle_optimum() {
             // Staggered starts: the early ones wait for the late ones.
             std::thread::sleep(Duration::from_millis(if n % 3 == 0 { 40 } else { 2 }));
         }
-        for (id, child) in children {
-            let out = child.wait_with_output().unwrap();
-            assert!(
-                out.status.success(),
-                "agent {id}: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-            let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-            assert_eq!(line["id"], id);
-            assert_eq!(line["converged"], true);
-        }
+        all_converge(children);
         let out = admm_ta()
             .args([
                 "collect",
@@ -179,26 +185,9 @@ fn robots_go_by_the_cost_files_names_in_team_and_topology_files() {
     let children: Vec<(usize, Child)> = names
         .iter()
         .enumerate()
-        .map(|(id, name)| {
-            let child = admm_ta()
-                .args(["agent", "--team", team.to_str().unwrap(), "--id", name])
-                .stdout(Stdio::piped())
-                .stderr(Stdio::piped())
-                .spawn()
-                .unwrap();
-            (id, child)
-        })
+        .map(|(id, name)| (id, start(&team, name)))
         .collect();
-    for (id, child) in children {
-        let out = child.wait_with_output().unwrap();
-        assert!(
-            out.status.success(),
-            "agent {id}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-        assert_eq!(line["id"], id);
-    }
+    all_converge(children);
     let out = collect(&team, &["--check", "--json"]);
     let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(result["optimal"], true, "{result}");
