@@ -141,11 +141,7 @@ impl TeamMethod for DualMethod {
     }
 
     fn team<'a>(&'static self, _: &NoSettings, team: TeamContext<'a>) -> Box<dyn TeamBuilder + 'a> {
-        Box::new(DualTeam {
-            params: team.params,
-            update: DualUpdate::Exact,
-            costs: team.problem.costs(),
-        })
+        Box::new(DualTeam::new(team, DualUpdate::Exact))
     }
 
     fn stop_cadence(&self, _: &NoSettings) -> (u64, u32) {
@@ -174,13 +170,12 @@ impl TeamMethod for InexactDualMethod {
         settings: &InexactDualSettings,
         team: TeamContext<'a>,
     ) -> Box<dyn TeamBuilder + 'a> {
-        Box::new(DualTeam {
-            params: team.params,
-            update: DualUpdate::Inexact {
+        Box::new(DualTeam::new(
+            team,
+            DualUpdate::Inexact {
                 gamma_factor: settings.gamma_factor,
             },
-            costs: team.problem.costs(),
-        })
+        ))
     }
 
     fn stop_cadence(&self, _: &InexactDualSettings) -> (u64, u32) {
@@ -206,6 +201,16 @@ struct DualTeam<'a> {
     update: DualUpdate,
     /// The team's costs, for each robot's own forbidden pairs.
     costs: &'a CostMatrix,
+}
+
+impl<'a> DualTeam<'a> {
+    fn new(team: TeamContext<'a>, update: DualUpdate) -> Self {
+        Self {
+            params: team.params,
+            update,
+            costs: team.problem.costs(),
+        }
+    }
 }
 
 impl TeamBuilder for DualTeam<'_> {
