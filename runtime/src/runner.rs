@@ -67,6 +67,10 @@ pub enum RunError {
     Unreadable(#[from] UnreadableOutcome),
     #[error("the run finished but could not remove its files: {0:?}")]
     Leftovers(Vec<PathBuf>),
+    /// A termination signal stopped a team running inside this process (while a
+    /// [`crate::signals::install`] guard lived).
+    #[error("stopped by {}", crate::signals::name(*signal))]
+    Stopped { signal: i32 },
 }
 
 /// What a solve sees of a lockstep run, and of no other: only the simulation has the whole
@@ -166,6 +170,9 @@ fn lockstep(
             (outcome.rounds, outcome.stopped, None)
         }
     };
+    if let Some(signal) = crate::signals::stop_requested() {
+        return Err(RunError::Stopped { signal });
+    }
     let decisions: Vec<usize> = match &certified {
         Some((_, tasks)) => tasks.clone(),
         None => sim.agents().iter().map(ConsensusAgent::decide).collect(),

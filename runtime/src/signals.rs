@@ -16,12 +16,14 @@
 //! or the whole life of an agent or host process), then the previous ones come back.
 
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicI32, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicI32, AtomicU32, AtomicUsize, Ordering};
 
 /// The first termination signal received since the handlers were installed (0: none).
 static RECEIVED: AtomicI32 = AtomicI32::new(0);
 /// How many termination signals arrived (a second Ctrl-C force-kills).
 static COUNT: AtomicU32 = AtomicU32::new(0);
+/// Live guards ([`install`]), readable without the lock.
+static GUARDS: AtomicUsize = AtomicUsize::new(0);
 
 /// The signals that stop a team.
 pub const TERMINATION: [i32; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP];
@@ -93,6 +95,7 @@ pub fn install() -> SignalGuard {
         }
     }
     installed.guards += 1;
+    GUARDS.store(installed.guards, Ordering::Release);
     SignalGuard(())
 }
 
@@ -100,6 +103,7 @@ impl Drop for SignalGuard {
     fn drop(&mut self) {
         let mut installed = INSTALLED.lock().unwrap_or_else(|e| e.into_inner());
         installed.guards -= 1;
+        GUARDS.store(installed.guards, Ordering::Release);
         if installed.guards == 0 {
             for (signal, old) in installed.previous.drain(..) {
                 // SAFETY: restoring the action `sigaction` gave us.
@@ -115,6 +119,16 @@ pub fn received() -> Option<i32> {
         0 => None,
         signal => Some(signal),
     }
+}
+
+/// The termination signal received while a guard lives: a team running inside this process
+/// (the lockstep simulation, threads) stops at its next round or wait slice. `None` when no
+/// guard lives, so a signal of an earlier run never stops a later one.
+pub fn stop_requested() -> Option<i32> {
+    if GUARDS.load(Ordering::Acquire) == 0 {
+        return None;
+    }
+    received()
 }
 
 /// How many termination signals arrived.

@@ -188,7 +188,7 @@ impl<A: ConsensusAgent + Send> LockstepSim<A> {
         observer: &mut dyn FnMut(&RoundView<'_>),
         mut done: impl FnMut(&Self) -> bool,
     ) -> SimOutcome {
-        while self.round < max_rounds {
+        while self.round < max_rounds && crate::signals::stop_requested().is_none() {
             self.step_round();
             observer(&self.view());
             if done(self) {
@@ -223,6 +223,13 @@ impl<A: ConsensusAgent + Send> LockstepSim<A> {
         let mut verdicts = Vec::with_capacity(self.agents.len());
         loop {
             let round = self.round as u64;
+            if crate::signals::stop_requested().is_some() {
+                // The caller names the signal ([`crate::signals::stop_requested`]).
+                return LocalStopOutcome {
+                    rounds: self.round,
+                    certified: None,
+                };
+            }
             verdicts.clear();
             for (i, (agent, stop)) in self.agents.iter().zip(stops.iter_mut()).enumerate() {
                 let theirs = self.neighbours[i].iter().map(|&j| states[j]);

@@ -17,7 +17,10 @@ use crossbeam::sync::{Parker, Unparker};
 use crossbeam::utils::CachePadded;
 use std::cell::UnsafeCell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
+
+/// The longest a waiting agent thread sleeps before it looks for a termination signal again.
+const SIGNAL_SLICE: Duration = Duration::from_millis(20);
 
 /// The `threads` transport's declaration (its agents are not processes).
 pub const INFO: crate::endpoint::TransportInfo = crate::endpoint::TransportInfo {
@@ -106,6 +109,12 @@ impl ThreadExchange<'_> {
         if self.fabric.aborted.load(Ordering::Acquire) {
             return Err(ExchangeError::Aborted { agent: self.index });
         }
+        if let Some(signal) = crate::signals::stop_requested() {
+            return Err(ExchangeError::Stopped {
+                agent: self.index,
+                signal,
+            });
+        }
         Ok(())
     }
 
@@ -125,7 +134,9 @@ impl ThreadExchange<'_> {
                 self.check_abort().map(|()| false)
             },
             |(), deadline| {
-                self.parker.park_deadline(deadline);
+                // In slices, so that a termination signal stops a waiting team promptly.
+                self.parker
+                    .park_deadline(deadline.min(Instant::now() + SIGNAL_SLICE));
                 Ok(())
             },
         )
