@@ -12,7 +12,6 @@ use admm_ta_runtime::solve::solve;
 use admm_ta_runtime::transport::{Execution, Transport};
 use admm_ta_topologies::TopologySpec;
 use serde::Serialize;
-use std::path::PathBuf;
 
 /// Settings of the comparison.
 #[derive(Debug, Clone)]
@@ -31,7 +30,7 @@ pub struct CompareConfig {
     pub adaptive_rho: bool,
     pub max_iters: usize,
     /// The `admm-ta` binary (ipc transport).
-    pub agent_program: Option<PathBuf>,
+    pub agent_program: Option<admm_ta_runtime::options::run::AgentProgram>,
 }
 
 /// One method on one team size and transport, averaged over the seeds.

@@ -29,7 +29,6 @@ use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::report::{OracleCheck, SolveReport};
 use admm_ta_runtime::solve::solve;
 use admm_ta_topologies::TopologySpec;
-use std::path::PathBuf;
 
 /// The random graph of the topology experiments (edge probability 0.1, connected).
 pub const RANDOM_GRAPH: &str = "random:0.1";
@@ -44,7 +43,7 @@ pub struct FigureConfig {
     pub adaptive_rho: bool,
     pub max_iters: usize,
     /// The `admm-ta` binary (ipc runs).
-    pub agent_program: Option<PathBuf>,
+    pub agent_program: Option<admm_ta_runtime::options::run::AgentProgram>,
     /// ADMM runs to the decentralized stop only up to this team size in `fig2-scaling`
     /// (beyond it, the paper's 0.1% criterion only: the decentralized stop of the primal
     /// method at 100 robots takes ~40 s per run on 2 cores).

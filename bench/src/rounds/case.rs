@@ -4,7 +4,6 @@
 use admm_ta_runtime::transport::Transport;
 use admm_ta_runtime::wait::WaitStrategy;
 use serde::Serialize;
-use std::path::PathBuf;
 use std::time::Duration;
 
 /// What the agents compute each round.
@@ -167,7 +166,7 @@ pub struct RoundsConfig {
     pub warmup: u64,
     /// Measurements of every case; transports of one configuration are interleaved.
     pub repeat: usize,
-    pub agent_program: Option<PathBuf>,
+    pub agent_program: Option<admm_ta_runtime::options::run::AgentProgram>,
     pub round_timeout: Duration,
 }
 

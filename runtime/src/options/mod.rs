@@ -27,7 +27,6 @@ use admm_ta_agents::method::team::MethodSetup;
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::ties::Perturbation;
 use serde::Serialize;
-use std::path::PathBuf;
 use std::time::Duration;
 
 /// What the team does when an agent fails.
@@ -270,7 +269,7 @@ impl SolveOptionsBuilder {
         self
     }
 
-    pub fn agent_program(mut self, program: impl Into<Option<PathBuf>>) -> Self {
+    pub fn agent_program(mut self, program: impl crate::options::run::IntoAgentProgram) -> Self {
         self.run = self.run.agent_program(program);
         self
     }

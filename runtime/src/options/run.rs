@@ -5,6 +5,7 @@ use crate::options::error::{ConfigError, seconds};
 use crate::options::given::OptionId;
 use crate::transport::{Transport, ZenohNotBuilt};
 use crate::wait::WaitStrategy;
+use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -16,7 +17,7 @@ pub struct RunOptions {
     global_barrier: bool,
     round_timeout: Duration,
     startup_timeout: Duration,
-    agent_program: Option<PathBuf>,
+    agent_program: Option<AgentProgram>,
     fault_injection: bool,
     warmup_rounds: u64,
 }
@@ -91,10 +92,10 @@ impl RunOptions {
         self.startup_timeout
     }
 
-    /// The `admm-ta` binary agent processes are started from (process transports need one
-    /// to run a team; options for independently started agents have none).
-    pub fn agent_program(&self) -> Option<&Path> {
-        self.agent_program.as_deref()
+    /// The `admm-ta` program agent processes are started from (process transports need
+    /// one to run a team; options for independently started agents have none).
+    pub fn agent_program(&self) -> Option<&AgentProgram> {
+        self.agent_program.as_ref()
     }
 
     /// Agent processes honour the `ADMM_TA_FAULT` test switch ([`crate::fault`]).
@@ -117,7 +118,7 @@ pub struct RunOptionsBuilder {
     global_barrier: bool,
     pub(super) round_timeout: f64,
     pub(super) startup_timeout: f64,
-    agent_program: Option<PathBuf>,
+    agent_program: Option<AgentProgram>,
     fault_injection: bool,
     warmup_rounds: u64,
 }
@@ -159,8 +160,10 @@ impl RunOptionsBuilder {
         self
     }
 
-    pub fn agent_program(mut self, program: impl Into<Option<PathBuf>>) -> Self {
-        self.agent_program = program.into();
+    /// The program agent processes are started from: a path (the `admm-ta` binary), an
+    /// [`AgentProgram`] with leading arguments, or `None`.
+    pub fn agent_program(mut self, program: impl IntoAgentProgram) -> Self {
+        self.agent_program = program.into_agent_program();
         self
     }
 
@@ -204,5 +207,91 @@ impl RunOptionsBuilder {
             fault_injection: self.fault_injection,
             warmup_rounds: self.warmup_rounds,
         })
+    }
+}
+
+/// How agent processes are started: `PROGRAM [ARGS…] agent --run ID --index I …`. The
+/// `admm-ta` binary needs no leading arguments; a front end that carries the command line
+/// in another program (the Python package: `python -m admm_ta._agent`) gives them.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AgentProgram {
+    program: PathBuf,
+    args: Vec<OsString>,
+}
+
+impl AgentProgram {
+    /// `program` started with `args` before the agent's own command line.
+    pub fn new(
+        program: impl Into<PathBuf>,
+        args: impl IntoIterator<Item = impl Into<OsString>>,
+    ) -> Self {
+        Self {
+            program: program.into(),
+            args: args.into_iter().map(Into::into).collect(),
+        }
+    }
+
+    /// The program file.
+    pub fn program(&self) -> &Path {
+        &self.program
+    }
+
+    /// The arguments before `agent`.
+    pub fn args(&self) -> &[OsString] {
+        &self.args
+    }
+}
+
+impl From<PathBuf> for AgentProgram {
+    fn from(program: PathBuf) -> Self {
+        Self::new(program, std::iter::empty::<OsString>())
+    }
+}
+
+/// What [`RunOptionsBuilder::agent_program`] takes: a path (`PathBuf`, `&Path`, `&str`,
+/// `String`), an [`AgentProgram`], or an `Option` of a path or of an [`AgentProgram`].
+pub trait IntoAgentProgram {
+    fn into_agent_program(self) -> Option<AgentProgram>;
+}
+
+impl IntoAgentProgram for AgentProgram {
+    fn into_agent_program(self) -> Option<AgentProgram> {
+        Some(self)
+    }
+}
+
+impl IntoAgentProgram for Option<AgentProgram> {
+    fn into_agent_program(self) -> Option<AgentProgram> {
+        self
+    }
+}
+
+impl IntoAgentProgram for PathBuf {
+    fn into_agent_program(self) -> Option<AgentProgram> {
+        Some(self.into())
+    }
+}
+
+impl IntoAgentProgram for Option<PathBuf> {
+    fn into_agent_program(self) -> Option<AgentProgram> {
+        self.map(Into::into)
+    }
+}
+
+impl IntoAgentProgram for &Path {
+    fn into_agent_program(self) -> Option<AgentProgram> {
+        Some(self.to_path_buf().into())
+    }
+}
+
+impl IntoAgentProgram for &str {
+    fn into_agent_program(self) -> Option<AgentProgram> {
+        Some(PathBuf::from(self).into())
+    }
+}
+
+impl IntoAgentProgram for String {
+    fn into_agent_program(self) -> Option<AgentProgram> {
+        Some(PathBuf::from(self).into())
     }
 }

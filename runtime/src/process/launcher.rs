@@ -13,6 +13,7 @@
 use crate::board::{Board, BoardError};
 use crate::endpoint::SupportError;
 use crate::exchange::round_loop::AgentOutcome;
+use crate::options::run::AgentProgram;
 use crate::process::agent::{AgentReport, log_path, result_path};
 use crate::process::connect::LauncherSupport;
 use crate::process::namespace::RunNamespace;
@@ -152,7 +153,7 @@ fn unix_ns() -> u128 {
 /// failure ends the run), and read their results.
 pub fn launch(
     mut scenario: Scenario,
-    agent_program: &Path,
+    agent_program: &AgentProgram,
     fault_injection: bool,
 ) -> Result<ProcessRun, LaunchError> {
     let _signals = signals::install();
@@ -231,7 +232,7 @@ fn prepare(scenario: &mut Scenario) -> Result<(RunGuard, ScenarioFile), LaunchEr
 fn spawn_agents(
     guard: &mut RunGuard,
     scenario: &ScenarioFile,
-    agent_program: &Path,
+    agent_program: &AgentProgram,
     fault_injection: bool,
 ) -> Result<(), LaunchError> {
     let agents = guard.board.as_ref().expect("the board exists").agents();
@@ -239,7 +240,8 @@ fn spawn_agents(
     for index in 0..agents {
         let log =
             create_private_file(&log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
-        let mut command = Command::new(agent_program);
+        let mut command = Command::new(agent_program.program());
+        command.args(agent_program.args());
         let launcher_pid = std::process::id() as libc::pid_t;
         // SAFETY: only async-signal-safe calls between fork and exec.
         unsafe {
@@ -273,7 +275,7 @@ fn spawn_agents(
             .spawn()
             .map_err(|source| LaunchError::Spawn {
                 index,
-                program: agent_program.to_path_buf(),
+                program: agent_program.program().to_path_buf(),
                 source,
             })?;
         guard.children.push(Some(child));
