@@ -54,6 +54,8 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod command_line;
+
 pub use admm_ta_agents as agents;
 pub use admm_ta_runtime as runtime;
 pub use admm_ta_topologies as topologies;

@@ -2,9 +2,9 @@
 //! runs in its file of `commands/`). Value lists (methods, transports, stop rules, wait
 //! strategies, …) come from the library's own types.
 
-use crate::method_flags::MethodFlags;
-use admm_ta::topologies::RobotRef;
-use admm_ta::{CaseChoice, CostModel, Method, OnFailure, StopRule, Transport, WaitStrategy};
+use crate::command_line::method_flags::MethodFlags;
+use crate::topologies::RobotRef;
+use crate::{CaseChoice, CostModel, Method, OnFailure, StopRule, Transport, WaitStrategy};
 use admm_ta_bench::rounds::case::{Barrier, StepKind};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -51,7 +51,7 @@ pub enum Command {
     Topology(TopologyArgs),
     /// Run many teams of agent processes at once (a stress test): failures, wall time,
     /// per-run p50/p99 and anything left behind; non-zero exit on any failure or leftover.
-    Stress(crate::commands::stress::StressArgs),
+    Stress(crate::command_line::commands::stress::StressArgs),
 }
 
 #[derive(Args, Debug)]

@@ -10,17 +10,17 @@
 //! | 5 | round limit reached without a certified assignment (the best one is printed) |
 //! | 6 | `--check` found the result not optimal |
 
-use admm_ta::agents::numerics::lsap::LsapError;
-use admm_ta::agents::problem::ProblemError;
-use admm_ta::runtime::process::launcher::LaunchError;
-use admm_ta::runtime::process::member_error::MemberError;
-use admm_ta::runtime::runner::RunError;
-use admm_ta::runtime::solve::report::SolveReport;
-use admm_ta::runtime::team::errors::CollectError;
-use admm_ta::runtime::team::errors::TeamFileError;
-use admm_ta::runtime::transport::ZenohNotBuilt;
-use admm_ta::topologies::RobotNameError;
-use admm_ta::{ConfigError, SolveError, StopRule, TopologyError};
+use crate::agents::numerics::lsap::LsapError;
+use crate::agents::problem::ProblemError;
+use crate::runtime::process::launcher::LaunchError;
+use crate::runtime::process::member_error::MemberError;
+use crate::runtime::runner::RunError;
+use crate::runtime::solve::report::SolveReport;
+use crate::runtime::team::errors::CollectError;
+use crate::runtime::team::errors::TeamFileError;
+use crate::runtime::transport::ZenohNotBuilt;
+use crate::topologies::RobotNameError;
+use crate::{ConfigError, SolveError, StopRule, TopologyError};
 
 /// A bad command line or input found by the command itself (exit 2).
 #[derive(Debug, thiserror::Error)]
@@ -40,7 +40,7 @@ pub struct NotOptimal(pub String);
 /// Returns early with a [`UsageError`] formatted as by `format!`.
 macro_rules! usage_bail {
     ($($arg:tt)*) => {
-        return Err(anyhow::Error::from($crate::exit::UsageError(format!($($arg)*))))
+        return Err(anyhow::Error::from($crate::command_line::exit::UsageError(format!($($arg)*))))
     };
 }
 pub(crate) use usage_bail;

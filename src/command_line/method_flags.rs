@@ -1,10 +1,10 @@
 //! Every method's own settings as command-line flags, from the method registry: a method
-//! declares each setting once ([`admm_ta::agents::method::settings::SettingSpec`]: its key,
+//! declares each setting once ([`crate::agents::method::settings::SettingSpec`]: its key,
 //! flag, help and values), and every command that takes method settings flattens
 //! [`MethodFlags`].
 
-use admm_ta::Method;
-use admm_ta::agents::method::settings::{GivenSettings, SettingKind, SettingValue};
+use crate::Method;
+use crate::agents::method::settings::{GivenSettings, SettingKind, SettingValue};
 use clap::Args;
 
 /// Every method's own settings as flags, from the method registry

@@ -1,9 +1,9 @@
 //! Human and JSON renderings of a solve report.
 
-use admm_ta::agents::method::info::Certification;
-use admm_ta::agents::problem::{AssignmentCase, IDLE};
-use admm_ta::runtime::transport::Execution;
-use admm_ta::{SolveReport, StopRule};
+use crate::agents::method::info::Certification;
+use crate::agents::problem::{AssignmentCase, IDLE};
+use crate::runtime::transport::Execution;
+use crate::{SolveReport, StopRule};
 use anyhow::Result;
 
 /// Standard output could not be written (a full disk, a closed pipe): exit 1, or quietly
@@ -16,7 +16,7 @@ pub struct WriteError(#[from] pub std::io::Error);
 macro_rules! outln {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        writeln!(std::io::stdout(), $($arg)*).map_err($crate::output::WriteError)?
+        writeln!(std::io::stdout(), $($arg)*).map_err($crate::command_line::output::WriteError)?
     }};
 }
 pub(crate) use outln;
@@ -25,7 +25,7 @@ pub(crate) use outln;
 macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        write!(std::io::stdout(), $($arg)*).map_err($crate::output::WriteError)?
+        write!(std::io::stdout(), $($arg)*).map_err($crate::command_line::output::WriteError)?
     }};
 }
 pub(crate) use out;

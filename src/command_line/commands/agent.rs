@@ -1,12 +1,12 @@
 //! `admm-ta agent`: one agent process, of an independently started team or of a launcher's run.
 
-use crate::cli::AgentArgs;
-use crate::exit::{Outcome, usage_bail};
-use crate::output::outln;
-use admm_ta::runtime::process::agent;
-use admm_ta::runtime::team::member;
-use admm_ta::runtime::team::team_file::Team;
-use admm_ta::topologies::RobotRef;
+use crate::command_line::cli::AgentArgs;
+use crate::command_line::exit::{Outcome, usage_bail};
+use crate::command_line::output::outln;
+use crate::runtime::process::agent;
+use crate::runtime::team::member;
+use crate::runtime::team::team_file::Team;
+use crate::topologies::RobotRef;
 use anyhow::{Context, Result};
 
 /// Runs the agent. An independently started agent whose team reached the round limit before

@@ -1,13 +1,13 @@
 //! `admm-ta bench rounds`: the round-latency sweep's arguments checked, its progress shown,
 //! its tables printed and its files written.
 
-use crate::cli::{Bench, RoundsArgs};
-use crate::commands::experiment::report_written;
-use crate::commands::shared::{agent_program, progress_bar, writable_dir};
-use crate::exit::{RunsFailed, UsageError, usage_bail};
-use crate::output::{out, outln, progress_row};
-use admm_ta::TopologySpec;
-use admm_ta::runtime::transport::{Capabilities, Execution, Transport};
+use crate::TopologySpec;
+use crate::command_line::cli::{Bench, RoundsArgs};
+use crate::command_line::commands::experiment::report_written;
+use crate::command_line::commands::shared::{agent_program, progress_bar, writable_dir};
+use crate::command_line::exit::{RunsFailed, UsageError, usage_bail};
+use crate::command_line::output::{out, outln, progress_row};
+use crate::runtime::transport::{Capabilities, Execution, Transport};
 use admm_ta_bench::experiment::{Experiment, write};
 use admm_ta_bench::rounds;
 use admm_ta_bench::rounds::case::{RoundsConfig, SweepSpec, cases};

@@ -1,9 +1,9 @@
 //! `admm-ta collect`: the assignment of an independently started team, from its agents' results.
 
-use crate::cli::CollectArgs;
-use crate::exit::{NotOptimal, Outcome};
-use crate::output::outln;
-use admm_ta::runtime::team::member;
+use crate::command_line::cli::CollectArgs;
+use crate::command_line::exit::{NotOptimal, Outcome};
+use crate::command_line::output::outln;
+use crate::runtime::team::member;
 use anyhow::Result;
 
 /// Prints the team's assignment. Ends as `solve` does: with `--check` the centralized

@@ -1,10 +1,10 @@
 //! `admm-ta demo`: the built-in problem (20 robots, 20 tasks, complete graph), checked.
 
-use crate::cli::DemoArgs;
-use crate::commands::shared::agent_program;
-use crate::output;
-use crate::output::outln;
-use admm_ta::{CaseChoice, CostMatrix, SolveOptions, TaskAssignmentProblem, generate};
+use crate::command_line::cli::DemoArgs;
+use crate::command_line::commands::shared::agent_program;
+use crate::command_line::output;
+use crate::command_line::output::outln;
+use crate::{CaseChoice, CostMatrix, SolveOptions, TaskAssignmentProblem, generate};
 use anyhow::Result;
 
 pub fn run(args: DemoArgs) -> Result<()> {
@@ -21,6 +21,6 @@ pub fn run(args: DemoArgs) -> Result<()> {
             options.transport().name()
         );
     }
-    let report = admm_ta::solve(&problem, &graph, &options)?;
+    let report = crate::solve(&problem, &graph, &options)?;
     output::print_report(&report, args.json)
 }

@@ -2,15 +2,15 @@
 //! runs into a report ([`admm_ta_bench::experiment::Experiment`]) that the one write path
 //! puts into `--out`, then prints its table or its JSON.
 
-use crate::cli::{Experiment as Command, FigureArgs};
-use crate::commands::shared::{agent_program, progress_bar};
-use crate::exit::{NotOptimal, UsageError, usage_bail};
-use crate::output::{out, outln, progress_row};
-use admm_ta::Method;
-use admm_ta::agents::problem::surveillance::SurveillanceScenario;
-use admm_ta::runtime::episodes::EpisodeRunConfig;
-use admm_ta::runtime::options::run::RunOptions;
-use admm_ta::runtime::transport::{Execution, Transport};
+use crate::Method;
+use crate::agents::problem::surveillance::SurveillanceScenario;
+use crate::command_line::cli::{Experiment as Command, FigureArgs};
+use crate::command_line::commands::shared::{agent_program, progress_bar};
+use crate::command_line::exit::{NotOptimal, UsageError, usage_bail};
+use crate::command_line::output::{out, outln, progress_row};
+use crate::runtime::episodes::EpisodeRunConfig;
+use crate::runtime::options::run::RunOptions;
+use crate::runtime::transport::{Execution, Transport};
 use admm_ta_bench::experiment::{Experiment, write};
 use admm_ta_bench::figures::{FigureConfig, convergence, scaling};
 use admm_ta_bench::{compare, rounds_anatomy, size_sweep, surveillance, table1};
@@ -40,7 +40,7 @@ pub fn run(command: Command) -> Result<()> {
             } else {
                 methods
             };
-            let spec: admm_ta::TopologySpec = topology.parse()?;
+            let spec: crate::TopologySpec = topology.parse()?;
             // Every team's graph now: a bad generator or topology file exits 2 before a run.
             for &n in &robots {
                 for seed in 0..seeds {
@@ -241,7 +241,7 @@ pub fn run(command: Command) -> Result<()> {
             }
             if !topologies.is_empty() {
                 for t in &topologies {
-                    t.parse::<admm_ta::TopologySpec>()
+                    t.parse::<crate::TopologySpec>()
                         .with_context(|| format!("--topologies: {t}"))?;
                 }
                 config.topologies = topologies;

@@ -11,10 +11,10 @@ pub mod solve;
 pub mod stress;
 pub mod topology;
 
-use crate::cli::Command;
+use crate::command_line::cli::Command;
 use anyhow::Result;
 
-/// Runs the subcommand; its exit code (see [`crate::exit`]).
+/// Runs the subcommand; its exit code (see [`crate::command_line::exit`]).
 /// `matches`: the whole command line's, which tell options given from defaults.
 pub fn run(command: Command, matches: &clap::ArgMatches) -> Result<u8> {
     match command {

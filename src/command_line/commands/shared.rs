@@ -1,11 +1,28 @@
-//! What several subcommands need: the binary agent processes start from, progress bars.
+//! What several subcommands need: the program agent processes start from, progress bars.
 
+use crate::runtime::options::run::AgentProgram;
 use anyhow::{Context, Result};
-use std::path::PathBuf;
+use std::sync::OnceLock;
 
-/// This binary: agent processes are started from it.
-pub fn agent_program() -> Result<PathBuf> {
-    std::env::current_exe().context("cannot locate the admm-ta binary to start agents from")
+/// The program agent processes start from when this process is not the `admm-ta` binary.
+static AGENT_PROGRAM: OnceLock<AgentProgram> = OnceLock::new();
+
+/// Agent processes of this process's teams start from `program` (the first call decides):
+/// a front end that carries the command line in another program (the Python package:
+/// `python -m admm_ta._agent`) says so once, before any team starts.
+pub fn set_agent_program(program: AgentProgram) {
+    let _ = AGENT_PROGRAM.set(program);
+}
+
+/// The program agent processes start from: the one [`set_agent_program`] gave, else this
+/// binary.
+pub fn agent_program() -> Result<AgentProgram> {
+    if let Some(program) = AGENT_PROGRAM.get() {
+        return Ok(program.clone());
+    }
+    std::env::current_exe()
+        .map(AgentProgram::from)
+        .context("cannot locate the admm-ta binary to start agents from")
 }
 
 /// A progress bar of `steps` steps drawn by `template` (indicatif's syntax).
@@ -18,7 +35,10 @@ pub fn progress_bar(steps: u64, template: &str) -> indicatif::ProgressBar {
 /// refused (exit 2) before a long run, not after it.
 pub fn writable_dir(dir: &std::path::Path) -> anyhow::Result<()> {
     let refused = |e: std::io::Error| {
-        crate::exit::UsageError(format!("--out {}: cannot write there: {e}", dir.display()))
+        crate::command_line::exit::UsageError(format!(
+            "--out {}: cannot write there: {e}",
+            dir.display()
+        ))
     };
     std::fs::create_dir_all(dir).map_err(refused)?;
     let probe = dir.join(format!(".admm-ta-probe-{}", std::process::id()));

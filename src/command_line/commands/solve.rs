@@ -1,17 +1,53 @@
 //! `admm-ta solve`: a problem from a CSV or random costs, solved as the flags say.
 
-use crate::cli::SolveArgs;
-use crate::commands::shared::agent_program;
-use crate::exit::{Outcome, UsageError};
-use crate::output;
-use admm_ta::agents::problem::{cost_file, forbidden, read_cost_text};
-use admm_ta::{Perturbation, SolveOptions, TaskAssignmentProblem, TopologySpec};
+use crate::agents::problem::{cost_file, forbidden, read_cost_text};
+use crate::command_line::cli::SolveArgs;
+use crate::command_line::commands::shared::agent_program;
+use crate::command_line::exit::{Outcome, UsageError};
+use crate::command_line::output;
+use crate::{
+    CostMatrix, Graph, Perturbation, SolveOptions, SolveReport, TaskAssignmentProblem, TopologySpec,
+};
 use anyhow::{Context, Result};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
 
 /// Solves as `args` say; `matches` (the command line's) tells which options the user gave.
 pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
+    let report = solve_report(&args, matches, GivenInput::default())?;
+    output::print_report(&report, args.json)?;
+    Ok(Outcome::of(&report))
+}
+
+/// What a front end hands [`solve_report`] besides the command line: the costs as values
+/// (instead of `--costs FILE` or `--robots N --tasks M`; `+∞` marks a forbidden pair, `−∞`
+/// with `--maximize`, as in a cost file) and the graph (instead of `--topology`).
+#[derive(Debug, Clone, Default)]
+pub struct GivenInput {
+    pub costs: Option<CostMatrix>,
+    pub graph: Option<Graph>,
+}
+
+/// `admm-ta solve` without the printing: the report of the solve `args` and `given` ask
+/// for. The caller decides what the report means ([`Outcome::of`]).
+pub fn solve_report(
+    args: &SolveArgs,
+    matches: Option<&ArgMatches>,
+    given_input: GivenInput,
+) -> Result<SolveReport> {
+    // Only the options the user gave are set: an option given that the run never reads
+    // is refused by the options' own rule (`refuse_unread`), as for team files.
+    let given =
+        |id: &str| matches.is_some_and(|m| m.value_source(id) == Some(ValueSource::CommandLine));
+    if given_input.costs.is_some() && (args.costs.is_some() || given("robots") || given("tasks")) {
+        return Err(UsageError(
+            "the costs are given already: no --costs, --robots or --tasks with them".into(),
+        )
+        .into());
+    }
+    if given_input.graph.is_some() && given("topology") {
+        return Err(UsageError("the graph is given already: no --topology with it".into()).into());
+    }
     if args.costs.as_deref() == Some(std::path::Path::new("-"))
         && args.forbidden.as_deref() == Some(std::path::Path::new("-"))
     {
@@ -23,6 +59,7 @@ pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
     // Pairs the cost file itself marks forbidden (JSON nulls).
     let mut marked = Vec::new();
     let costs = match (&args.costs, args.robots, args.tasks) {
+        _ if given_input.costs.is_some() => given_input.costs.expect("checked above"),
         (Some(path), _, _) => {
             let file = cost_file::parse(&read_cost_text(path)?, args.delimiter.map(|d| d.byte()))?;
             marked = file.forbidden;
@@ -50,14 +87,22 @@ pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
     } else {
         TaskAssignmentProblem::new(costs, args.case)?
     };
-    let spec: TopologySpec = args.topology.parse()?;
-    let graph = spec
-        .build_named(problem.robots(), args.seed, problem.costs().robot_names())
-        .with_context(|| format!("topology '{}'", args.topology))?;
-    // Only the options the user gave are set: an option given that the run never reads
-    // is refused by the options' own rule (`refuse_unread`), as for team files.
-    let given =
-        |id: &str| matches.is_some_and(|m| m.value_source(id) == Some(ValueSource::CommandLine));
+    let graph = match given_input.graph {
+        Some(graph) if graph.robots() != problem.robots() => {
+            return Err(UsageError(format!(
+                "the graph has {} robots but the costs have {}",
+                graph.robots(),
+                problem.robots()
+            ))
+            .into());
+        }
+        Some(graph) => graph,
+        None => {
+            let spec: TopologySpec = args.topology.parse()?;
+            spec.build_named(problem.robots(), args.seed, problem.costs().robot_names())
+                .with_context(|| format!("topology '{}'", args.topology))?
+        }
+    };
     let mut options = SolveOptions::builder()
         .refuse_unread(true)
         .method(args.method)
@@ -104,9 +149,7 @@ pub fn run(args: SolveArgs, matches: Option<&ArgMatches>) -> Result<Outcome> {
         options = options.wait(args.wait);
     }
     let options = options.build()?;
-    let report = admm_ta::solve(&problem, &graph, &options)?;
-    output::print_report(&report, args.json)?;
-    Ok(Outcome::of(&report))
+    Ok(crate::solve(&problem, &graph, &options)?)
 }
 
 /// `auto`, `off` (or 0) or a positive number ε.

@@ -5,11 +5,11 @@
 //! the runs left behind: shared memory and run directories of its runs, and agent processes
 //! still alive or unreaped. It exits non-zero on any failure or leftover.
 
-use crate::commands::shared::{agent_program, progress_bar};
-use crate::exit::{RunsFailed, usage_bail};
-use crate::output::outln;
-use admm_ta::runtime::process::namespace::{run_id_prefix, runs_dir, shm_named};
-use admm_ta::{CaseChoice, CostMatrix, Method, SolveOptions, TaskAssignmentProblem, Transport};
+use crate::command_line::commands::shared::{agent_program, progress_bar};
+use crate::command_line::exit::{RunsFailed, usage_bail};
+use crate::command_line::output::outln;
+use crate::runtime::process::namespace::{run_id_prefix, runs_dir, shm_named};
+use crate::{CaseChoice, CostMatrix, Method, SolveOptions, TaskAssignmentProblem, Transport};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use std::sync::Mutex;
@@ -56,8 +56,7 @@ pub struct StressArgs {
 type Outcome = (Duration, Option<String>);
 
 pub fn run(args: StressArgs) -> Result<()> {
-    if args.transport.capabilities().execution != admm_ta::runtime::transport::Execution::Processes
-    {
+    if args.transport.capabilities().execution != crate::runtime::transport::Execution::Processes {
         usage_bail!(
             "stress runs teams of agent processes: use --transport shm, ipc, uds or zenoh (not {})",
             args.transport
@@ -68,7 +67,7 @@ pub fn run(args: StressArgs) -> Result<()> {
     }
     // For the whole test, not only while a run's launcher lives: a signal between two runs
     // stops it too.
-    let _signals = admm_ta::runtime::signals::install();
+    let _signals = crate::runtime::signals::install();
     if args.seed.checked_add(args.runs as u64 - 1).is_none() {
         usage_bail!(
             "--seed {} + --runs {} passes the largest seed, {}",
@@ -78,7 +77,7 @@ pub fn run(args: StressArgs) -> Result<()> {
         );
     }
     let tasks = args.tasks.unwrap_or(args.robots);
-    let spec: admm_ta::TopologySpec = args.topology.parse()?;
+    let spec: crate::TopologySpec = args.topology.parse()?;
     let program = agent_program()?;
     // Bad options exit 2 here, before any team starts, not as every run's failure.
     inputs(&args, tasks, &spec, &program, args.seed)?;
@@ -99,7 +98,7 @@ pub fn run(args: StressArgs) -> Result<()> {
                 loop {
                     let k = next.fetch_add(1, Ordering::Relaxed);
                     // A termination signal stops the stress test between runs too.
-                    if k >= args.runs || admm_ta::runtime::signals::received().is_some() {
+                    if k >= args.runs || crate::runtime::signals::received().is_some() {
                         return;
                     }
                     let t0 = Instant::now();
@@ -149,10 +148,10 @@ pub fn run(args: StressArgs) -> Result<()> {
         quantile(0.99),
         times.last().copied().unwrap_or_default(),
     );
-    if let Some(signal) = admm_ta::runtime::signals::received() {
+    if let Some(signal) = crate::runtime::signals::received() {
         bail!(
             "stopped by {} after {} of {} runs",
-            admm_ta::runtime::signals::name(signal),
+            crate::runtime::signals::name(signal),
             outcomes.len(),
             args.runs
         );
@@ -173,12 +172,12 @@ pub fn run(args: StressArgs) -> Result<()> {
 fn one_run(
     args: &StressArgs,
     tasks: usize,
-    spec: &admm_ta::TopologySpec,
-    program: &std::path::Path,
+    spec: &crate::TopologySpec,
+    program: &crate::runtime::options::run::AgentProgram,
     k: usize,
 ) -> Result<()> {
     let (problem, graph, options) = inputs(args, tasks, spec, program, args.seed + k as u64)?;
-    admm_ta::solve(&problem, &graph, &options)?;
+    crate::solve(&problem, &graph, &options)?;
     Ok(())
 }
 
@@ -186,10 +185,10 @@ fn one_run(
 fn inputs(
     args: &StressArgs,
     tasks: usize,
-    spec: &admm_ta::TopologySpec,
-    program: &std::path::Path,
+    spec: &crate::TopologySpec,
+    program: &crate::runtime::options::run::AgentProgram,
     seed: u64,
-) -> Result<(TaskAssignmentProblem, admm_ta::Graph, SolveOptions)> {
+) -> Result<(TaskAssignmentProblem, crate::Graph, SolveOptions)> {
     let costs = CostMatrix::uniform(args.robots, tasks, seed)?;
     let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto)?;
     let graph = spec
@@ -201,7 +200,7 @@ fn inputs(
         .seed(seed)
         .round_timeout_secs(args.round_timeout)
         .startup_timeout_secs(args.startup_timeout)
-        .agent_program(program.to_path_buf())
+        .agent_program(program.clone())
         .build()?;
     Ok((problem, graph, options))
 }

@@ -1,9 +1,9 @@
 //! `admm-ta topology`: a generated topology in the topology file format.
 
-use crate::cli::TopologyArgs;
-use crate::output::out;
-use admm_ta::TopologySpec;
-use admm_ta::topologies::file as topology_file;
+use crate::TopologySpec;
+use crate::command_line::cli::TopologyArgs;
+use crate::command_line::output::out;
+use crate::topologies::file as topology_file;
 use anyhow::Result;
 
 pub fn run(args: TopologyArgs) -> Result<()> {
