@@ -55,6 +55,120 @@ pub fn solve(cost: &[f64], rows: usize, cols: usize) -> Result<Vec<Option<usize>
     }
 }
 
+/// scipy's `linear_sum_assignment(cost, maximize)` on a row-major `rows × cols` matrix, step
+/// for step: a tall matrix is solved through a contiguous transpose, profits through their
+/// negation, then NaN and `−∞` (after the negation: `+∞` profits) are refused, and the
+/// same shortest-augmenting-path search runs in the same order, so ties resolve to the
+/// same assignment. Returns `(row_ind, col_ind)`, `min(rows, cols)` pairs sorted by row
+/// (empty for an empty matrix, which is never checked). [`ScipyLsap`] does the same
+/// without allocating once warm.
+pub fn linear_sum_assignment(
+    cost: &[f64],
+    rows: usize,
+    cols: usize,
+    maximize: bool,
+) -> Result<(Vec<usize>, Vec<usize>), LsapError> {
+    let mut scratch = ScipyLsap::default();
+    Ok(scratch
+        .solve(cost, rows, cols, maximize)?
+        .iter()
+        .copied()
+        .unzip())
+}
+
+/// [`linear_sum_assignment`] over memory kept between calls (the Python package keeps one
+/// per thread): after the first call of a size, a call allocates nothing.
+#[derive(Debug, Clone)]
+pub struct ScipyLsap {
+    workspace: LsapWorkspace,
+    /// The negated or transposed matrix, when the input is not used as it is.
+    copy: Vec<f64>,
+    /// The answer: `(row, col)` pairs sorted by row.
+    pairs: Vec<(usize, usize)>,
+}
+
+impl Default for ScipyLsap {
+    fn default() -> Self {
+        Self {
+            workspace: LsapWorkspace::new(0, 0),
+            copy: Vec::new(),
+            pairs: Vec::new(),
+        }
+    }
+}
+
+impl ScipyLsap {
+    /// The last successful [`ScipyLsap::solve`]'s pairs.
+    pub fn pairs(&self) -> &[(usize, usize)] {
+        &self.pairs
+    }
+
+    /// As [`linear_sum_assignment`]: the `(row, col)` pairs sorted by row.
+    pub fn solve(
+        &mut self,
+        cost: &[f64],
+        rows: usize,
+        cols: usize,
+        maximize: bool,
+    ) -> Result<&[(usize, usize)], LsapError> {
+        if rows.checked_mul(cols) != Some(cost.len()) {
+            return Err(LsapError::Shape(cost.len(), rows, cols));
+        }
+        self.pairs.clear();
+        if rows == 0 || cols == 0 {
+            return Ok(&self.pairs);
+        }
+        let transpose = cols < rows;
+        let (nr, nc) = if transpose {
+            (cols, rows)
+        } else {
+            (rows, cols)
+        };
+        if transpose || maximize {
+            let sign = if maximize { -1.0 } else { 1.0 };
+            self.copy.clear();
+            if transpose {
+                self.copy.resize(rows * cols, 0.0);
+                for r in 0..rows {
+                    for c in 0..cols {
+                        self.copy[c * rows + r] = sign * cost[r * cols + c];
+                    }
+                }
+            } else {
+                self.copy.extend(cost.iter().map(|&c| sign * c));
+            }
+        }
+        let matrix: &[f64] = if transpose || maximize {
+            &self.copy
+        } else {
+            cost
+        };
+        if let Some(k) = matrix
+            .iter()
+            .position(|c| c.is_nan() || *c == f64::NEG_INFINITY)
+        {
+            return Err(LsapError::NonFinite(k / nc, k % nc));
+        }
+        self.workspace.reshape(nr, nc);
+        assert_eq!(matrix.len(), nr * nc);
+        let col4row = self
+            .workspace
+            // SAFETY: the solver asks for rows `< nr` and columns `< nc` only, and the
+            // matrix has `nr × nc` entries (asserted above).
+            .solve(|r, c| unsafe { *matrix.get_unchecked(r * nc + c) })
+            .ok_or(LsapError::Infeasible)?;
+        if transpose {
+            // Row `j` of the transpose is column `j`: pair it with its row, sorted by row.
+            self.pairs
+                .extend(col4row.iter().enumerate().map(|(col, &row)| (row, col)));
+            self.pairs.sort_unstable();
+        } else {
+            self.pairs.extend(col4row.iter().copied().enumerate());
+        }
+        Ok(&self.pairs)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
