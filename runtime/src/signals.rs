@@ -113,6 +113,38 @@ impl Drop for SignalGuard {
     }
 }
 
+/// The actions of every signal [`install`] (or iceoryx2, the first time) changes, saved to
+/// be put back: a host with handlers of its own that runs teams inside its process (the
+/// Python package: Python's SIGINT handler raises `KeyboardInterrupt`) saves them before
+/// [`install`] and restores them after the guard drops, since the guard gives back
+/// iceoryx2's handlers, not the host's.
+pub struct SavedActions(Vec<(i32, libc::sigaction)>);
+
+impl SavedActions {
+    /// The current actions of the termination signals and of those iceoryx2 captures.
+    pub fn save() -> Self {
+        let mut saved = Vec::new();
+        for signal in TERMINATION.into_iter().chain(DEFAULT_ACTION) {
+            // SAFETY: reading a signal's action into a zeroed sigaction.
+            unsafe {
+                let mut old: libc::sigaction = std::mem::zeroed();
+                if libc::sigaction(signal, std::ptr::null(), &mut old) == 0 {
+                    saved.push((signal, old));
+                }
+            }
+        }
+        Self(saved)
+    }
+
+    /// Puts the saved actions back.
+    pub fn restore(self) {
+        for (signal, old) in self.0 {
+            // SAFETY: restoring the action `sigaction` gave us.
+            unsafe { libc::sigaction(signal, &old, std::ptr::null_mut()) };
+        }
+    }
+}
+
 /// The termination signal received, if any (since the handlers were installed).
 pub fn received() -> Option<i32> {
     match RECEIVED.load(Ordering::Acquire) {
