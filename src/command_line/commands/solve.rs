@@ -96,7 +96,11 @@ pub fn solve_report(
             ))
             .into());
         }
-        Some(graph) => graph,
+        Some(graph) => {
+            // Assumption 1 of the paper, as every generated or file topology is checked.
+            graph.require_connected()?;
+            graph
+        }
         None => {
             let spec: TopologySpec = args.topology.parse()?;
             spec.build_named(problem.robots(), args.seed, problem.costs().robot_names())
