@@ -1,0 +1,44 @@
+"""Decentralized task assignment for robot teams by consensus ADMM.
+
+Two calls:
+
+* :func:`linear_sum_assignment` — scipy's ``scipy.optimize.linear_sum_assignment`` (same
+  arguments, results, exceptions and tie-breaking), centralized, on the project's exact
+  shortest-augmenting-path solver, with the interpreter released while it runs.
+* :func:`solve` — the decentralized solve of the ``admm-ta solve`` command line: every
+  robot an agent that talks only to its neighbours (in this process, in threads, or as
+  agent processes over iceoryx2 shared memory), with every option the command line has.
+
+>>> import admm_ta
+>>> admm_ta.linear_sum_assignment([[4, 1, 3], [2, 0, 5], [3, 2, 2]])
+(array([0, 1, 2]), array([1, 0, 2]))
+>>> result = admm_ta.solve([[4, 1, 3], [2, 0, 5], [3, 2, 2]], topology="chain", check=True)
+>>> result.assignment, result.cost, result.certified
+([1, 0, 2], 5.0, True)
+"""
+
+from __future__ import annotations
+
+import sys as _sys
+
+from . import _core
+from ._core import linear_sum_assignment
+from ._errors import NotCertifiedError, NotOptimalError, SolveError
+from ._solve import SolveResult, solve
+
+__all__ = [
+    "linear_sum_assignment",
+    "solve",
+    "SolveResult",
+    "SolveError",
+    "NotCertifiedError",
+    "NotOptimalError",
+    "__version__",
+]
+
+__version__: str = _core.__version__
+
+# Agent processes of a process transport run this package's command line: the same
+# interpreter, nothing on PATH and no binary of the repository needed.
+if _sys.executable:
+    _core.set_agent_command(_sys.executable, ["-m", "admm_ta._agent"])

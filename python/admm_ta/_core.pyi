@@ -1,0 +1,21 @@
+"""Type stubs of the Rust extension module ``admm_ta._core`` (see ``python/src/lib.rs``)."""
+
+from os import PathLike
+from typing import Any, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = ["linear_sum_assignment", "solve", "main", "set_agent_command", "__version__"]
+__version__: str
+
+def linear_sum_assignment(
+    cost_matrix: npt.ArrayLike, maximize: Any = False
+) -> Tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]: ...
+def solve(
+    argv: Sequence[str],
+    cost: Optional[npt.ArrayLike] = None,
+    graph: Optional[Tuple[int, Sequence[Tuple[int, int]]]] = None,
+) -> Tuple[int, Optional[str], str]: ...
+def main(argv: Sequence[str]) -> int: ...
+def set_agent_command(program: Union[str, PathLike[str]], args: Sequence[str]) -> None: ...
