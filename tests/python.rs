@@ -147,7 +147,6 @@ fn the_python_package_passes_its_tests() {
                 "no:cacheprovider",
                 "--doctest-modules",
             ])
-            .args(["--ignore", &format!("{package}/_agent.py")])
             .args(["--ignore", &format!("{package}/__main__.py")])
             .arg(&package)
             .current_dir(root().join("python").join("tests")),

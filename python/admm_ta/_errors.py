@@ -6,9 +6,13 @@ graph) raises :class:`ValueError`, as scipy does; Ctrl-C raises :class:`Keyboard
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Optional
+# `typing` costs an agent process (which imports this package) several ms: annotations
+# only, as mypy reads them.
+TYPE_CHECKING = False
 
 if TYPE_CHECKING:
+    from typing import Optional
+
     from ._solve import SolveResult
 
 

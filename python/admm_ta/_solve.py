@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
-import json
 import os
-from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
+# `typing` costs an agent process (which imports this package) several ms: annotations
+# only, as mypy reads them.
+TYPE_CHECKING = False
 
 from . import _core
 from ._errors import NotCertifiedError, NotOptimalError, SolveError
+
+if TYPE_CHECKING:
+    from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 
 class SolveResult:
@@ -24,6 +28,8 @@ class SolveResult:
 
     def to_dict(self) -> Dict[str, Any]:
         """The report as the command line's ``--json`` prints it (a copy)."""
+        import json
+
         copy: Dict[str, Any] = json.loads(json.dumps(self._report))
         return copy
 
@@ -80,7 +86,9 @@ class SolveResult:
         ``barrier``: each with ``p50``, ``p90``, ``p99``, ``p999``, ``max``, ``mean``,
         ``count``), or ``None`` where rounds are not measured (the lockstep simulation)."""
         latency = self._report.get("round_latency_us")
-        return None if latency is None else json.loads(json.dumps(latency))
+        if latency is None:
+            return None
+        return {part: dict(values) for part, values in latency.items()}
 
     @property
     def optimal(self) -> Optional[bool]:
@@ -239,6 +247,8 @@ def solve(
         argv += ["--topology", os.fspath(topology)]
     else:
         graph = _graph(topology, robots)
+    import json
+
     code, report, message = _core.solve(argv, matrix, graph)
     result = None if report is None else SolveResult(json.loads(report))
     if code == 0 and result is not None:

@@ -7,7 +7,7 @@
 //! * [`solve`]: `admm-ta solve` in this process, its costs and graph handed over as values;
 //!   returns the exit code the command line would give, the JSON report and the message.
 //! * [`main`]: the whole command line (`python -m admm_ta`, the `admm-ta` script, and the
-//!   agent processes of a process transport, started as `python -m admm_ta._agent`).
+//!   agent processes of a process transport, started as `python -c` with it).
 //!
 //! Termination signals: while a call runs a team, SIGINT, SIGTERM and SIGHUP are recorded by
 //! the library's handlers (the team stops cleanly, agent processes are reaped and shared
@@ -268,7 +268,7 @@ fn main(py: Python<'_>, argv: Vec<String>) -> u8 {
 }
 
 /// Agent processes of this process's teams start as `program ARGS… agent …` (the package
-/// gives `sys.executable -m admm_ta._agent`).
+/// gives `sys.executable -c ...`, calling [`main`]).
 #[pyfunction]
 fn set_agent_command(program: PathBuf, args: Vec<String>) -> PyResult<()> {
     if program.as_os_str().is_empty() {

@@ -230,6 +230,56 @@ mod tests {
         }
     }
 
+    /// scipy's call: the optimum of `solve`, pairs sorted by row, profits by negation,
+    /// scipy's refusals; one reused `ScipyLsap` over shapes that grow and shrink.
+    #[test]
+    fn scipy_s_call_is_optimal_sorted_and_refuses_as_scipy() {
+        let mut rng = admm_ta_topologies::rng::SeededRng::new(9);
+        let mut reused = ScipyLsap::default();
+        for (rows, cols) in [(3, 5), (5, 3), (1, 1), (6, 6), (2, 7), (7, 2), (4, 4)] {
+            let cost: Vec<f64> = (0..rows * cols)
+                .map(|_| (rng.uniform() * 4.0).floor())
+                .collect();
+            for maximize in [false, true] {
+                let (r, c) = linear_sum_assignment(&cost, rows, cols, maximize).unwrap();
+                assert_eq!(r.len(), rows.min(cols));
+                assert!(r.windows(2).all(|w| w[0] < w[1]), "rows sorted: {r:?}");
+                let total: f64 = r.iter().zip(&c).map(|(&i, &j)| cost[i * cols + j]).sum();
+                let sign = if maximize { -1.0 } else { 1.0 };
+                let signed: Vec<f64> = cost.iter().map(|x| sign * x).collect();
+                let best = total_of(&signed, cols, &solve(&signed, rows, cols).unwrap());
+                assert!((sign * total - best).abs() < 1e-9);
+                let again = reused.solve(&cost, rows, cols, maximize).unwrap();
+                assert_eq!(again.iter().map(|p| p.0).collect::<Vec<_>>(), r);
+                assert_eq!(again.iter().map(|p| p.1).collect::<Vec<_>>(), c);
+            }
+        }
+        let inf = f64::INFINITY;
+        assert_eq!(
+            linear_sum_assignment(&[f64::NAN], 1, 1, false),
+            Err(LsapError::NonFinite(0, 0))
+        );
+        assert!(linear_sum_assignment(&[-inf], 1, 1, false).is_err());
+        assert!(linear_sum_assignment(&[inf], 1, 1, true).is_err());
+        assert!(linear_sum_assignment(&[-inf, 1.0], 1, 2, true).is_ok());
+        assert_eq!(
+            linear_sum_assignment(&[inf, 1.0, inf, 2.0], 2, 2, false),
+            Err(LsapError::Infeasible)
+        );
+        assert_eq!(
+            linear_sum_assignment(&[], 0, 3, false),
+            Ok((Vec::new(), Vec::new()))
+        );
+        assert!(linear_sum_assignment(&[1.0], 2, 2, false).is_err());
+    }
+
+    fn total_of(cost: &[f64], cols: usize, a: &[Option<usize>]) -> f64 {
+        a.iter()
+            .enumerate()
+            .filter_map(|(r, c)| c.map(|c| cost[r * cols + c]))
+            .sum()
+    }
+
     #[test]
     fn a_reused_workspace_gives_the_solver_s_answers() {
         let mut rng = admm_ta_topologies::rng::SeededRng::new(9);

@@ -212,7 +212,7 @@ impl RunOptionsBuilder {
 
 /// How agent processes are started: `PROGRAM [ARGS…] agent --run ID --index I …`. The
 /// `admm-ta` binary needs no leading arguments; a front end that carries the command line
-/// in another program (the Python package: `python -m admm_ta._agent`) gives them.
+/// in another program (the Python package: `python -c "..."`) gives them.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct AgentProgram {
     program: PathBuf,

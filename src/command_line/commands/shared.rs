@@ -9,7 +9,7 @@ static AGENT_PROGRAM: OnceLock<AgentProgram> = OnceLock::new();
 
 /// Agent processes of this process's teams start from `program` (the first call decides):
 /// a front end that carries the command line in another program (the Python package:
-/// `python -m admm_ta._agent`) says so once, before any team starts.
+/// `python -c "...admm_ta._core.main(...)"`) says so once, before any team starts.
 pub fn set_agent_program(program: AgentProgram) {
     let _ = AGENT_PROGRAM.set(program);
 }
