@@ -58,18 +58,23 @@ fn environment(python: &Path) -> PathBuf {
         );
     }
     run(
-        Command::new(&bin)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--quiet",
-                "--disable-pip-version-check",
-            ])
-            .args(REQUIREMENTS),
+        pip_install(&bin).args(REQUIREMENTS),
         "pip install (the test dependencies)",
     );
     bin
+}
+
+/// `python -m pip install`, quietly.
+fn pip_install(python: &Path) -> Command {
+    let mut command = Command::new(python);
+    command.args([
+        "-m",
+        "pip",
+        "install",
+        "--quiet",
+        "--disable-pip-version-check",
+    ]);
+    command
 }
 
 /// `PATH` with the environment's `bin` first (the build backend runs `maturin` from it).
@@ -96,14 +101,7 @@ fn the_python_package_passes_its_tests() {
         .join("python");
     // The README's install line, without build isolation (the backend is installed above).
     run(
-        Command::new(&venv_python)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--quiet",
-                "--disable-pip-version-check",
-            ])
+        pip_install(&venv_python)
             .args(["--no-build-isolation", "--force-reinstall", "--no-deps"])
             .args(["--config-settings", "build-args=--locked"])
             .arg(root().join("python"))

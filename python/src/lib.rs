@@ -167,11 +167,10 @@ fn linear_sum_assignment<'py>(
 /// back, a signal that arrived is raised again and Python's `KeyboardInterrupt` (or its
 /// own handler) takes over.
 fn with_signals<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> PyResult<T> {
-    let python_s = signals::SavedActions::save();
     let guard = signals::install();
     let value = py.detach(f);
+    // Python's handlers are back once the last guard drops.
     drop(guard);
-    python_s.restore();
     if let Some(signal) = signals::received() {
         // SAFETY: raising a signal in this process; Python's handler (or the default
         // action) is installed again.
@@ -259,12 +258,8 @@ fn solve<'py>(
 /// gives the conventional 128 + signal, as the binary does; it is not raised again.
 #[pyfunction]
 fn main(py: Python<'_>, argv: Vec<String>) -> u8 {
-    let python_s = signals::SavedActions::save();
-    let guard = signals::install();
-    let code = py.detach(move || cli::run(argv));
-    drop(guard);
-    python_s.restore();
-    code
+    let _guard = signals::install();
+    py.detach(move || cli::run(argv))
 }
 
 /// Agent processes of this process's teams start as `program ARGS… agent …` (the package

@@ -81,3 +81,21 @@ def test_ctrl_c_stops_a_long_solve_and_leaves_nothing(transport):
     assert out.split() == ["again", "True", "True"], (out, err)
     assert not [pid for pid in agents if alive(pid)]
     assert team_shm() - shm_before == set()
+
+
+@pytest.mark.parametrize("transport", ["sim", "ipc"])
+def test_python_s_own_handlers_are_back_after_a_solve(transport):
+    import admm_ta
+
+    calls = []
+    previous = signal.signal(signal.SIGUSR1, lambda *_: calls.append(1))
+    try:
+        admm_ta.solve([[1, 2], [2, 1]], transport=transport)
+        os.kill(os.getpid(), signal.SIGUSR1)
+        time.sleep(0.05)
+        assert calls == [1]
+        with pytest.raises(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1)
+    finally:
+        signal.signal(signal.SIGUSR1, previous)

@@ -13,7 +13,8 @@
 //! …), which it only records: [`install`] gives them back their default actions.
 //!
 //! [`install`] returns a guard; the handlers stay while a guard lives (the launcher's run,
-//! or the whole life of an agent or host process), then the previous ones come back.
+//! or the whole life of an agent or host process), then the process's own actions come back
+//! (those from before the first guard, not iceoryx2's), for every signal touched.
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicI32, AtomicU32, AtomicUsize, Ordering};
@@ -70,6 +71,20 @@ pub struct SignalGuard(());
 pub fn install() -> SignalGuard {
     let mut installed = INSTALLED.lock().unwrap_or_else(|e| e.into_inner());
     if installed.guards == 0 {
+        // The actions the last guard gives back: the process's own, saved before iceoryx2
+        // can register its handlers — a host that runs teams inside its process (the
+        // Python package) gets its handlers back (Python's SIGINT handler raises
+        // `KeyboardInterrupt`), not iceoryx2's.
+        installed.previous.clear();
+        for signal in TERMINATION.into_iter().chain(DEFAULT_ACTION) {
+            // SAFETY: reading a signal's action into a zeroed sigaction.
+            unsafe {
+                let mut old: libc::sigaction = std::mem::zeroed();
+                if libc::sigaction(signal, std::ptr::null(), &mut old) == 0 {
+                    installed.previous.push((signal, old));
+                }
+            }
+        }
         // iceoryx2 registers its own handlers lazily, once per process: let it do so now,
         // so that it cannot replace ours later.
         let _ = iceoryx2_bb_posix::signal::SignalHandler::last_signal();
@@ -79,7 +94,6 @@ pub fn install() -> SignalGuard {
         }
         RECEIVED.store(0, Ordering::Release);
         COUNT.store(0, Ordering::Release);
-        installed.previous.clear();
         for signal in TERMINATION {
             // SAFETY: a zeroed sigaction is valid; the handler only touches atomics.
             unsafe {
@@ -87,10 +101,7 @@ pub fn install() -> SignalGuard {
                 action.sa_sigaction = on_signal as extern "C" fn(libc::c_int) as usize;
                 action.sa_flags = 0;
                 libc::sigemptyset(&mut action.sa_mask);
-                let mut old: libc::sigaction = std::mem::zeroed();
-                if libc::sigaction(signal, &action, &mut old) == 0 {
-                    installed.previous.push((signal, old));
-                }
+                libc::sigaction(signal, &action, std::ptr::null_mut());
             }
         }
     }
@@ -109,38 +120,6 @@ impl Drop for SignalGuard {
                 // SAFETY: restoring the action `sigaction` gave us.
                 unsafe { libc::sigaction(signal, &old, std::ptr::null_mut()) };
             }
-        }
-    }
-}
-
-/// The actions of every signal [`install`] (or iceoryx2, the first time) changes, saved to
-/// be put back: a host with handlers of its own that runs teams inside its process (the
-/// Python package: Python's SIGINT handler raises `KeyboardInterrupt`) saves them before
-/// [`install`] and restores them after the guard drops, since the guard gives back
-/// iceoryx2's handlers, not the host's.
-pub struct SavedActions(Vec<(i32, libc::sigaction)>);
-
-impl SavedActions {
-    /// The current actions of the termination signals and of those iceoryx2 captures.
-    pub fn save() -> Self {
-        let mut saved = Vec::new();
-        for signal in TERMINATION.into_iter().chain(DEFAULT_ACTION) {
-            // SAFETY: reading a signal's action into a zeroed sigaction.
-            unsafe {
-                let mut old: libc::sigaction = std::mem::zeroed();
-                if libc::sigaction(signal, std::ptr::null(), &mut old) == 0 {
-                    saved.push((signal, old));
-                }
-            }
-        }
-        Self(saved)
-    }
-
-    /// Puts the saved actions back.
-    pub fn restore(self) {
-        for (signal, old) in self.0 {
-            // SAFETY: restoring the action `sigaction` gave us.
-            unsafe { libc::sigaction(signal, &old, std::ptr::null_mut()) };
         }
     }
 }
