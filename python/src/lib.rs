@@ -26,6 +26,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use std::ffi::c_int;
 use std::path::PathBuf;
+use std::time::Duration;
 
 /// `obj` as scipy makes its cost matrix: `PyArray_ContiguousFromAny(obj, NPY_DOUBLE, 0, 0)`
 /// (numpy's own conversion: an array is cast safely, a `TypeError` for object or complex
@@ -163,14 +164,50 @@ fn linear_sum_assignment<'py>(
     result
 }
 
-/// Runs `f` with the library's signal handlers installed; afterwards Python's handlers are
-/// back, a signal that arrived is raised again and Python's `KeyboardInterrupt` (or its
-/// own handler) takes over.
+/// How often the calling thread looks at Python's own pending signals while a team runs.
+const PYTHON_SIGNAL_SLICE: Duration = Duration::from_millis(20);
+
+/// Runs `f` (a team) on a worker thread with the library's signal handlers installed, while
+/// the calling thread waits without the interpreter and looks at Python's pending signals
+/// every [`PYTHON_SIGNAL_SLICE`]:
+/// * SIGINT, SIGTERM, SIGHUP reach the library's handlers: the team stops cleanly; when the
+///   last guard drops Python's handlers are back, the signal is raised again and Python's
+///   handler takes over (Ctrl-C: `KeyboardInterrupt`);
+/// * a signal Python handles itself (SIGALRM with a handler that raises, or
+///   `_thread.interrupt_main()`) runs its handler here; if that raises, the team is stopped
+///   as by SIGINT and the handler's exception is the call's.
 fn with_signals<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> PyResult<T> {
     let guard = signals::install();
-    let value = py.detach(f);
+    let (value, raised) = std::thread::scope(|scope| {
+        let (done, finished) = crossbeam::channel::bounded(1);
+        let worker = scope.spawn(move || {
+            let value = f();
+            let _ = done.send(());
+            value
+        });
+        let mut raised = None;
+        // Until the worker is done (or gone: a panic, resumed below).
+        while py.detach(|| finished.recv_timeout(PYTHON_SIGNAL_SLICE))
+            == Err(crossbeam::channel::RecvTimeoutError::Timeout)
+        {
+            if raised.is_none()
+                && let Err(error) = py.check_signals()
+            {
+                // Stop the team as a Ctrl-C would, then let the handler's exception out.
+                signals::record(libc::SIGINT);
+                raised = Some(error);
+            }
+        }
+        let value = worker
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (value, raised)
+    });
     // Python's handlers are back once the last guard drops.
     drop(guard);
+    if let Some(error) = raised {
+        return Err(error);
+    }
     if let Some(signal) = signals::received() {
         // SAFETY: raising a signal in this process; Python's handler (or the default
         // action) is installed again.

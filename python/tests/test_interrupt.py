@@ -99,3 +99,44 @@ def test_python_s_own_handlers_are_back_after_a_solve(transport):
             time.sleep(1)
     finally:
         signal.signal(signal.SIGUSR1, previous)
+
+
+LONG = dict(stop="max-iters", max_iters=10**9)
+
+
+def test_a_python_signal_handler_that_raises_stops_the_team():
+    """`signal.alarm` with a handler that raises: the timeout pattern."""
+    import admm_ta
+
+    def timeout(*_):
+        raise TimeoutError("too long")
+
+    previous = signal.signal(signal.SIGALRM, timeout)
+    try:
+        for transport in ["sim", "threads", "ipc"]:
+            signal.setitimer(signal.ITIMER_REAL, 0.5)
+            began = time.monotonic()
+            with pytest.raises(TimeoutError, match="too long"):
+                admm_ta.solve([[1, 2], [2, 1]], transport=transport, **LONG)
+            assert time.monotonic() - began < 5
+            assert admm_ta.solve([[1, 2], [2, 1]], transport=transport).certified
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def test_interrupt_main_stops_the_team():
+    import _thread
+    import threading
+
+    import admm_ta
+
+    timer = threading.Timer(0.5, _thread.interrupt_main)
+    timer.start()
+    began = time.monotonic()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            admm_ta.solve([[1, 2], [2, 1]], transport="threads", **LONG)
+    finally:
+        timer.cancel()
+    assert time.monotonic() - began < 5
