@@ -53,6 +53,7 @@ const LAYERS: [&[&str]; 6] = [
         "exchange",
         "board",
         "liveness",
+        "logging",
         "signals",
         "fault",
         "wait",

@@ -312,6 +312,9 @@ fn set_agent_command(program: PathBuf, args: Vec<String>) -> PyResult<()> {
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // Structured logs when `RUST_LOG` asks for them (README, "Logs"); a bad filter is
+    // ignored here: importing the package must not fail over it.
+    let _ = admm_ta::runtime::logging::init(None);
     m.add_function(wrap_pyfunction!(linear_sum_assignment, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(main, m)?)?;

@@ -106,6 +106,7 @@ pub mod fault;
 pub mod futex;
 pub mod latency;
 pub mod liveness;
+pub mod logging;
 pub mod signals;
 pub mod usage;
 pub mod wait;

@@ -1,6 +1,9 @@
 //! The command line: every subcommand's arguments (clap definitions only; each subcommand
 //! runs in its file of `commands/`). Value lists (methods, transports, stop rules, wait
 //! strategies, …) come from the library's own types.
+//!
+//! Size: the whole command line in one file, one definition per subcommand and option with
+//! its help text; split by subcommand it would no longer read as one interface.
 
 use crate::command_line::method_flags::MethodFlags;
 use crate::topologies::RobotRef;
@@ -16,6 +19,11 @@ use std::path::PathBuf;
     about = "Consensus ADMM task assignment for multi-robot teams"
 )]
 pub struct Cli {
+    /// Structured logs on standard error, one line per event with the run, agent and round
+    /// (`RUST_LOG` syntax: `info`, `debug`, `trace` for every round, `admm_ta_runtime=debug`);
+    /// agent processes log to the launcher's standard error. Default: `RUST_LOG`, else none.
+    #[arg(long, global = true, value_name = "FILTER")]
+    pub log: Option<String>,
     #[command(subcommand)]
     pub command: Command,
 }

@@ -34,6 +34,10 @@ pub fn run(args: impl IntoIterator<Item = impl Into<OsString> + Clone>) -> u8 {
             return 2;
         }
     };
+    if let Err(error) = crate::runtime::logging::init(args.log.as_deref()) {
+        eprintln!("error: {error}");
+        return 2;
+    }
     match commands::run(args.command, &matches) {
         Ok(code) => code,
         Err(error) if output::reader_closed(&error) => {

@@ -8,6 +8,7 @@ mod common;
 mod blame;
 mod faults;
 mod limits;
+mod logs;
 mod private_dirs;
 mod signals;
 mod stress;

@@ -202,6 +202,15 @@ impl RoundLoop {
                     Verdict::Continue => None,
                 };
                 if let Some(finished) = finished {
+                    match finished.1 {
+                        Some(certified_round) => tracing::debug!(
+                            round,
+                            certified_round,
+                            task = finished.0,
+                            "the stop protocol certified the assignment"
+                        ),
+                        None => tracing::debug!(round, "the round limit ended the run"),
+                    }
                     self.stopped = true;
                     return Ok(finished);
                 }
@@ -231,6 +240,14 @@ impl RoundLoop {
             self.iterate_digest = digest;
             self.projection_steps += steps;
             let published = Instant::now();
+            // The hot loop logs only at `trace` (one atomic load when that is off).
+            tracing::trace!(
+                round,
+                wait_us = gathered.duration_since(started).as_secs_f64() * 1e6,
+                compute_us = computed.duration_since(gathered).as_secs_f64() * 1e6,
+                publish_us = published.duration_since(computed).as_secs_f64() * 1e6,
+                "round"
+            );
             if plan.global_barrier {
                 exchange.global_barrier(round + 1, published + plan.round_timeout)?;
             }

@@ -69,6 +69,7 @@ pub fn run(
     scenario_digest: &str,
 ) -> Result<(), MemberError> {
     let _signals = crate::signals::install();
+    let _span = tracing::info_span!("agent", run = %run_id, agent = index).entered();
     // Not a symlink, ours, mode 0600, and what the launcher wrote (its digest).
     let bytes = crate::process::private_dir::read_verified(scenario_path, scenario_digest)
         .map_err(MemberError::refused)?;
@@ -101,9 +102,21 @@ pub fn run_scenario(
     let graph = scenario.graph().map_err(MemberError::refused)?;
     let plan = scenario.plan(index).map_err(MemberError::refused)?;
     let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
+    tracing::debug!(
+        transport = scenario.transport.name(),
+        neighbours = ?graph.neighbours(index),
+        "scenario read, connecting"
+    );
     let mut endpoint = connect(scenario, &graph, index, run_dir, supervised, deadline)
-        .inspect_err(|_| record_stop(scenario))?;
+        .inspect_err(|e| {
+            tracing::warn!(error = %e.text(), "could not connect");
+            record_stop(scenario)
+        })?;
     let connected_unix_ns = unix_ns();
+    tracing::debug!(
+        ms = started.elapsed().as_secs_f64() * 1e3,
+        "connected to every neighbour"
+    );
     let ran = match &scenario.workload {
         ScenarioWorkload::Episodes(settings) => {
             let mut agent = settings.agent(index, &graph);
@@ -118,6 +131,7 @@ pub fn run_scenario(
         }
     };
     let (outcome, episodes) = ran.map_err(|e| {
+        tracing::warn!(error = %e, "stopped");
         if let ExchangeError::Stopped { signal, .. } = e {
             if crate::signals::received().is_some() {
                 // Our own signal: the rest of the team stops too (nobody failed). The stop
@@ -138,6 +152,13 @@ pub fn run_scenario(
     })?;
     // Release the ports before reporting: once the launcher sees the result it may clean up.
     drop(endpoint);
+    tracing::info!(
+        rounds = outcome.rounds,
+        task = outcome.task,
+        certified_round = outcome.certified_round,
+        converged = outcome.converged,
+        "finished"
+    );
     let report = AgentReport {
         outcome,
         connected_unix_ns,

@@ -158,19 +158,29 @@ pub fn launch(
 ) -> Result<ProcessRun, LaunchError> {
     let _signals = signals::install();
     let (mut guard, scenario_file) = prepare(&mut scenario)?;
+    let _span = tracing::info_span!("launcher", run = %scenario.run_id).entered();
+    tracing::debug!(dir = %guard.namespace.dir.display(), robots = scenario.robots, "run prepared");
     let spawned_unix_ns = unix_ns();
     spawn_agents(&mut guard, &scenario_file, agent_program, fault_injection)?;
     let guard = match supervise(guard, scenario.robots)? {
         Supervised::AllExited(guard) => guard,
         Supervised::Failed(guard, supervision) => {
-            return Err(failure(&guard, &supervision, &scenario).into());
+            let error = LaunchError::from(failure(&guard, &supervision, &scenario));
+            tracing::warn!(%error, "the team failed");
+            return Err(error);
         }
     };
     let run_dir = guard.namespace.dir.clone();
     let namespace = guard.namespace.clone();
     let (outcomes, episodes, connected) = read_results(&run_dir, scenario.robots)?;
     let startup = Duration::from_nanos(connected.saturating_sub(spawned_unix_ns) as u64);
+    tracing::info!(
+        startup_ms = startup.as_secs_f64() * 1e3,
+        rounds = outcomes.first().map_or(0, |o| o.rounds),
+        "every agent exited with its result"
+    );
     drop(guard);
+    tracing::debug!("run files removed");
     Ok(ProcessRun {
         run_id: namespace.id.clone(),
         outcomes,
@@ -237,6 +247,16 @@ fn spawn_agents(
 ) -> Result<(), LaunchError> {
     let agents = guard.board.as_ref().expect("the board exists").agents();
     let run_dir = guard.namespace.dir.clone();
+    // With logs on, every agent writes its log lines to this process's standard error (a
+    // copy kept close-on-exec here, made the agent's descriptor 3), its own standard error
+    // staying its private log file.
+    let log_fd = crate::logging::filter().and_then(|_| {
+        // SAFETY: duplicating our standard error to a close-on-exec descriptor.
+        let fd = unsafe { libc::fcntl(2, libc::F_DUPFD_CLOEXEC, 10) };
+        (fd >= 0).then_some(fd)
+    });
+    let _close_log_fd = CloseOnDrop(log_fd);
+    tracing::debug!(agents, program = %agent_program.program().display(), "starting the agents");
     for index in 0..agents {
         let log =
             create_private_file(&log_path(&run_dir, index)).map_err(LaunchError::RunDirectory)?;
@@ -253,8 +273,19 @@ fn spawn_agents(
                 {
                     return Err(std::io::Error::other("the launcher is gone"));
                 }
+                if let Some(fd) = log_fd
+                    && libc::dup2(fd, crate::logging::CHILD_LOG_FD) < 0
+                {
+                    return Err(std::io::Error::last_os_error());
+                }
                 Ok(())
             });
+        }
+        if let (Some(filter), Some(_)) = (crate::logging::filter(), log_fd) {
+            command.env("RUST_LOG", filter).env(
+                crate::logging::LOG_FD_ENV,
+                crate::logging::CHILD_LOG_FD.to_string(),
+            );
         }
         #[cfg(feature = "fault-injection")]
         if !fault_injection {
@@ -281,6 +312,18 @@ fn spawn_agents(
         guard.children.push(Some(child));
     }
     Ok(())
+}
+
+/// Closes a descriptor of ours when dropped.
+struct CloseOnDrop(Option<libc::c_int>);
+
+impl Drop for CloseOnDrop {
+    fn drop(&mut self) {
+        if let Some(fd) = self.0 {
+            // SAFETY: a descriptor this launcher opened and nobody else closes.
+            unsafe { libc::close(fd) };
+        }
+    }
 }
 
 /// Every agent's outcome and episodes, in agent order, and when the last one had all its

@@ -168,11 +168,13 @@ pub(crate) fn supervise(mut guard: RunGuard, agents: usize) -> Result<Supervised
     };
     while guard.children.iter().any(Option::is_some) {
         if let Some(stop) = stop_request(&guard) {
+            tracing::info!(?stop, "stopping the team");
             return Err(stop_team(guard, stop));
         }
         let (progressed, first_failure) = seen.reap_exited(&mut guard);
         if let Some(index) = first_failure {
             seen.name_culprit(&guard, index);
+            tracing::warn!(first = index, blamed = ?seen.failed, "failure detected");
         }
         // The failed agent may still run (hung, or sending garbage): it is not waited for.
         if let Some(culprit) = seen.failed
@@ -217,6 +219,10 @@ impl Supervision {
             };
             *slot = None;
             progressed = true;
+            match &how {
+                None => tracing::debug!(agent = index, "agent exited"),
+                Some(how) => tracing::info!(agent = index, how = %how, "agent exited"),
+            }
             if let Some(signal) = how.as_deref().and_then(stopped_by_signal) {
                 let board = guard.board.as_ref().expect("the board exists");
                 let _ = board.request_stop(signal, Some(index));

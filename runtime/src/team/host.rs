@@ -86,6 +86,8 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
     let _signals = crate::signals::install();
     let started = Instant::now();
     let team = Team::read(team_path).map_err(MemberError::refused)?;
+    let _span = tracing::info_span!("host", run = %team.file.run, host = name).entered();
+    tracing::debug!(team = %team_path.display(), "starting the host");
     if !team.file.transport.across_hosts() {
         return Err(MemberError::refused(HostError::NoHosts));
     }

@@ -233,6 +233,8 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
     let _signals = crate::signals::install();
     let started = Instant::now();
     let team = Team::read(team_path).map_err(MemberError::refused)?;
+    let _span = tracing::info_span!("agent", run = %team.file.run, agent = id).entered();
+    tracing::debug!(team = %team_path.display(), "joining the team");
     let n = team.file.robots;
     if id >= n {
         return Err(MemberError::refused(JoinError::NoSuchAgent {
