@@ -55,6 +55,7 @@ const LAYERS: [&[&str]; 6] = [
         "liveness",
         "logging",
         "signals",
+        "timeline",
         "fault",
         "wait",
         "futex",

@@ -108,5 +108,6 @@ pub mod latency;
 pub mod liveness;
 pub mod logging;
 pub mod signals;
+pub mod timeline;
 pub mod usage;
 pub mod wait;

@@ -124,6 +124,7 @@ fn plans(n: usize, max_rounds: u64, stop: &AgentStop, options: &RunOptions) -> V
             round_timeout: options.round_timeout(),
             global_barrier: options.global_barrier(),
             warmup_rounds: options.warmup_rounds(),
+            timeline: options.timeline(),
         })
         .collect()
 }
@@ -188,6 +189,7 @@ fn lockstep(
             projection_steps: steps[index],
             latency: RoundLatency::new().to_buckets(),
             usage: ThreadUsage::default(),
+            timeline: Vec::new(),
         })
         .collect();
     Ok(TeamRun {

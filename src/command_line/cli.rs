@@ -479,6 +479,12 @@ pub struct SolveArgs {
     /// JSON report (`check.trace`), for convergence plots.
     #[arg(long, requires = "check")]
     pub trace: bool,
+    /// Write every agent's rounds (wait, compute, publish, barrier; the message each agent
+    /// waited for last as a flow) to FILE as Chrome trace-event JSON (Perfetto,
+    /// chrome://tracing), and name the critical path in the report (threads and process
+    /// transports).
+    #[arg(long, value_name = "FILE")]
+    pub timeline: Option<PathBuf>,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,

@@ -186,6 +186,30 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
             }
         );
     }
+    if let Some(path) = &report.critical_path {
+        let top: Vec<String> = path
+            .top
+            .iter()
+            .map(|a| {
+                format!(
+                    "agent {} ({:.1}% of round time, waited for by {} agent-rounds, critical in {} rounds)",
+                    a.agent,
+                    100.0 * a.waiting_share,
+                    a.waited_for,
+                    a.rounds
+                )
+            })
+            .collect();
+        outln!(
+            "critical path: {:.1}% of the agents' round time went to waiting for a late neighbour{}",
+            100.0 * path.waiting_share,
+            if top.is_empty() {
+                String::new()
+            } else {
+                format!("; most waited for: {}", top.join(", "))
+            }
+        );
+    }
     if let Some(check) = &report.check {
         let round = |r: Option<usize>| r.map_or("never".to_string(), |r| r.to_string());
         outln!(

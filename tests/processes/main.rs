@@ -12,4 +12,5 @@ mod logs;
 mod private_dirs;
 mod signals;
 mod stress;
+mod timeline;
 mod transports;

@@ -5,6 +5,7 @@
 use crate::exchange::header::RoundHeader;
 use crate::exchange::{Exchange, ExchangeError};
 use crate::latency::{BucketsMismatch, Component, LatencyBuckets, RoundLatency};
+use crate::timeline::{RoundStamp, TimelineRecorder};
 use crate::usage::ThreadUsage;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::local_stop::{LocalCertifiedStop, Verdict};
@@ -31,6 +32,8 @@ pub struct AgentPlan {
     pub global_barrier: bool,
     /// Rounds run before latency and resource usage are recorded (benchmarks).
     pub warmup_rounds: u64,
+    /// Stamp every round into a timeline ([`crate::timeline`]).
+    pub timeline: bool,
 }
 
 /// What one agent reports at the end of a run.
@@ -52,6 +55,9 @@ pub struct AgentOutcome {
     /// CPU time and context switches of the agent's thread over the recorded rounds.
     #[serde(default)]
     pub usage: ThreadUsage,
+    /// Every round's stamps, when the plan asked for a timeline.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub timeline: Vec<RoundStamp>,
 }
 
 /// An agent's outcome whose latency histograms do not merge with the others'.
@@ -113,6 +119,8 @@ pub struct RoundLoop {
     /// A stop ended the last [`RoundLoop::run`]: the next one computes from the gathered
     /// round at once.
     stopped: bool,
+    /// The rounds' stamps, when the plan asks for a timeline (sized before round 0).
+    timeline: Option<TimelineRecorder>,
 }
 
 impl RoundLoop {
@@ -136,6 +144,9 @@ impl RoundLoop {
             usage_from: ThreadUsage::now(),
             round: 0,
             stopped: false,
+            timeline: plan
+                .timeline
+                .then(|| TimelineRecorder::new(plan.max_rounds.saturating_add(1))),
         })
     }
 
@@ -252,6 +263,9 @@ impl RoundLoop {
                 exchange.global_barrier(round + 1, published + plan.round_timeout)?;
             }
             let done = Instant::now();
+            if let Some(timeline) = &mut self.timeline {
+                timeline.record(round, [started, gathered, computed, published, done]);
+            }
             if round >= plan.warmup_rounds {
                 let latency = &mut self.latency;
                 latency.record(Component::Wait, gathered - started);
@@ -282,6 +296,11 @@ impl RoundLoop {
             projection_steps: self.projection_steps,
             latency: self.latency.to_buckets(),
             usage: ThreadUsage::now().since(&self.usage_from),
+            timeline: self
+                .timeline
+                .clone()
+                .map(TimelineRecorder::into_stamps)
+                .unwrap_or_default(),
         }
     }
 }

@@ -24,6 +24,7 @@ pub enum OptionId {
     StartupTimeout,
     OnFailure,
     Wait,
+    Timeline,
 }
 
 impl OptionId {
@@ -44,6 +45,7 @@ impl OptionId {
             Self::StartupTimeout => "--startup-timeout",
             Self::OnFailure => "--on-failure",
             Self::Wait => "--wait",
+            Self::Timeline => "--timeline",
         }
     }
 

@@ -361,6 +361,14 @@ impl SolveOptionsBuilder {
         self
     }
 
+    /// Every agent stamps its rounds: [`crate::solve::report::SolveReport::timeline`] and
+    /// its critical path (threads and process transports).
+    pub fn timeline(mut self, on: bool) -> Self {
+        self.given = self.given.with(OptionId::Timeline);
+        self.run = self.run.timeline(on);
+        self
+    }
+
     pub fn on_failure(mut self, on_failure: OnFailure) -> Self {
         self.given = self.given.with(OptionId::OnFailure);
         self.on_failure = on_failure;
@@ -429,6 +437,7 @@ impl SolveOptionsBuilder {
             wait: self.run.wait,
             round_timeout: self.run.round_timeout,
             startup_timeout: self.run.startup_timeout,
+            timeline: self.run.timeline,
         });
         let run = self.run.build()?;
         if self.stop.is_central() && !lockstep {

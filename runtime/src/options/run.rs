@@ -20,6 +20,7 @@ pub struct RunOptions {
     agent_program: Option<AgentProgram>,
     fault_injection: bool,
     warmup_rounds: u64,
+    timeline: bool,
 }
 
 impl Default for RunOptions {
@@ -35,6 +36,7 @@ impl Default for RunOptions {
             agent_program: None,
             fault_injection: false,
             warmup_rounds: 0,
+            timeline: false,
         }
     }
 }
@@ -64,6 +66,7 @@ impl RunOptions {
             agent_program: self.agent_program.clone(),
             fault_injection: self.fault_injection,
             warmup_rounds: self.warmup_rounds,
+            timeline: self.timeline,
         }
     }
 
@@ -107,6 +110,11 @@ impl RunOptions {
     pub fn warmup_rounds(&self) -> u64 {
         self.warmup_rounds
     }
+
+    /// Every agent stamps its rounds into a timeline ([`crate::timeline`]).
+    pub fn timeline(&self) -> bool {
+        self.timeline
+    }
 }
 
 /// Builds [`RunOptions`]; timeouts are kept as given until [`RunOptionsBuilder::build`]
@@ -121,6 +129,7 @@ pub struct RunOptionsBuilder {
     agent_program: Option<AgentProgram>,
     fault_injection: bool,
     warmup_rounds: u64,
+    pub(super) timeline: bool,
 }
 
 impl RunOptionsBuilder {
@@ -177,6 +186,12 @@ impl RunOptionsBuilder {
         self
     }
 
+    /// Every agent stamps its rounds into a timeline (not the lockstep simulation).
+    pub fn timeline(mut self, on: bool) -> Self {
+        self.timeline = on;
+        self
+    }
+
     /// The timeouts, checked.
     pub(super) fn timeouts(&self) -> Result<(Duration, Duration), ConfigError> {
         Ok((
@@ -206,6 +221,7 @@ impl RunOptionsBuilder {
             agent_program: self.agent_program,
             fault_injection: self.fault_injection,
             warmup_rounds: self.warmup_rounds,
+            timeline: self.timeline,
         })
     }
 }

@@ -30,6 +30,7 @@ pub(super) struct Chosen<'a> {
     pub wait: WaitStrategy,
     pub round_timeout: f64,
     pub startup_timeout: f64,
+    pub timeline: bool,
 }
 
 impl Chosen<'_> {
@@ -102,6 +103,10 @@ fn refuse_unread(b: &Chosen) -> Result<(), ConfigError> {
     // start up.
     if given(OptionId::RoundTimeout) {
         let option = Setting::new(OptionId::RoundTimeout, Value::Number(b.round_timeout));
+        for_transport(b, option, |c| c != Execution::Lockstep)?;
+    }
+    if given(OptionId::Timeline) && b.timeline {
+        let option = Setting::new(OptionId::Timeline, Value::On);
         for_transport(b, option, |c| c != Execution::Lockstep)?;
     }
     if given(OptionId::Wait) {

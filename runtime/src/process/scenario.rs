@@ -87,6 +87,9 @@ pub struct Scenario {
     /// Rounds before latency is recorded.
     #[serde(default)]
     pub warmup_rounds: u64,
+    /// Every agent stamps its rounds ([`crate::timeline`]).
+    #[serde(default)]
+    pub timeline: bool,
     /// What the transport put here for its agents (a Zenoh run's router links), as its own
     /// type serialises it.
     #[serde(default)]
@@ -158,6 +161,7 @@ impl Scenario {
             transport: options.transport(),
             wait: options.wait(),
             warmup_rounds: options.warmup_rounds(),
+            timeline: options.timeline(),
             transport_config: None,
             local_agents: None,
         };
@@ -290,6 +294,7 @@ impl Scenario {
             round_timeout: Duration::from_millis(self.round_timeout_ms),
             global_barrier: self.global_barrier,
             warmup_rounds: self.warmup_rounds,
+            timeline: self.timeline,
         })
     }
 

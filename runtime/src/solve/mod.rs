@@ -430,6 +430,11 @@ fn solve_once(
         startup_ms: run.startup_ms,
         run_id: run.run_id,
         iterate_digests: run.iterate_digests,
+        critical_path: options
+            .run()
+            .timeline()
+            .then(|| crate::timeline::critical_path(graph, &run.timeline)),
+        timeline: run.timeline,
         check,
     })
 }
@@ -446,6 +451,7 @@ struct RunResult {
     startup_ms: Option<f64>,
     run_id: Option<String>,
     iterate_digests: Vec<u64>,
+    timeline: Vec<Vec<crate::timeline::RoundStamp>>,
 }
 
 impl RunResult {
@@ -462,6 +468,7 @@ impl RunResult {
             startup_ms: None,
             run_id: None,
             iterate_digests: Vec::new(),
+            timeline: Vec::new(),
         }
     }
 
@@ -483,6 +490,7 @@ impl RunResult {
             usage: distributed.then_some(team.usage),
             startup_ms: team.startup.map(|d| d.as_secs_f64() * 1e3),
             iterate_digests: team.outcomes.iter().map(|o| o.iterate_digest).collect(),
+            timeline: team.outcomes.into_iter().map(|o| o.timeline).collect(),
             run_id: team.run_id,
         }
     }

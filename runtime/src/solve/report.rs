@@ -123,6 +123,12 @@ pub struct SolveReport {
     /// Hash of each agent's last published payload (to compare transports).
     #[serde(skip)]
     pub iterate_digests: Vec<u64>,
+    /// Every agent's round stamps (`timeline` on; `timeline::chrome_trace` renders them).
+    #[serde(skip)]
+    pub timeline: Vec<Vec<crate::timeline::RoundStamp>>,
+    /// Whom the team waited for, round by round (`timeline` on).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critical_path: Option<crate::timeline::CriticalPath>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub check: Option<OracleCheck>,
     /// Set when a robot failed and the survivors re-solved without it: `cost` and `check`

@@ -152,8 +152,22 @@ pub fn solve_report(
     if given("wait") {
         options = options.wait(args.wait);
     }
+    if args.timeline.is_some() {
+        options = options.timeline(true);
+    }
     let options = options.build()?;
-    Ok(crate::solve(&problem, &graph, &options)?)
+    if let Some(path) = &args.timeline {
+        // Refused before the run if it cannot be written.
+        std::fs::File::create(path)
+            .map_err(|e| UsageError(format!("--timeline {}: {e}", path.display())))?;
+    }
+    let report = crate::solve(&problem, &graph, &options)?;
+    if let Some(path) = &args.timeline {
+        let trace = crate::runtime::timeline::chrome_trace(&graph, &report.timeline);
+        std::fs::write(path, serde_json::to_vec(&trace)?)
+            .with_context(|| format!("--timeline {}", path.display()))?;
+    }
+    Ok(report)
 }
 
 /// `auto`, `off` (or 0) or a positive number ε.
