@@ -10,8 +10,10 @@ PACKAGE = os.path.join(os.path.dirname(HERE), "admm_ta")
 
 
 def run(*args):
+    # From the tests' folder: the installed package, not the source folder (which has no
+    # extension module in a fresh clone).
     return subprocess.run([sys.executable, "-m", *args], capture_output=True, text=True,
-                          cwd=os.path.dirname(HERE), timeout=300)
+                          cwd=HERE, timeout=300)
 
 
 def test_the_stub_agrees_with_the_extension_module():
