@@ -139,6 +139,20 @@ impl Board {
         Ok(Self { memory, agents })
     }
 
+    /// Opens a board whose team size is not known (`admm-ta top`): the size of the segment
+    /// tells it. `None` if it cannot be opened or is not a board's size.
+    pub fn open_sized(shm: &str) -> Option<Self> {
+        let memory = SharedMemoryBuilder::new(&file_name(shm).ok()?)
+            .is_memory_locked(false)
+            .open_existing(iceoryx2_bb_posix::access_mode::AccessMode::ReadWrite)
+            .ok()?;
+        let lines = memory.size() / LINE;
+        (memory.size() % LINE == 0 && lines > 4).then(|| Self {
+            agents: lines - 4,
+            memory,
+        })
+    }
+
     /// Creates the board of a run (the launcher, which owns it: it is removed when dropped),
     /// zeroed, with the team's shape `(agents, tasks, payload length)` recorded so that an
     /// agent of another shape is refused.

@@ -74,6 +74,7 @@
 
 // Entry points.
 pub mod episodes;
+pub mod observe;
 pub mod probe_run;
 pub mod solve;
 pub mod team;

@@ -60,6 +60,11 @@ pub enum Command {
     /// Run many teams of agent processes at once (a stress test): failures, wall time,
     /// per-run p50/p99 and anything left behind; non-zero exit on any failure or leftover.
     Stress(crate::command_line::commands::stress::StressArgs),
+    /// This user's running teams of agent processes (launched or started independently), and
+    /// per agent its round, state (computing, waiting for whom, finished, failed), round time
+    /// and CPU, refreshed in place; `q` quits, ↑/↓ choose the team. `--once` prints one
+    /// snapshot (`--json` for scripts). It only reads what the teams share.
+    Top(crate::command_line::commands::top::TopArgs),
 }
 
 #[derive(Args, Debug)]

@@ -13,4 +13,5 @@ mod private_dirs;
 mod signals;
 mod stress;
 mod timeline;
+mod top;
 mod transports;

@@ -9,6 +9,7 @@ pub mod host;
 pub mod shared;
 pub mod solve;
 pub mod stress;
+pub mod top;
 pub mod topology;
 
 use crate::command_line::cli::Command;
@@ -29,5 +30,6 @@ pub fn run(command: Command, matches: &clap::ArgMatches) -> Result<u8> {
         Command::Experiment { experiment } => experiment::run(experiment).map(|()| 0),
         Command::Topology(args) => topology::run(args).map(|()| 0),
         Command::Stress(args) => stress::run(args).map(|()| 0),
+        Command::Top(args) => top::run(args).map(|()| 0),
     }
 }
