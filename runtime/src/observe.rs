@@ -184,7 +184,7 @@ fn independent_teams() -> Vec<TeamView> {
         let Some(board) = Board::open_sized(&name) else {
             continue;
         };
-        let agents = (0..board.agents())
+        let mut agents: Vec<AgentView> = (0..board.agents())
             .filter(|&i| board.registered(i) || board.connected(i))
             .map(|i| {
                 // A member that left cleared its pid; one whose process is gone died.
@@ -193,6 +193,17 @@ fn independent_teams() -> Vec<TeamView> {
                 agent_view(&board, i, gone, None, pid)
             })
             .collect();
+        // The graph is the team file's (not on the board): before every member has
+        // connected, the connected ones wait for the others to start.
+        let missing: Vec<usize> = (0..board.agents())
+            .filter(|&i| !board.connected(i))
+            .collect();
+        if !missing.is_empty() {
+            for agent in agents.iter_mut().filter(|a| a.state == "computing") {
+                agent.state = "waiting";
+                agent.waiting_for = missing.clone();
+            }
+        }
         teams.push(TeamView {
             run: format!("team-{team}"),
             kind: "team",
