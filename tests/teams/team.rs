@@ -707,3 +707,48 @@ fn team_file_settings_are_refused_by_the_command_lines_rule_naming_file_and_key(
         }
     }
 }
+
+/// A team file's `timeline`: every agent stamps its rounds and `collect` writes the trace
+/// and names the critical path.
+#[test]
+fn a_team_file_timeline_is_written_by_collect() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("tl{}", std::process::id());
+    let instance = common::oracle_instances()
+        .into_iter()
+        .find(|i| i.name == "case1_uniform_5x5")
+        .unwrap();
+    let team = team_file(dir.path(), &run, 5, &instance.csv, "ring", 30.0);
+    let mut text = std::fs::read_to_string(&team).unwrap();
+    text.push_str("timeline = \"trace.json\"\n");
+    std::fs::write(&team, text).unwrap();
+    let agents: Vec<(usize, Child)> = (0..5).map(|id| (id, start(&team, id))).collect();
+    all_converge(agents);
+    let out = admm_ta()
+        .args(["collect", "--team", team.to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rounds = result["iterations"].as_u64().unwrap();
+    assert_eq!(
+        result["critical_path"]["rounds"].as_array().unwrap().len() as u64,
+        rounds - 1
+    );
+    let trace: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("trace.json")).unwrap()).unwrap();
+    for agent in 0..5u64 {
+        let waits = trace["traceEvents"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|e| e["name"] == "wait" && e["pid"] == agent)
+            .count() as u64;
+        assert_eq!(waits, rounds, "agent {agent}");
+    }
+    assert!(team_shm_left(&run).is_empty());
+}

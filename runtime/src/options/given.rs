@@ -58,6 +58,7 @@ impl OptionId {
             Self::MaxIters => "max_iters",
             Self::RoundTimeout => "round_timeout",
             Self::StartupTimeout => "startup_timeout",
+            Self::Timeline => "timeline",
             _ => return None,
         })
     }

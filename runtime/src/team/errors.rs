@@ -215,6 +215,13 @@ pub enum CollectError {
     Problem(#[from] ProblemError),
     #[error(transparent)]
     Oracle(#[from] LsapError),
+    /// The team file's `timeline` could not be written.
+    #[error("cannot write the timeline {}", path.display())]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
 }
 
 /// Why a host of a team across machines ended without its report.

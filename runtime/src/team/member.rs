@@ -316,13 +316,19 @@ pub struct TeamResult {
     pub optimal: Option<bool>,
     /// Round latency over all agents' rounds (µs), on whatever carried the messages.
     pub round_latency_us: LatencySummary,
+    /// The team file's `timeline`: whom the team waited for, round by round.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critical_path: Option<crate::timeline::CriticalPath>,
+    /// Where the timeline was written (Chrome trace JSON).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timeline: Option<PathBuf>,
 }
 
 /// Reads every agent's result and checks they describe one feasible assignment.
 pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, CollectError> {
     let team = Team::read(team_path)?;
     let n = team.file.robots;
-    let (problem, _) = team.problem_and_graph()?;
+    let (problem, graph) = team.problem_and_graph()?;
     let digest = TeamDigest::of(&team_scenario(&team)?).to_hex();
     let results = team.results_dir();
     let mut reports = Vec::with_capacity(n);
@@ -390,6 +396,22 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, CollectError
         return Err(CollectError::Infeasible(decisions));
     };
     let cost = problem.cost_of(&assignment)?;
+    let timelines: Vec<Vec<crate::timeline::RoundStamp>> =
+        reports.iter().map(|r| r.outcome.timeline.clone()).collect();
+    let timeline = match team.timeline_path() {
+        Some(path) => {
+            // The agents' clocks are one machine's (a team across hosts has several).
+            let trace = crate::timeline::chrome_trace(&graph, &timelines);
+            std::fs::write(&path, serde_json::to_vec(&trace).expect("JSON serialises")).map_err(
+                |source| CollectError::Write {
+                    path: path.clone(),
+                    source,
+                },
+            )?;
+            Some(path)
+        }
+        None => None,
+    };
     let optimum = if check {
         Some(oracle::solve(&problem)?.cost)
     } else {
@@ -413,5 +435,9 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, CollectError
         optimal_cost: optimum,
         optimal: optimum.map(|o| (cost - o).abs() <= 1e-9 * o.abs().max(1.0)),
         round_latency_us: latency.summary(),
+        critical_path: timeline
+            .is_some()
+            .then(|| crate::timeline::critical_path(&graph, &timelines)),
+        timeline,
     })
 }

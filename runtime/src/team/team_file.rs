@@ -95,6 +95,10 @@ pub struct TeamFile {
     /// The machines of a zenoh or mixed team.
     #[serde(default)]
     pub hosts: Vec<HostEntry>,
+    /// Every agent stamps its rounds; `collect` writes them to this file as Chrome trace
+    /// JSON (relative to this file) and names the critical path (`solve --timeline`).
+    #[serde(default)]
+    pub timeline: Option<PathBuf>,
 }
 
 fn complete() -> String {
@@ -222,6 +226,11 @@ impl Team {
         self.path(&self.file.results)
     }
 
+    /// Where `collect` writes the team's timeline, if the file asks for one.
+    pub fn timeline_path(&self) -> Option<PathBuf> {
+        self.file.timeline.as_deref().map(|p| self.path(p))
+    }
+
     /// The problem and graph every agent derives from the file.
     pub fn problem_and_graph(&self) -> Result<(TaskAssignmentProblem, Graph), TeamFileError> {
         let f = &self.file;
@@ -312,6 +321,7 @@ impl Team {
             .seed(f.seed)
             .round_timeout_secs(f.round_timeout)
             .startup_timeout_secs(f.startup_timeout)
+            .timeline(f.timeline.is_some())
             .build()
     }
 }

@@ -39,6 +39,18 @@ pub fn run(args: CollectArgs) -> Result<Outcome> {
                 _ => String::new(),
             }
         );
+        if let (Some(path), Some(critical)) = (&result.timeline, &result.critical_path) {
+            outln!(
+                "timeline written to {}; critical path: {:.1}% of the agents' round time went to waiting for a late neighbour{}",
+                path.display(),
+                100.0 * critical.waiting_share,
+                critical.top.first().map_or(String::new(), |a| format!(
+                    ", most for agent {} ({:.1}%)",
+                    a.agent,
+                    100.0 * a.waiting_share
+                ))
+            );
+        }
         let round = result.round_latency_us.round;
         outln!(
             "round latency (µs, all agents): p50 {:.1}, p90 {:.1}, p99 {:.1}, max {:.1}",
