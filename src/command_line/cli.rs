@@ -191,6 +191,10 @@ pub struct RoundsArgs {
     /// Print the JSON report on stdout instead of the tables.
     #[arg(long)]
     pub json: bool,
+    /// Measure what `--timeline` costs instead: every case with and without timelines in
+    /// turn (`--repeat` times), round p50 and p99 of each and their ratios.
+    #[arg(long, conflicts_with = "json")]
+    pub timeline_overhead: bool,
 }
 
 /// Options shared by the figure experiments.

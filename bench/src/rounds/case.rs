@@ -168,6 +168,8 @@ pub struct RoundsConfig {
     pub repeat: usize,
     pub agent_program: Option<admm_ta_runtime::options::run::AgentProgram>,
     pub round_timeout: Duration,
+    /// Every agent stamps its rounds (`--timeline`), to measure what that costs.
+    pub timeline: bool,
 }
 
 impl RoundsConfig {
@@ -182,6 +184,7 @@ impl RoundsConfig {
             repeat: 1,
             agent_program: None,
             round_timeout: Duration::from_secs(30),
+            timeline: false,
         }
     }
 }

@@ -17,6 +17,7 @@
 //! tables, CSV and plots; here: measuring a case and running a sweep.
 
 pub mod case;
+pub mod overhead;
 pub mod report;
 
 use crate::rounds::case::{Case, RoundsConfig, StepKind, cases};
@@ -66,6 +67,7 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
         .warmup_rounds(config.warmup)
         .round_timeout(config.round_timeout)
         .agent_program(config.agent_program.clone())
+        .timeline(config.timeline)
         .build()?;
     let (latency, usage, startup, wall) = match case.step {
         StepKind::Touch | StepKind::Average => {
@@ -104,6 +106,7 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
                 .round_timeout(config.round_timeout)
                 .agent_program(config.agent_program.clone())
                 .fault_injection(false)
+                .timeline(config.timeline)
                 .build()?;
             let report = solve(&problem, &graph, &options)?;
             (

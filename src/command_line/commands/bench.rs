@@ -11,6 +11,7 @@ use crate::runtime::transport::{Capabilities, Execution, Transport};
 use admm_ta_bench::experiment::{Experiment, write};
 use admm_ta_bench::rounds;
 use admm_ta_bench::rounds::case::{RoundsConfig, SweepSpec, cases};
+use admm_ta_bench::rounds::overhead;
 use admm_ta_bench::rounds::report::{TABLE_HEADER, render_row};
 use anyhow::{Context, Result};
 
@@ -33,6 +34,7 @@ pub fn run(bench: Bench) -> Result<()> {
         repeat,
         out,
         json,
+        timeline_overhead,
     }) = bench;
     if agents.as_ref().is_some_and(|a| a.contains(&0)) {
         usage_bail!("--agents: every team needs at least 1 agent");
@@ -107,6 +109,30 @@ pub fn run(bench: Bench) -> Result<()> {
         cases.len() as u64,
         "{bar:30} {pos}/{len} cases, {elapsed} elapsed, ~{eta} left  {msg}",
     );
+    if timeline_overhead {
+        outln!(
+            "--timeline on and off in turn, {} repetition(s) of {} recorded rounds after {} of warm-up, step {}; round latency in µs (medians)
+",
+            config.repeat,
+            config.rounds,
+            config.warmup,
+            config.step.name()
+        );
+        outln!("{}", overhead::HEADER);
+        let rows = overhead::timeline_overhead(&config, &mut |case, row| {
+            bar.inc(1);
+            bar.suspend(|| match row {
+                Ok(r) => progress_row(&r.render()),
+                Err(e) => progress_row(&format!("{} failed: {e} |", case.columns())),
+            });
+        });
+        bar.finish_and_clear();
+        let failed = rows.iter().filter(|r| r.is_err()).count();
+        if failed > 0 {
+            return Err(RunsFailed(format!("{failed} of {} cases failed", rows.len())).into());
+        }
+        return Ok(());
+    }
     if !json {
         outln!(
             "{} recorded rounds per case after {} of warm-up, step {}; latencies in µs over all agents' rounds
