@@ -90,6 +90,21 @@ fn all_converge(agents: impl IntoIterator<Item = (usize, Child)>) {
     }
 }
 
+/// `collect --json` of `team` (with `extra` arguments), which must succeed.
+fn collect_json(team: &Path, extra: &[&str]) -> serde_json::Value {
+    let out = admm_ta()
+        .args(["collect", "--team", team.to_str().unwrap(), "--json"])
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 fn team_shm_left(run: &str) -> Vec<String> {
     std::fs::read_dir("/dev/shm")
         .map(|d| {
@@ -126,22 +141,7 @@ fn independently_started_agents_reach_the_oracle_optimum() {
             std::thread::sleep(Duration::from_millis(if n % 3 == 0 { 40 } else { 2 }));
         }
         all_converge(children);
-        let out = admm_ta()
-            .args([
-                "collect",
-                "--team",
-                team.to_str().unwrap(),
-                "--check",
-                "--json",
-            ])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let result = collect_json(&team, &["--check"]);
         assert_eq!(result["optimal"], true, "{name}: {result}");
         let cost = result["cost"].as_f64().unwrap();
         assert!(
@@ -724,16 +724,7 @@ fn a_team_file_timeline_is_written_by_collect() {
     std::fs::write(&team, text).unwrap();
     let agents: Vec<(usize, Child)> = (0..5).map(|id| (id, start(&team, id))).collect();
     all_converge(agents);
-    let out = admm_ta()
-        .args(["collect", "--team", team.to_str().unwrap(), "--json"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let result = collect_json(&team, &[]);
     let rounds = result["iterations"].as_u64().unwrap();
     assert_eq!(
         result["critical_path"]["rounds"].as_array().unwrap().len() as u64,
