@@ -398,10 +398,18 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, CollectError
     let cost = problem.cost_of(&assignment)?;
     let timelines: Vec<Vec<crate::timeline::RoundStamp>> =
         reports.iter().map(|r| r.outcome.timeline.clone()).collect();
+    // A team across hosts has one monotonic clock per host, with unknown offsets: its
+    // trace says so, and no critical path is drawn from stamps that do not compare.
+    let across_hosts = !team.file.hosts.is_empty();
     let timeline = match team.timeline_path() {
         Some(path) => {
-            // The agents' clocks are one machine's (a team across hosts has several).
-            let trace = crate::timeline::chrome_trace(&graph, &timelines);
+            let mut trace = crate::timeline::chrome_trace(&graph, &timelines);
+            if across_hosts {
+                trace["otherData"]["clock"] = serde_json::Value::from(
+                    "CLOCK_MONOTONIC of each host, NOT aligned across hosts (unknown \
+                     offsets): compare stamps of agents on one host only",
+                );
+            }
             std::fs::write(&path, serde_json::to_vec(&trace).expect("JSON serialises")).map_err(
                 |source| CollectError::Write {
                     path: path.clone(),
@@ -435,8 +443,7 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, CollectError
         optimal_cost: optimum,
         optimal: optimum.map(|o| (cost - o).abs() <= 1e-9 * o.abs().max(1.0)),
         round_latency_us: latency.summary(),
-        critical_path: timeline
-            .is_some()
+        critical_path: (timeline.is_some() && !across_hosts)
             .then(|| crate::timeline::critical_path(&graph, &timelines)),
         timeline,
     })
