@@ -91,6 +91,14 @@ class SolveResult:
         return {part: dict(values) for part, values in latency.items()}
 
     @property
+    def critical_path(self) -> Optional[Dict[str, Any]]:
+        """With ``timeline="FILE"``: whom the team waited for (``rounds``: per round the agent
+        most agents waited for; ``top``: the agents most waited for and the share of round
+        time spent waiting for each; ``waiting_share``); else ``None``."""
+        path = self._report.get("critical_path")
+        return None if path is None else dict(path)
+
+    @property
     def optimal(self) -> Optional[bool]:
         """``check=True``: whether the centralized optimum agrees; else ``None``."""
         check = self._report.get("check")
@@ -194,8 +202,10 @@ def solve(
     **options
         Any other option of ``admm-ta solve``, by its name with ``_`` for ``-``:
         ``seed=3``, ``rho=0.5``, ``max_iters=2000``, ``round_timeout=5``,
-        ``global_barrier=True``, ``case="idle"``, ``forbidden="pairs.txt"``, ...
-        ``True`` gives a flag, ``False`` or ``None`` leaves it out.
+        ``global_barrier=True``, ``case="idle"``, ``forbidden="pairs.txt"``,
+        ``timeline="trace.json"`` (every agent's rounds as Chrome trace JSON, and
+        ``result.critical_path``), ... ``True`` gives a flag, ``False`` or ``None`` leaves
+        it out.
 
     Returns
     -------

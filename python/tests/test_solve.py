@@ -182,3 +182,15 @@ def test_the_command_line_script():
     out = subprocess.run([sys.executable, "-m", "admm_ta", "solve", "--bogus"],
                          capture_output=True, text=True, timeout=60)
     assert out.returncode == 2 and "--bogus" in out.stderr
+
+
+def test_a_timeline_and_the_critical_path(tmp_path):
+    trace = tmp_path / "t.json"
+    result = admm_ta.solve(np.random.default_rng(2).random((6, 6)), topology="ring",
+                           transport="ipc", timeline=trace)
+    path = result.critical_path
+    assert path is not None and 0.0 <= path["waiting_share"] <= 1.0
+    assert len(path["rounds"]) == result.rounds - 1
+    events = json.loads(trace.read_text())["traceEvents"]
+    assert {e["pid"] for e in events} == set(range(6))
+    assert admm_ta.solve([[1, 2], [2, 1]]).critical_path is None
