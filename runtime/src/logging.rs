@@ -46,12 +46,11 @@ pub fn init(filter: Option<&str>) -> Result<(), LogFilterError> {
         .with_env_filter(parsed)
         .with_target(false)
         .with_ansi(false);
-    let installed = match inherited_fd() {
+    // An error: another subscriber (a host program's) is already set, and gets our events.
+    let _ = match inherited_fd() {
         Some(fd) => builder.with_writer(move || FdWriter(fd)).try_init(),
         None => builder.with_writer(std::io::stderr).try_init(),
     };
-    // Another subscriber (a host program's) is already set: it gets our events.
-    let _ = installed;
     Ok(())
 }
 

@@ -127,6 +127,23 @@ pub struct CriticalAgent {
     pub waiting_share: f64,
 }
 
+/// The neighbour agent `i` waited for in round `r ≥ 1`: the one whose round-`r` message
+/// (published at the end of its round `r − 1`) came last, if `i` was waiting by then.
+fn late_neighbour(
+    graph: &Graph,
+    timelines: &[Vec<RoundStamp>],
+    i: usize,
+    r: usize,
+) -> Option<usize> {
+    let late = graph
+        .neighbours(i)
+        .iter()
+        .copied()
+        .filter(|&j| j < timelines.len())
+        .max_by_key(|&j| (timelines[j][r - 1].published, j))?;
+    (timelines[late][r - 1].published > timelines[i][r].wait).then_some(late)
+}
+
 /// The critical path of a team's rounds: `timelines[i]` is agent `i`'s stamps.
 pub fn critical_path(graph: &Graph, timelines: &[Vec<RoundStamp>]) -> CriticalPath {
     let n = timelines.len();
@@ -142,15 +159,7 @@ pub fn critical_path(graph: &Graph, timelines: &[Vec<RoundStamp>]) -> CriticalPa
         for i in 0..n {
             let mine = &timelines[i][r];
             total_round_ns += mine.done.saturating_sub(mine.wait);
-            let late = graph
-                .neighbours(i)
-                .iter()
-                .copied()
-                .filter(|&j| j < n)
-                .max_by_key(|&j| (timelines[j][r - 1].published, j));
-            if let Some(j) = late
-                && timelines[j][r - 1].published > mine.wait
-            {
+            if let Some(j) = late_neighbour(graph, timelines, i, r) {
                 charged[j] += mine.gathered.saturating_sub(mine.wait);
                 waited_for[j] += 1;
                 votes[j] += 1;
@@ -237,17 +246,10 @@ pub fn chrome_trace(graph: &Graph, timelines: &[Vec<RoundStamp>]) -> serde_json:
     let mut id = 0u64;
     for r in 1..rounds {
         for (i, mine) in timelines.iter().enumerate().map(|(i, t)| (i, &t[r])) {
-            let late = graph
-                .neighbours(i)
-                .iter()
-                .copied()
-                .filter(|&j| j < timelines.len())
-                .max_by_key(|&j| (timelines[j][r - 1].published, j));
-            let Some(j) = late else { continue };
-            let sent = timelines[j][r - 1].published;
-            if sent <= mine.wait {
+            let Some(j) = late_neighbour(graph, timelines, i, r) else {
                 continue;
-            }
+            };
+            let sent = timelines[j][r - 1].published;
             id += 1;
             events.push(serde_json::json!({
                 "name": "message", "cat": "message", "ph": "s", "id": id,

@@ -6,7 +6,7 @@
 use crate::common;
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 use std::time::Duration;
 
 fn admm_ta() -> Command {
@@ -63,27 +63,25 @@ fn start(team: &Path, id: impl std::fmt::Display) -> Child {
         .unwrap()
 }
 
-/// Waits for every agent; each must succeed.
-fn all_succeed(agents: impl IntoIterator<Item = (usize, Child)>) {
-    for (id, child) in agents {
-        let out = child.wait_with_output().unwrap();
-        assert!(
-            out.status.success(),
-            "agent {id}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
+/// Waits for every agent; each must succeed. Their outputs, by agent.
+fn all_succeed(agents: impl IntoIterator<Item = (usize, Child)>) -> Vec<(usize, Output)> {
+    agents
+        .into_iter()
+        .map(|(id, child)| {
+            let out = child.wait_with_output().unwrap();
+            assert!(
+                out.status.success(),
+                "agent {id}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            (id, out)
+        })
+        .collect()
 }
 
 /// Waits for every agent; each must succeed, report its own number and have converged.
 fn all_converge(agents: impl IntoIterator<Item = (usize, Child)>) {
-    for (id, child) in agents {
-        let out = child.wait_with_output().unwrap();
-        assert!(
-            out.status.success(),
-            "agent {id}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+    for (id, out) in all_succeed(agents) {
         let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         assert_eq!(line["id"], id);
         assert_eq!(line["converged"], true);
