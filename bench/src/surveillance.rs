@@ -19,6 +19,7 @@ use admm_ta_agents::problem::surveillance::SurveillanceScenario;
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
 use admm_ta_runtime::episodes::{EpisodeRunConfig, run_episodes};
 use admm_ta_runtime::sim::LockstepSim;
+use admm_ta_runtime::timeline::{CriticalPath, RoundStamp, chrome_trace, critical_path};
 use admm_ta_runtime::workload::episode::EpisodeSettings;
 use admm_ta_topologies::{Graph, TopologySpec};
 use serde::Serialize;
@@ -70,6 +71,22 @@ pub struct SurveillanceReport {
     pub limit_cycle_roles: Option<usize>,
     pub scenario: SurveillanceScenario,
     pub per_episode: Vec<Episode>,
+    /// With timelines (`--timeline`): whom the team waited for, round by round, over all
+    /// episodes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critical_path: Option<CriticalPath>,
+    /// Every agent's round stamps over all episodes (timelines on; see [`trace`]).
+    #[serde(skip)]
+    pub timeline: Vec<Vec<RoundStamp>>,
+    #[serde(skip)]
+    graph: Option<Graph>,
+}
+
+/// The team's timeline as Chrome trace JSON (rounds numbered across episodes), if its
+/// agents recorded one.
+pub fn trace(report: &SurveillanceReport) -> Option<serde_json::Value> {
+    let graph = report.graph.as_ref()?;
+    (!report.timeline.is_empty()).then(|| chrome_trace(graph, &report.timeline))
 }
 
 /// Rounds of a cold-started decentralized solve of `costs` (lockstep simulation).
@@ -246,6 +263,10 @@ pub fn run(
         limit_cycle_roles: limit_cycle(&costs, model.tie_break * n as f64),
         scenario: model,
         per_episode,
+        critical_path: (config.options.timeline() && run.timeline.iter().any(|t| !t.is_empty()))
+            .then(|| critical_path(&graph, &run.timeline)),
+        timeline: run.timeline,
+        graph: Some(graph),
     })
 }
 
@@ -280,6 +301,18 @@ fn render(report: &SurveillanceReport) -> String {
         report.round_p50_us,
         report.round_p99_us,
     );
+    if let Some(path) = &report.critical_path {
+        out += &format!(
+            "critical path: {:.1}% of the agents' round time went to waiting for a late neighbour{}\n",
+            100.0 * path.waiting_share,
+            path.top.first().map_or(String::new(), |a| format!(
+                ", most for agent {} ({:.1}%, the one most waited for in {} rounds)",
+                a.agent,
+                100.0 * a.waiting_share,
+                a.rounds
+            ))
+        );
+    }
     for miss in report.misses.iter().take(20) {
         out += &format!("  {miss}\n");
     }

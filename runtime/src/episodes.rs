@@ -51,6 +51,8 @@ pub struct EpisodeRun {
     pub latency: LatencySummary,
     pub startup: Option<Duration>,
     pub wall: Duration,
+    /// Every agent's round stamps over all episodes (`options.timeline()` on).
+    pub timeline: Vec<Vec<crate::timeline::RoundStamp>>,
 }
 
 /// Runs `settings.episodes` episodes with one agent per robot on `graph`, alive for the whole
@@ -74,5 +76,6 @@ pub fn run_episodes(
         latency: team.latency.summary(),
         startup: team.startup,
         wall: started.elapsed(),
+        timeline: team.outcomes.into_iter().map(|o| o.timeline).collect(),
     })
 }

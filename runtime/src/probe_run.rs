@@ -63,6 +63,8 @@ pub struct ProbeReport {
     pub startup: Option<Duration>,
     /// The whole run, start-up included.
     pub wall: Duration,
+    /// Every agent's round stamps (`options.timeline()` on; [`crate::timeline`] renders them).
+    pub timeline: Vec<Vec<crate::timeline::RoundStamp>>,
 }
 
 /// Runs `run` on `graph`.
@@ -82,5 +84,6 @@ pub fn run_probe(graph: &Graph, run: &ProbeRun) -> Result<ProbeReport, RunError>
         usage: team.usage,
         startup: team.startup,
         wall: started.elapsed(),
+        timeline: team.outcomes.into_iter().map(|o| o.timeline).collect(),
     })
 }

@@ -191,9 +191,15 @@ pub struct RoundsArgs {
     /// Print the JSON report on stdout instead of the tables.
     #[arg(long)]
     pub json: bool,
+    /// Record every agent's rounds and write one Chrome trace per case into DIR
+    /// (`<agents>-<graph>-<payload>-<transport>-<wait>-<barrier>.json`, created if missing;
+    /// open in Perfetto or chrome://tracing); the critical path of each case goes into the
+    /// report, rounds.json and one plot per case (critical-<case>.svg in --out).
+    #[arg(long, value_name = "DIR")]
+    pub timeline: Option<PathBuf>,
     /// Measure what `--timeline` costs instead: every case with and without timelines in
     /// turn (`--repeat` times), round p50 and p99 of each and their ratios.
-    #[arg(long, conflicts_with = "json")]
+    #[arg(long, conflicts_with_all = ["json", "timeline"])]
     pub timeline_overhead: bool,
 }
 
@@ -316,6 +322,11 @@ pub enum Experiment {
         /// mean_iterations_warm, mean_iterations_cold, …) instead of the summary.
         #[arg(long)]
         json: bool,
+        /// Record every agent's rounds over all episodes and write them as Chrome trace JSON
+        /// to FILE (rounds numbered across episodes; at most 200 000 rounds per agent); the
+        /// critical path goes into the summary and surveillance.json.
+        #[arg(long, value_name = "FILE")]
+        timeline: Option<PathBuf>,
     },
     /// Where the rounds go: per method (primal in both variants, dual, inexact dual, market,
     /// distributed Hungarian, CBAA), cost model (uniform, geometric) and graph (complete,

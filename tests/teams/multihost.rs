@@ -28,7 +28,7 @@ fn admm_ta() -> Command {
 fn team_file(dir: &Path, run: &str, transport: &str, costs: &Path, topology: &str) -> PathBuf {
     let path = dir.join("team.toml");
     let mut text = format!(
-        "run = \"{run}\"\nrobots = 10\ncosts = \"{}\"\ntopology = \"{topology}\"\nseed = 4\nresults = \"results\"\nstartup_timeout = 30.0\nround_timeout = 5.0\ntransport = \"{transport}\"\n",
+        "run = \"{run}\"\nrobots = 10\ncosts = \"{}\"\ntopology = \"{topology}\"\nseed = 4\nresults = \"results\"\nstartup_timeout = 30.0\nround_timeout = 5.0\ntransport = \"{transport}\"\ntimeline = \"trace.json\"\n",
         costs.display()
     );
     for (name, agents) in [("alpha", "[0, 1, 2, 3, 4]"), ("beta", "[5, 6, 7, 8, 9]")] {
@@ -235,6 +235,37 @@ fn two_hosts_reach_the_optimum_with_the_iterates_of_sim(transport: &str, run: &s
     assert!(out.status.success(), "{}", text(&out));
     let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(result["optimal"], true, "{result}");
+    // One machine, one clock: the offset estimated from the round messages must bracket 0.
+    let clocks = result["host_clocks"].as_array().expect("host clocks");
+    assert_eq!(clocks.len(), 2, "{result}");
+    assert_eq!(clocks[0]["host"], "alpha");
+    assert_eq!(clocks[0]["offset_ns"], 0);
+    let beta = &clocks[1];
+    assert_eq!(beta["estimated"], true, "{beta}");
+    assert_eq!(beta["consistent"], true, "{beta}");
+    let (offset, uncertainty) = (
+        beta["offset_ns"].as_i64().unwrap(),
+        beta["uncertainty_ns"].as_u64().unwrap(),
+    );
+    assert!(offset.unsigned_abs() <= uncertainty, "{beta}");
+    assert!(uncertainty < 50_000_000, "{beta}");
+    let trace: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("trace.json")).unwrap()).unwrap();
+    assert!(
+        trace["otherData"]["clock"]
+            .as_str()
+            .unwrap()
+            .contains("beta"),
+        "{}",
+        trace["otherData"]
+    );
+    assert!(
+        result["critical_path"]["by_agent"]
+            .as_array()
+            .unwrap()
+            .len()
+            == 10
+    );
     let sim = sim_report(&team);
     assert_eq!(result["assignment"], serde_json::json!(sim.assignment));
     assert_eq!(result["iterations"], sim.iterations as u64);

@@ -124,6 +124,29 @@ pub struct Case {
 }
 
 impl Case {
+    /// A file name for the case: `10-complete-10x10-ipc-auto-neighbour` (anything but
+    /// letters, digits, `.` and `x` becomes `-`).
+    pub fn slug(&self) -> String {
+        format!(
+            "{}-{}-{}-{}-{}-{}",
+            self.agents,
+            self.topology,
+            self.payload,
+            self.transport.name(),
+            self.wait.name(),
+            self.barrier_name()
+        )
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect()
+    }
+
     /// `global` or `neighbour`.
     pub fn barrier_name(&self) -> &'static str {
         Barrier::of(self.global_barrier).name()
@@ -168,8 +191,10 @@ pub struct RoundsConfig {
     pub repeat: usize,
     pub agent_program: Option<admm_ta_runtime::options::run::AgentProgram>,
     pub round_timeout: Duration,
-    /// Every agent stamps its rounds (`--timeline`), to measure what that costs.
+    /// Every agent stamps its rounds (`--timeline`, or to measure what that costs).
     pub timeline: bool,
+    /// `--timeline DIR`: each case's trace is written there (`<case slug>.json`).
+    pub traces: Option<std::path::PathBuf>,
 }
 
 impl RoundsConfig {
@@ -185,6 +210,7 @@ impl RoundsConfig {
             agent_program: None,
             round_timeout: Duration::from_secs(30),
             timeline: false,
+            traces: None,
         }
     }
 }

@@ -32,7 +32,9 @@ use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
 use admm_ta_runtime::runner::RunError;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::solve;
+use admm_ta_runtime::timeline::{RoundStamp, chrome_trace, critical_path};
 use admm_ta_topologies::TopologySpec;
+use std::path::Path;
 
 /// Why a case could not be measured.
 #[derive(Debug, thiserror::Error)]
@@ -69,7 +71,7 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
         .agent_program(config.agent_program.clone())
         .timeline(config.timeline)
         .build()?;
-    let (latency, usage, startup, wall) = match case.step {
+    let (latency, usage, startup, wall, timeline) = match case.step {
         StepKind::Touch | StepKind::Average => {
             let step = if case.step == StepKind::Touch {
                 ProbeStep::Touch
@@ -86,6 +88,7 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
                 r.usage,
                 r.startup.map(|d| d.as_secs_f64() * 1e3),
                 r.wall,
+                r.timeline,
             )
         }
         StepKind::Primal => {
@@ -114,6 +117,7 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
                 report.agent_usage.unwrap_or_default(),
                 report.startup_ms,
                 started.elapsed(),
+                report.timeline,
             )
         }
     };
@@ -140,7 +144,39 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
         wall_ms: wall.as_secs_f64() * 1e3,
         repeats: 1,
         round_p50_range_us: (latency.round.p50, latency.round.p50),
+        // Over the recorded rounds, as the latencies are (the trace shows the warm-up too).
+        critical_path: (config.timeline && !timeline.is_empty()).then(|| {
+            let recorded: Vec<Vec<RoundStamp>> = timeline
+                .iter()
+                .map(|t| t[(config.warmup as usize).min(t.len())..].to_vec())
+                .collect();
+            critical_path(&graph, &recorded)
+        }),
+        trace: None,
+        timeline: if config.traces.is_some() {
+            timeline
+        } else {
+            Vec::new()
+        },
     })
+}
+
+/// Writes `result`'s trace into `dir` (named by its case) and lets go of its stamps.
+fn write_trace(result: &mut CaseResult, dir: &Path) -> Result<(), String> {
+    let case = &result.case;
+    let graph = case
+        .topology
+        .parse::<TopologySpec>()
+        .map_err(|e| e.to_string())?
+        .build(case.agents, 0)
+        .map_err(|e| e.to_string())?;
+    let path = dir.join(format!("{}.json", case.slug()));
+    let trace = chrome_trace(&graph, &std::mem::take(&mut result.timeline));
+    let bytes = serde_json::to_vec(&trace).map_err(|e| e.to_string())?;
+    std::fs::write(&path, bytes)
+        .map_err(|e| format!("cannot write the trace {}: {e}", path.display()))?;
+    result.trace = Some(path);
+    Ok(())
 }
 
 /// The repetition with the median round p50, carrying the spread of all of them.
@@ -209,9 +245,24 @@ pub fn run(
         for (case, outcome) in group.iter().zip(measured) {
             match outcome {
                 Ok(results) => {
-                    let result = median_of(results);
-                    progress(case, Ok(&result));
-                    report.results.push(result);
+                    let mut result = median_of(results);
+                    let written = match &config.traces {
+                        Some(dir) => write_trace(&mut result, dir),
+                        None => Ok(()),
+                    };
+                    match written {
+                        Ok(()) => {
+                            progress(case, Ok(&result));
+                            report.results.push(result);
+                        }
+                        Err(error) => {
+                            progress(case, Err(&error));
+                            report.failures.push(CaseFailure {
+                                case: case.clone(),
+                                error,
+                            });
+                        }
+                    }
                 }
                 Err(error) => {
                     progress(case, Err(&error));

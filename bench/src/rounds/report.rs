@@ -5,6 +5,7 @@ use crate::experiment::{Experiment, OutputFile};
 use crate::plot::{Chart, Scale, Series};
 use crate::rounds::case::{Case, DEFAULT_TRANSPORTS, PayloadShape, StepKind};
 use admm_ta_runtime::latency::Percentiles;
+use admm_ta_runtime::timeline::{CriticalPath, RoundStamp};
 use admm_ta_runtime::transport::Transport;
 use admm_ta_runtime::wait::WaitStrategy;
 use serde::Serialize;
@@ -60,6 +61,15 @@ pub struct CaseResult {
     pub repeats: usize,
     /// Lowest and highest round p50 over the repetitions, µs: the run-to-run spread.
     pub round_p50_range_us: (f64, f64),
+    /// With timelines: whom the team waited for, round by round.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critical_path: Option<CriticalPath>,
+    /// With `--timeline DIR`: the trace file of this case.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trace: Option<std::path::PathBuf>,
+    /// Every agent's round stamps, until the trace is written.
+    #[serde(skip)]
+    pub timeline: Vec<Vec<RoundStamp>>,
 }
 
 /// A case that could not be measured.
@@ -188,6 +198,45 @@ pub fn render_ratios(report: &RoundsReport) -> String {
     lines.join("\n")
 }
 
+/// The critical path of every case with a timeline, as Markdown: the share of all agents'
+/// round time spent waiting for a late neighbour, the agents most waited for (their share,
+/// the rounds in which they were the one most agents waited for) and the trace file.
+pub fn render_critical(report: &RoundsReport) -> String {
+    let mut lines = vec![
+        "| agents | graph | payload | transport | wait | barrier | waiting for a late neighbour | most waited for: agent (share of round time, rounds led) | trace |".to_string(),
+        format!("|{}", "---|".repeat(9)),
+    ];
+    for r in &report.results {
+        let Some(path) = &r.critical_path else {
+            continue;
+        };
+        let top = path
+            .top
+            .iter()
+            .take(3)
+            .map(|a| {
+                format!(
+                    "{} ({:.1}%, {})",
+                    a.agent,
+                    100.0 * a.waiting_share,
+                    a.rounds
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        lines.push(format!(
+            "{} {:.1}% | {} | {} |",
+            r.case.columns(),
+            100.0 * path.waiting_share,
+            if top.is_empty() { "-".into() } else { top },
+            r.trace
+                .as_ref()
+                .map_or("-".into(), |p| p.display().to_string())
+        ));
+    }
+    lines.join("\n")
+}
+
 /// `rounds.csv`: one line per measured case.
 pub fn to_csv(report: &RoundsReport) -> String {
     let mut out = String::from(
@@ -232,12 +281,20 @@ impl Experiment for RoundsReport {
         "rounds.json"
     }
 
-    /// The ratios between transports (the rows are printed as they are measured).
+    /// The ratios between transports (the rows are printed as they are measured), and the
+    /// critical paths when the agents recorded timelines.
     fn render(&self) -> String {
-        format!(
+        let mut text = format!(
             "\nRatios on equal cases (round time):\n\n{}\n",
             render_ratios(self)
-        )
+        );
+        if self.results.iter().any(|r| r.critical_path.is_some()) {
+            text += &format!(
+                "\nCritical path (whom the team waited for, from the timelines):\n\n{}\n",
+                render_critical(self)
+            );
+        }
+        text
     }
 
     /// `rounds.csv` and the plots.
@@ -322,7 +379,41 @@ pub fn charts(report: &RoundsReport) -> Vec<(String, Chart)> {
             charts.push((format!("rounds-payload-{n}-agents.svg"), chart));
         }
     }
+    charts.extend(critical_charts(report));
     charts
+}
+
+/// With timelines, one chart per case: the share of the team's round time spent waiting for
+/// each agent (`critical-<case>.svg`).
+pub fn critical_charts(report: &RoundsReport) -> Vec<(String, Chart)> {
+    report
+        .results
+        .iter()
+        .filter_map(|r| {
+            let path = r.critical_path.as_ref()?;
+            let c = &r.case;
+            let points = path
+                .by_agent
+                .iter()
+                .enumerate()
+                .map(|(i, share)| (i as f64, 100.0 * share))
+                .collect();
+            let chart = Chart::new(
+                format!(
+                    "critical path: waiting for each agent ({} agents, {} graph, {}, {} step; {:.1}% of round time in all)",
+                    c.agents,
+                    c.topology,
+                    c.transport.name(),
+                    c.step.name(),
+                    100.0 * path.waiting_share
+                ),
+                "agent",
+                "share of all agents' round time spent waiting for it (%)",
+            )
+            .series(Series::new("waited for", points));
+            Some((format!("critical-{}.svg", c.slug()), chart))
+        })
+        .collect()
 }
 
 /// Adds a p50 and a dashed p99 line per transport to `chart`, over the cases that `x` places

@@ -100,7 +100,7 @@ pub fn run_agent<A: ConsensusAgent + ?Sized>(
     exchange: &mut dyn Exchange,
     plan: &AgentPlan,
 ) -> Result<AgentOutcome, ExchangeError> {
-    let mut rounds = RoundLoop::start(agent, exchange, plan)?;
+    let mut rounds = RoundLoop::start(agent, exchange, plan, 1)?;
     let (task, certified_round) = rounds.run(agent, exchange, plan, plan.stop.clone())?;
     Ok(rounds.outcome(plan.index, task, certified_round))
 }
@@ -124,11 +124,14 @@ pub struct RoundLoop {
 }
 
 impl RoundLoop {
-    /// Publishes the agent's round-0 message.
+    /// Publishes the agent's round-0 message. `runs` is how many runs (episodes) of up to
+    /// `plan.max_rounds` rounds will follow: a timeline is sized for all of them (up to
+    /// [`crate::timeline::MAX_RECORDED_ROUNDS`]).
     pub fn start<A: ConsensusAgent + ?Sized>(
         agent: &mut A,
         exchange: &mut dyn Exchange,
         plan: &AgentPlan,
+        runs: u64,
     ) -> Result<Self, ExchangeError> {
         let mine = RoundHeader::initial(plan.index);
         let mut iterate_digest = 0;
@@ -144,9 +147,13 @@ impl RoundLoop {
             usage_from: ThreadUsage::now(),
             round: 0,
             stopped: false,
-            timeline: plan
-                .timeline
-                .then(|| TimelineRecorder::new(plan.max_rounds.saturating_add(1))),
+            timeline: plan.timeline.then(|| {
+                TimelineRecorder::new(
+                    plan.max_rounds
+                        .saturating_mul(runs.max(1))
+                        .saturating_add(1),
+                )
+            }),
         })
     }
 

@@ -23,6 +23,7 @@ use crate::process::scenario::Scenario;
 use crate::process::team_digest::TeamDigest;
 use crate::team::errors::{CollectError, JoinError, TeamFileError};
 use crate::team::team_file::{HostEntry, Team};
+use crate::team::team_timeline::write_timeline;
 use crate::workload::Workload;
 use crate::workload::plan::prepare;
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
@@ -319,6 +320,10 @@ pub struct TeamResult {
     /// The team file's `timeline`: whom the team waited for, round by round.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub critical_path: Option<crate::timeline::CriticalPath>,
+    /// A team across hosts with a timeline: every host's clock offset to the first host's,
+    /// estimated from the round messages ([`crate::timeline::clocks`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub host_clocks: Option<Vec<crate::team::team_timeline::NamedHostClock>>,
     /// Where the timeline was written (Chrome trace JSON).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timeline: Option<PathBuf>,
@@ -396,30 +401,8 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, CollectError
         return Err(CollectError::Infeasible(decisions));
     };
     let cost = problem.cost_of(&assignment)?;
-    let timelines: Vec<Vec<crate::timeline::RoundStamp>> =
-        reports.iter().map(|r| r.outcome.timeline.clone()).collect();
-    // A team across hosts has one monotonic clock per host, with unknown offsets: its
-    // trace says so, and no critical path is drawn from stamps that do not compare.
-    let across_hosts = !team.file.hosts.is_empty();
-    let timeline = match team.timeline_path() {
-        Some(path) => {
-            let mut trace = crate::timeline::chrome_trace(&graph, &timelines);
-            if across_hosts {
-                trace["otherData"]["clock"] = serde_json::Value::from(
-                    "CLOCK_MONOTONIC of each host, NOT aligned across hosts (unknown \
-                     offsets): compare stamps of agents on one host only",
-                );
-            }
-            std::fs::write(&path, serde_json::to_vec(&trace).expect("JSON serialises")).map_err(
-                |source| CollectError::Write {
-                    path: path.clone(),
-                    source,
-                },
-            )?;
-            Some(path)
-        }
-        None => None,
-    };
+    let timelines = reports.iter().map(|r| r.outcome.timeline.clone()).collect();
+    let (timeline, critical_path, host_clocks) = write_timeline(&team, &graph, timelines)?;
     let optimum = if check {
         Some(oracle::solve(&problem)?.cost)
     } else {
@@ -443,8 +426,8 @@ pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, CollectError
         optimal_cost: optimum,
         optimal: optimum.map(|o| (cost - o).abs() <= 1e-9 * o.abs().max(1.0)),
         round_latency_us: latency.summary(),
-        critical_path: (timeline.is_some() && !across_hosts)
-            .then(|| crate::timeline::critical_path(&graph, &timelines)),
+        critical_path,
+        host_clocks,
         timeline,
     })
 }

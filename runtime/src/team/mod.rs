@@ -6,6 +6,7 @@
 //! * [`errors`]: their errors, one type per operation;
 //! * `hosts`: a team file's hosts (robots by name or number, one host per robot);
 //! * [`member`]: agents started independently from a team file (joining, leaving, collecting);
+//! * [`team_timeline`]: the trace `collect` writes, hosts' clocks aligned;
 //! * `host` and `bridge` (feature `zenoh`): one machine of a multi-host team — its Zenoh
 //!   router, and the bridge that carries a mixed team's messages between a host's iceoryx2
 //!   services and the other hosts (the one place that uses two transports at once).
@@ -14,6 +15,7 @@ pub mod errors;
 mod hosts;
 pub mod member;
 pub mod team_file;
+pub mod team_timeline;
 
 #[cfg(feature = "zenoh")]
 pub mod bridge;

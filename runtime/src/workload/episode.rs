@@ -138,7 +138,7 @@ pub fn run_surveillance_agent(
     let i = plan.index;
     let model = &settings.model;
     let mut state = model.initial_state(i);
-    let mut rounds = RoundLoop::start(agent, exchange, plan)?;
+    let mut rounds = RoundLoop::start(agent, exchange, plan, settings.episodes as u64)?;
     let mut records = Vec::with_capacity(settings.episodes);
     let mut last = (0, None);
     for episode in 0..settings.episodes {

@@ -34,6 +34,7 @@ pub fn run(bench: Bench) -> Result<()> {
         repeat,
         out,
         json,
+        timeline,
         timeline_overhead,
     }) = bench;
     if agents.as_ref().is_some_and(|a| a.contains(&0)) {
@@ -96,7 +97,12 @@ pub fn run(bench: Bench) -> Result<()> {
         usage_bail!("--warmup must be 0…{MAX_ROUNDS}, got {}", config.warmup);
     }
     // Refused now, not after the whole sweep ran.
-    writable_dir(&out)?;
+    writable_dir("--out", &out)?;
+    if let Some(dir) = &timeline {
+        writable_dir("--timeline", dir)?;
+        config.timeline = true;
+        config.traces = Some(dir.clone());
+    }
     config.agent_program = Some(agent_program()?);
     let cases = cases(&config);
     if cases.is_empty() {

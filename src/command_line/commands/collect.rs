@@ -50,6 +50,12 @@ pub fn run(args: CollectArgs) -> Result<Outcome> {
                     100.0 * a.waiting_share
                 ))
             );
+            if let Some(clocks) = &result.host_clocks {
+                outln!(
+                    "clocks: {}",
+                    crate::runtime::team::team_timeline::clock_note(clocks)
+                );
+            }
         }
         let round = result.round_latency_us.round;
         outln!(

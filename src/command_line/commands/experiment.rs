@@ -138,6 +138,7 @@ pub fn run(command: Command) -> Result<()> {
             max_iters,
             out,
             json,
+            timeline,
         } => {
             if episodes == 0 || max_iters == 0 {
                 usage_bail!("--episodes and --max-iters must be at least 1");
@@ -155,11 +156,17 @@ pub fn run(command: Command) -> Result<()> {
             if transport.capabilities().execution == Execution::Lockstep {
                 usage_bail!("--transport: the team runs on threads, shm, ipc or uds");
             }
+            if let Some(path) = &timeline {
+                // Refused now, not after the episodes ran.
+                std::fs::write(path, b"")
+                    .map_err(|e| UsageError(format!("--timeline {}: {e}", path.display())))?;
+            }
             let config = EpisodeRunConfig {
                 max_rounds: max_iters,
                 options: RunOptions::builder()
                     .transport(transport)
                     .agent_program(agent_program()?)
+                    .timeline(timeline.is_some())
                     .build()?,
             };
             let bar = progress_bar(
@@ -172,6 +179,12 @@ pub fn run(command: Command) -> Result<()> {
             });
             bar.finish_and_clear();
             let report = report?;
+            if let Some(path) = &timeline {
+                let trace =
+                    surveillance::trace(&report).context("the agents recorded no timeline")?;
+                std::fs::write(path, serde_json::to_vec(&trace)?)
+                    .with_context(|| format!("--timeline {}", path.display()))?;
+            }
             let written = write(&report, &out)?;
             if json {
                 let mut value = serde_json::to_value(&report)?;

@@ -33,10 +33,10 @@ pub fn progress_bar(steps: u64, template: &str) -> indicatif::ProgressBar {
 
 /// Creates `dir` if missing and checks a file can be written in it: an output directory is
 /// refused (exit 2) before a long run, not after it.
-pub fn writable_dir(dir: &std::path::Path) -> anyhow::Result<()> {
+pub fn writable_dir(flag: &str, dir: &std::path::Path) -> anyhow::Result<()> {
     let refused = |e: std::io::Error| {
         crate::command_line::exit::UsageError(format!(
-            "--out {}: cannot write there: {e}",
+            "{flag} {}: cannot write there: {e}",
             dir.display()
         ))
     };

@@ -7,14 +7,19 @@
 //! open.
 //!
 //! **Clocks.** Stamps are `CLOCK_MONOTONIC` nanoseconds: one clock for every process of one
-//! machine, so stamps of agent processes and threads compare directly. (Agents on other
-//! machines — Zenoh teams — are not recorded: their clocks have unknown offsets.)
+//! machine, so stamps of agent processes and threads compare directly. A team across
+//! machines has one clock per host, with unknown offsets: [`clocks`] estimates them from the
+//! round messages themselves (a message arrives after it was sent, both ways over every edge
+//! between two hosts) and shifts every host's stamps onto one clock, with the uncertainty
+//! of each offset said in the trace and the report.
 //!
 //! **Whom an agent waited for.** Agent `j`'s round-`r` message is published when `j`
 //! finishes computing round `r − 1`; agent `i` can compute round `r` once the last of its
 //! neighbours' round-`r` messages is in. So the neighbour with the latest publish stamp of
 //! round `r − 1` is the one `i` waited for, if `i` was waiting by then; the time `i` spent
 //! waiting in that round is charged to it. No exchange has to tell who came last.
+
+pub mod clocks;
 
 use admm_ta_topologies::Graph;
 use serde::{Deserialize, Serialize};
@@ -113,6 +118,8 @@ pub struct CriticalPath {
     pub top: Vec<CriticalAgent>,
     /// The share of all agents' round time spent waiting for a late neighbour.
     pub waiting_share: f64,
+    /// For every agent, the share of all agents' round time spent waiting for it.
+    pub by_agent: Vec<f64>,
 }
 
 /// One agent's part in the team's waiting.
@@ -199,6 +206,7 @@ pub fn critical_path(graph: &Graph, timelines: &[Vec<RoundStamp>]) -> CriticalPa
         rounds: per_round,
         top,
         waiting_share: share(charged.iter().sum()),
+        by_agent: charged.iter().map(|&ns| share(ns)).collect(),
     }
 }
 
@@ -207,6 +215,15 @@ pub fn critical_path(graph: &Graph, timelines: &[Vec<RoundStamp>]) -> CriticalPa
 /// `publish`, `barrier`, the round in `args`), and a flow from the publish of the neighbour
 /// each agent waited for to the end of its wait. Times in µs from the first stamp.
 pub fn chrome_trace(graph: &Graph, timelines: &[Vec<RoundStamp>]) -> serde_json::Value {
+    chrome_trace_named(graph, timelines, &|agent| format!("agent {agent}"))
+}
+
+/// [`chrome_trace`] with each agent's track named by `name` (e.g. with its host).
+pub fn chrome_trace_named(
+    graph: &Graph,
+    timelines: &[Vec<RoundStamp>],
+    name: &dyn Fn(usize) -> String,
+) -> serde_json::Value {
     let origin = timelines
         .iter()
         .flat_map(|t| t.first())
@@ -218,7 +235,7 @@ pub fn chrome_trace(graph: &Graph, timelines: &[Vec<RoundStamp>]) -> serde_json:
     for (agent, stamps) in timelines.iter().enumerate() {
         events.push(serde_json::json!({
             "name": "process_name", "ph": "M", "pid": agent, "tid": 0,
-            "args": {"name": format!("agent {agent}")},
+            "args": {"name": name(agent)},
         }));
         events.push(serde_json::json!({
             "name": "process_sort_index", "ph": "M", "pid": agent, "tid": 0,
@@ -300,6 +317,9 @@ mod tests {
         assert_eq!(path.rounds, [Some(2), Some(2), Some(2)]);
         assert_eq!(path.top[0].agent, 2);
         assert!(path.top[0].waiting_share > 0.0 && path.waiting_share <= 1.0);
+        assert_eq!(path.by_agent.len(), 3);
+        assert_eq!(path.by_agent[2], path.top[0].waiting_share);
+        assert_eq!(path.by_agent[0], 0.0);
         let trace = chrome_trace(&graph, &timelines);
         let events = trace["traceEvents"].as_array().unwrap();
         assert!(events.iter().any(|e| e["ph"] == "s" && e["pid"] == 2));
