@@ -1,4 +1,4 @@
-//! Independently started teams: team files and members on one machine, and teams across hosts (Zenoh, mixed) over loopback.
+//! Independently started teams: team files and members on one machine, and teams across hosts (Zenoh, mixed) over loopback and on network namespaces.
 //!
 //! One test binary per area (as ripgrep does): each file here is a module.
 
@@ -6,4 +6,5 @@
 mod common;
 
 mod multihost;
+mod netns;
 mod team;

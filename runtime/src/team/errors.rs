@@ -261,4 +261,13 @@ pub enum HostError {
     HostLost { host: String, lost: String },
     #[error("host {host}: the team's run failed: agent {failed} failed (see its output)")]
     AgentFailed { host: String, failed: usize },
+    #[error(
+        "host {host}: the team's run failed: agent {failed} failed (see its output); agent(s) {listed:?} still listed alive {waited:.1?} later were not waited for"
+    )]
+    FailedWithAgentsListed {
+        host: String,
+        failed: usize,
+        listed: Vec<usize>,
+        waited: Duration,
+    },
 }

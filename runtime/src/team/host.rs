@@ -16,6 +16,7 @@
 
 use crate::process::member_error::MemberError;
 use crate::process::team_digest::TeamDigest;
+use crate::team::census::Census;
 use crate::team::errors::HostError;
 use crate::team::member::team_scenario;
 use crate::team::team_file::Team;
@@ -23,7 +24,8 @@ use crate::zenoh_net::ZenohError;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::{
-    alive_keys, announce_failure, announce_stop, watch_failures, watch_stops,
+    alive_agents, alive_keys, announce_failure_repeatedly, announce_stop, watch_failures,
+    watch_stops,
 };
 use serde::Serialize;
 use std::collections::HashSet;
@@ -56,6 +58,10 @@ struct Presence {
     goodbyes: HashSet<String>,
     /// The first host whose token vanished without a goodbye: killed, crashed or cut off.
     lost_host: Option<String>,
+    /// Agents of a host whose token vanished: gone for this host, whatever their tokens say
+    /// later (after a partition, routers that have not noticed it yet advertise the lost
+    /// host's tokens again for a while).
+    settled: Vec<bool>,
 }
 
 struct TeamWatch {
@@ -78,6 +84,10 @@ const LOST_HOST_LINGER: Duration = Duration::from_secs(2);
 
 /// How long a host stopped by a signal waits for the team's agents to leave.
 const STOP_GRACE: Duration = Duration::from_secs(2);
+
+/// After a failure, how long beyond one round's deadline a host waits for the agents still
+/// listed alive (a Zenoh lease is 10 s: a vanished session's tokens are gone by then).
+const AFTER_FAILURE: Duration = Duration::from_secs(10);
 
 /// Runs host `name` of the team in `team_path` until the team's run is over. The team
 /// file, the host's name and a team file that differs from the running team's are refused
@@ -110,6 +120,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             stopped: None,
             goodbyes: HashSet::new(),
             lost_host: None,
+            settled: vec![false; n],
         }),
         changed: Condvar::new(),
     });
@@ -129,9 +140,10 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
                     return;
                 };
                 let put = sample.kind() == SampleKind::Put;
+                tracing::debug!(agent = a, alive = put, "an agent's token");
                 watch.update(|p| {
                     p.seen[a] |= put;
-                    p.alive[a] = put;
+                    p.alive[a] = put && !p.settled[a];
                 });
             })
             .wait()
@@ -174,6 +186,12 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         let watch = Arc::clone(&watch);
         let links = links.clone();
         let me = host.name.clone();
+        let agents_of: Vec<(String, Vec<usize>)> = team
+            .file
+            .hosts
+            .iter()
+            .map(|h| (h.name.clone(), h.agents.clone()))
+            .collect();
         session
             .liveliness()
             .declare_subscriber(links.host_all())
@@ -182,8 +200,22 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
                     return;
                 };
                 if sample.kind() == SampleKind::Delete && h != me {
+                    tracing::debug!(host = h, "a host's token vanished");
                     let h = h.to_string();
+                    let theirs = agents_of
+                        .iter()
+                        .find(|(name, _)| *name == h)
+                        .map(|(_, agents)| agents.clone())
+                        .unwrap_or_default();
                     watch.update(|p| {
+                        // Its agents are settled with it: out of reach whatever their own
+                        // tokens still say here (a router that lost a host can keep the
+                        // host's agents' tokens for many seconds, or answer queries with them).
+                        let known = p.alive.len();
+                        for &a in theirs.iter().filter(|&&a| a < known) {
+                            p.alive[a] = false;
+                            p.settled[a] = true;
+                        }
                         if !p.goodbyes.contains(&h) {
                             p.lost_host.get_or_insert(h);
                         }
@@ -196,6 +228,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
     let _failures = {
         let watch = Arc::clone(&watch);
         watch_failures(session, &links, move |failed| {
+            tracing::debug!(failed, "a failure was announced");
             watch.update(|p| {
                 p.failed.get_or_insert(failed);
             });
@@ -235,6 +268,10 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
     let mut stop: Option<(i32, Instant)> = None;
     // The agent announced failed for a lost host, and when.
     let mut lost_announced: Option<(usize, Instant)> = None;
+    // When this host first saw the team's failure; the last census and whom it missed.
+    let mut failed_at: Option<Instant> = None;
+    let mut census = Census::new(n);
+    let round_timeout = Duration::from_secs_f64(team.file.round_timeout);
     loop {
         let signal = crate::signals::received().or(presence.stopped);
         if let Some(signal) = signal
@@ -266,6 +303,41 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             bridge.check().map_err(MemberError::failed)?;
         }
         let all_seen = presence.seen.iter().all(|&s| s);
+        if presence.failed.is_some() {
+            failed_at.get_or_insert_with(Instant::now);
+        }
+        // The team is ending (everybody came and somebody left, or somebody failed) and
+        // agents are still listed alive: the network is asked, and an agent missing from two
+        // answers in a row is taken as gone (its token's removal never reached this router).
+        let somebody_left = all_seen && presence.alive.iter().any(|&a| !a);
+        if (somebody_left || presence.failed.is_some())
+            && presence.alive.iter().any(|&a| a)
+            && census.due()
+        {
+            drop(presence);
+            let answer = alive_agents(session, &links);
+            presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
+            if let Ok(alive_now) = answer {
+                tracing::debug!(?alive_now, "census");
+                for a in census.gone(&alive_now, &presence.alive) {
+                    tracing::debug!(agent = a, "a token the network no longer has: gone");
+                    presence.alive[a] = false;
+                }
+            }
+        }
+        if let (Some(failed), Some(at)) = (presence.failed, failed_at)
+            && at.elapsed() >= round_timeout + AFTER_FAILURE
+        {
+            let listed: Vec<usize> = (0..n).filter(|&a| presence.alive[a]).collect();
+            if !listed.is_empty() {
+                return Err(MemberError::failed(HostError::FailedWithAgentsListed {
+                    host: host.name.clone(),
+                    failed,
+                    listed,
+                    waited: at.elapsed(),
+                }));
+            }
+        }
         let none_alive = presence.alive.iter().all(|&a| !a);
         let lingered = lost_announced.is_none_or(|(_, at)| at.elapsed() >= LOST_HOST_LINGER);
         if none_alive && (all_seen || presence.failed.is_some()) && lingered {
@@ -293,7 +365,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             // Again and again for a while: an announcement reaches only the agents already
             // subscribed, and some may still be starting.
             drop(presence);
-            announce_failure(session, &links, first);
+            announce_failure_repeatedly(session, &links, first);
             presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
         }
         let now = Instant::now();

@@ -28,7 +28,7 @@ pub enum Deployment {
     #[default]
     #[serde(alias = "ipc")]
     Iceoryx2,
-    /// Every agent a Zenoh peer of its host's router.
+    /// Every agent a Zenoh client of its host's router.
     Zenoh,
     /// iceoryx2 among the agents of a host; the host's bridge carries what crosses hosts.
     Mixed,

@@ -20,4 +20,6 @@ pub mod team_timeline;
 #[cfg(feature = "zenoh")]
 pub mod bridge;
 #[cfg(feature = "zenoh")]
+mod census;
+#[cfg(feature = "zenoh")]
 pub mod host;

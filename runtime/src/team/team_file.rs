@@ -15,7 +15,7 @@
 //! ```
 //!
 //! A team across several machines names its hosts and how they talk (see
-//! [`crate::zenoh_net`]): `transport = "zenoh"` (every agent a Zenoh peer of its host's
+//! [`crate::zenoh_net`]): `transport = "zenoh"` (every agent a Zenoh client of its host's
 //! router) or `"mixed"` (iceoryx2 among the agents of a host, Zenoh between hosts through
 //! each host's bridge). Every host runs `admm-ta host --team FILE --name NAME` next to its
 //! agents (needs a build with `--features zenoh`):

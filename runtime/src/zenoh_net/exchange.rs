@@ -33,7 +33,7 @@ use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::Fault;
 use crate::wait::WaitPolicy;
 use crate::zenoh_net::ZenohError;
-use crate::zenoh_net::links::{AGENT_LISTEN, ZenohLinks};
+use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::session::{
     self, Role, alive_agents, alive_keys, announce_failure, missing_hosts, watch_failures,
     watch_stops,
@@ -55,14 +55,20 @@ const FAILURE_CHECK_SLICE: Duration = Duration::from_millis(20);
 /// token and the message may travel different links).
 const DEPARTURE_GRACE: Duration = Duration::from_millis(300);
 
-/// A gather that waits this long sends the agent's last two messages again, then again at
-/// doubling intervals up to [`RESEND_AT_MOST_EVERY`]. Zenoh propagates a new subscription
-/// asynchronously, so a message published right after start-up can find no route yet and
-/// be dropped (round-0 messages were lost so while a team's routers were still starting).
-/// A neighbour waiting on the lost message cannot send what this agent waits for, so the
-/// waiter re-sends; duplicates are harmless (a message lands in the slot of its round's
-/// parity and is taken only for its own round).
+/// A gather of the first rounds (below [`RESEND_ROUNDS`]) that waits this long sends the
+/// agent's last two messages again, then again at doubling intervals up to
+/// [`RESEND_AT_MOST_EVERY`]. Zenoh propagates a new subscription asynchronously, so a
+/// message published right after start-up can find no route yet and be dropped (round-0
+/// messages were lost so while a team's routers were still starting). A neighbour waiting
+/// on the lost message cannot send what this agent waits for, so the waiter re-sends;
+/// duplicates are harmless (a message lands in the slot of its round's parity and is taken
+/// only for its own round). Later rounds travel routes that carried a message already, on
+/// reliable links with blocking congestion control: nothing is dropped there, and resending
+/// a slow round's messages only adds load where a team is already slow (at 100 agents on 2
+/// cores every round waited past 50 ms and every agent re-sent, doubling the router's
+/// traffic).
 const RESEND_AFTER: Duration = Duration::from_millis(50);
+const RESEND_ROUNDS: u64 = 2;
 const RESEND_AT_MOST_EVERY: Duration = Duration::from_secs(1);
 
 /// How often start-up asks which neighbours are present.
@@ -206,7 +212,7 @@ impl ZenohExchange {
             &Role::Agent {
                 within: deadline.saturating_duration_since(Instant::now()),
             },
-            &[AGENT_LISTEN.to_string()],
+            &[],
             &links.connect,
         )
         .map_err(|e| err(e.to_string()))?;
@@ -585,7 +591,7 @@ impl Drop for ZenohExchange {
             );
         }
         // Flushes what is queued and tells the peers we left (our token vanishes).
-        let _ = self.session.close().wait();
+        session::close(&self.session);
     }
 }
 
@@ -622,14 +628,19 @@ impl Exchange for ZenohExchange {
         if round.is_multiple_of(64) {
             self.check_launcher(round)?;
         }
-        let mut resend_at = started + RESEND_AFTER;
+        // Later rounds never resend: their wait is the deadline's alone.
+        let mut resend_at = if round < RESEND_ROUNDS {
+            started + RESEND_AFTER
+        } else {
+            deadline
+        };
         let mut resend_every = RESEND_AFTER;
         let held = self.policy.wait_until(
             self,
             deadline,
             |s| s.take_arrived(round),
             |s, deadline| {
-                if Instant::now() >= resend_at {
+                if round < RESEND_ROUNDS && Instant::now() >= resend_at {
                     s.resend(round)?;
                     resend_every = (resend_every * 2).min(RESEND_AT_MOST_EVERY);
                     resend_at = Instant::now() + resend_every;

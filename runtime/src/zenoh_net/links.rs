@@ -101,11 +101,6 @@ impl ZenohLinks {
     }
 }
 
-/// Where an agent listens: any free port on loopback. Agents of one host link directly;
-/// traffic between hosts goes through their routers (as `rmw_zenoh` deploys it), so only
-/// the routers' endpoints must be reachable from other machines.
-pub const AGENT_LISTEN: &str = "tcp/127.0.0.1:0";
-
 /// Checks that `endpoint` is a Zenoh TCP endpoint `tcp/ADDRESS:PORT` (the only link this
 /// build carries).
 pub fn check_endpoint(endpoint: &str) -> Result<(), NotAnEndpoint> {

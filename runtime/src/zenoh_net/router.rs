@@ -1,12 +1,12 @@
-//! A host's Zenoh router: the host's agents connect to it, and it links to the other hosts'
-//! routers. Agents of one host then link to each other directly (Zenoh's gossip introduces
-//! them), so the router carries start-up discovery and the cross-host traffic.
+//! A host's Zenoh router: the host's agents connect to it as clients, and it links to the
+//! other hosts' routers; it relays every round message between its clients and to the other
+//! hosts (see [`crate::zenoh_net::session`] for why agents are not peers).
 
 use crate::zenoh_net::ZenohError;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::session::{self, Role};
 use std::net::TcpListener;
-use zenoh::{Session, Wait};
+use zenoh::Session;
 
 /// A running router; dropping it closes it.
 pub struct HostRouter {
@@ -57,6 +57,6 @@ impl HostRouter {
 
 impl Drop for HostRouter {
     fn drop(&mut self) {
-        let _ = self.session.close().wait();
+        session::close(&self.session);
     }
 }

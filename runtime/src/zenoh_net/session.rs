@@ -1,21 +1,37 @@
-//! Zenoh session configurations, as `rmw_zenoh` deploys them: agents are peers that connect
-//! to their host's router and listen on loopback, so that agents of one host link to each
-//! other directly once the router's gossip introduces them (one hop instead of two through
-//! the router: 1.7 vs 2.3 ms per round for 10 agents on a complete graph here, 0.45 vs 0.73
-//! on a ring); routers link the hosts and carry the traffic between them. Multicast scouting is off everywhere: a team names its endpoints (robot networks
-//! often drop multicast, and a test must not find another test's sessions).
-
+//! Zenoh session configurations: agents are **clients** of their host's router, and routers
+//! link the hosts and carry the traffic between them. Multicast scouting is off everywhere: a
+//! team names its endpoints (robot networks often drop multicast, and a test must not find
+//! another test's sessions).
+//!
+//! Why clients and not peers (as `rmw_zenoh` deploys them): peers of one host link to each
+//! other directly once the router's gossip introduces them — one hop instead of two, but
+//! `k(k − 1)/2` links for `k` agents, all opened at start-up, each tried **once** (a failed
+//! gossip connection is logged and never retried), and a Zenoh router does not relay between
+//! two peers of its own region. At 100 agents (4 950 links, each process accepting at most
+//! `accept_pending` = 100 handshakes at once) some pair always stayed unlinked, for the whole
+//! run: its round messages had no route, and resending could not help (issue 36). A client
+//! has one link, to its router, which relays between its clients; the router accepts as many
+//! handshakes as a fleet opens at once (`ROUTER_ACCEPT_PENDING`).
 use crate::zenoh_net::ZenohError;
 use std::time::Duration;
 use zenoh::{Config, Session, Wait};
 
 /// What a session is for.
 pub(crate) enum Role {
-    /// An agent: a peer that must reach its router within `within`, or fail.
+    /// An agent: a client that must reach its router within `within`, or fail.
     Agent { within: Duration },
     /// A host's router: keeps trying the other hosts' routers in the background.
     Router,
 }
+
+/// Batches (64 kB each) of a link's data queue (Zenoh allows 1…16, default 2).
+const TX_QUEUE_BATCHES: usize = 16;
+
+/// Handshakes a router accepts at once: more than a team has agents.
+const ROUTER_ACCEPT_PENDING: usize = 4096;
+
+/// Sessions a router holds: its clients and the other hosts' routers.
+const ROUTER_MAX_SESSIONS: usize = 8192;
 
 fn set(config: &mut Config, key: &str, value: &str) -> Result<(), ZenohError> {
     config
@@ -36,13 +52,22 @@ pub(crate) fn config(
 ) -> Result<Config, ZenohError> {
     let mut config = Config::default();
     let mode = match role {
-        Role::Agent { .. } => "\"peer\"",
+        Role::Agent { .. } => "\"client\"",
         Role::Router => "\"router\"",
     };
     set(&mut config, "mode", mode)?;
     set(&mut config, "scouting/multicast/enabled", "false")?;
     set(&mut config, "listen/endpoints", &list(listen))?;
     set(&mut config, "connect/endpoints", &list(connect))?;
+    // A round message of a large team is bigger than a batch (100 × 100 f64: 80 kB, two
+    // 64 kB batches): with Zenoh's two batches per priority queue one message fills a link's
+    // queue and the router relays one message at a time; sixteen (1 MB per link) let it
+    // relay a round's burst.
+    set(
+        &mut config,
+        "transport/link/tx/queue/size/data",
+        &TX_QUEUE_BATCHES.to_string(),
+    )?;
     match role {
         Role::Agent { within } => {
             let ms = within.as_millis().clamp(1, i64::MAX as u128);
@@ -52,9 +77,42 @@ pub(crate) fn config(
         Role::Router => {
             set(&mut config, "connect/timeout_ms", "-1")?;
             set(&mut config, "connect/exit_on_failure", "false")?;
+            // A fleet's agents connect at once: every handshake is accepted (Zenoh's
+            // default, 100 pending, closes the rest silently).
+            set(
+                &mut config,
+                "transport/unicast/accept_pending",
+                &ROUTER_ACCEPT_PENDING.to_string(),
+            )?;
+            set(
+                &mut config,
+                "transport/unicast/max_sessions",
+                &ROUTER_MAX_SESSIONS.to_string(),
+            )?;
         }
     }
     Ok(config)
+}
+
+/// How long closing a session is waited for: what is queued is flushed and the others are
+/// told within it; a link to a host that was cut off is not waited for (Zenoh's own close
+/// can take 10 s and more then, and a host must not outlive its team by that much).
+pub(crate) const CLOSE_WITHIN: Duration = Duration::from_secs(2);
+
+/// Closes `session`, waiting at most [`CLOSE_WITHIN`] (the rest of the close goes on in the
+/// background until the process exits).
+pub(crate) fn close(session: &Session) {
+    let session = session.clone();
+    let (done, closed) = std::sync::mpsc::channel();
+    let closing = std::thread::Builder::new()
+        .name("zenoh-close".into())
+        .spawn(move || {
+            let _ = session.close().wait();
+            let _ = done.send(());
+        });
+    if closing.is_ok() {
+        let _ = closed.recv_timeout(CLOSE_WITHIN);
+    }
 }
 
 /// Opens a session of `role`.
@@ -127,6 +185,20 @@ pub(crate) fn announce_failure(
     let _ = session
         .put(links.failure_key(), failed.to_string())
         .congestion_control(zenoh::qos::CongestionControl::Block)
+        .wait();
+}
+
+/// [`announce_failure`] without ever blocking: dropped where a link's queue is full (for
+/// announcements repeated many times, such as a host's for a lost host — a blocking put to a
+/// link that was just cut can hold the caller for Zenoh's `wait_before_close`).
+pub(crate) fn announce_failure_repeatedly(
+    session: &Session,
+    links: &crate::zenoh_net::links::ZenohLinks,
+    failed: usize,
+) {
+    let _ = session
+        .put(links.failure_key(), failed.to_string())
+        .congestion_control(zenoh::qos::CongestionControl::Drop)
         .wait();
 }
 
