@@ -5,8 +5,8 @@
 //! * the global barrier's counters and its 32-bit futex wake-up word (line 0, byte 16);
 //! * per agent (line `1 + i`): its two arrival counters (rounds of each parity, see
 //!   [`arrivals_target`]), the last round it published, its process id (members of an
-//!   independently started team), whether it is connected (start-up rendezvous) and its
-//!   32-bit futex wake-up word (byte 40);
+//!   independently started team), whether it is connected (start-up rendezvous), its
+//!   32-bit futex wake-up word (byte 40) and whether it finished its run (byte 48);
 //! * the failure line: the agent marked as failed (the first mark wins), the team's shape
 //!   (tasks and payload length, so an agent of another shape is refused), the count of
 //!   members that left, the stop request (a termination signal, distinct from a
@@ -223,6 +223,18 @@ impl Board {
             Self::create_owned(shm, agents, tasks, payload_len, false)?,
             true,
         ))
+    }
+
+    /// Agent `agent` finished its run (it is about to leave): a node of it found dead from
+    /// now on is one going away, not a failure.
+    pub fn set_finished(&self, agent: usize) {
+        self.word(LINE * (agent + 1) + 48)
+            .store(1, Ordering::Release);
+    }
+
+    /// Whether agent `agent` said it finished its run ([`Board::set_finished`]).
+    pub fn finished(&self, agent: usize) -> bool {
+        self.word(LINE * (agent + 1) + 48).load(Ordering::Acquire) != 0
     }
 
     /// Records agent `agent`'s process id (independently started teams).

@@ -77,6 +77,11 @@ pub(crate) fn scan_dead_agents(config: &Config, me: usize, board: &Board) -> Opt
             if let Some(agent) = agent.filter(|&a| a != me) {
                 // Whoever gets there first cleans up; the others find the node gone.
                 let _ = view.try_remove_stale_resources();
+                // An agent that finished its run is leaving, not dead (its node can look
+                // dead while it goes away: a false failure at the end of a run otherwise).
+                if board.finished(agent) {
+                    return CallbackProgression::Continue;
+                }
                 dead = Some(agent);
                 return CallbackProgression::Stop;
             }

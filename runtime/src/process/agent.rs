@@ -150,6 +150,12 @@ pub fn run_scenario(
         }
         MemberError::failed(e)
     })?;
+    // Finished, not dead: a neighbour that scans the run's nodes while this one's node goes
+    // away must not take it for a failure (the board of a team with one; Zenoh teams have
+    // none).
+    if let Ok(board) = crate::board::Board::open(&scenario.board_shm, scenario.robots) {
+        board.set_finished(index);
+    }
     // Release the ports before reporting: once the launcher sees the result it may clean up.
     drop(endpoint);
     tracing::info!(

@@ -82,6 +82,10 @@ impl TeamWatch {
 /// that its agents still starting hear it.
 const LOST_HOST_LINGER: Duration = Duration::from_secs(2);
 
+/// How long a host waits, once every other host is up, for its router's direct link to
+/// each of them (Zenoh retries a connection every 1–4 s).
+const DIRECT_LINKS_WITHIN: Duration = Duration::from_secs(10);
+
 /// How long a host stopped by a signal waits for the team's agents to leave.
 const STOP_GRACE: Duration = Duration::from_secs(2);
 
@@ -244,6 +248,19 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
     // name before it declares its host token (so no agent of the team starts with it).
     let startup_deadline = started + Duration::from_secs_f64(team.file.startup_timeout);
     let _digest = check_team_digest(&team, &host.name, &links, session, startup_deadline)?;
+    // Every other host is up: its direct link follows within Zenoh's reconnection period.
+    let hosts = team.file.hosts.len() - 1;
+    let linked = router.await_routers(
+        hosts,
+        startup_deadline.min(Instant::now() + DIRECT_LINKS_WITHIN),
+    );
+    if linked < hosts {
+        tracing::warn!(
+            linked,
+            hosts,
+            "not every other host's router is linked directly: messages go over other hosts"
+        );
+    }
     // After the bridge's subscriptions: the other hosts wait for this token before they let
     // their agents publish to ours.
     let _token = session

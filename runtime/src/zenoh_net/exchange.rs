@@ -69,6 +69,13 @@ const DEPARTURE_GRACE: Duration = Duration::from_millis(300);
 /// traffic).
 const RESEND_AFTER: Duration = Duration::from_millis(50);
 const RESEND_ROUNDS: u64 = 2;
+
+/// A gather of the first rounds still missing a neighbour's message after this long declares
+/// its subscription to that neighbour again. Between routers, a subscription's declaration
+/// can be lost while the routers' links come up (seen at 100 agents on four hosts: a
+/// neighbour's every copy went nowhere for 10 s): declared again, it propagates anew and the
+/// neighbour's next copy (it re-sends too) finds its route.
+const RESUBSCRIBE_AFTER: Duration = Duration::from_secs(1);
 const RESEND_AT_MOST_EVERY: Duration = Duration::from_secs(1);
 
 /// How often start-up asks which neighbours are present.
@@ -142,7 +149,8 @@ pub struct ZenohExchange {
     launcher: Option<u32>,
     links: ZenohLinks,
     publisher: Publisher<'static>,
-    _subscribers: Vec<Subscriber<()>>,
+    /// One per neighbour (in order), then the stop and failure watches.
+    subscribers: Vec<Subscriber<()>>,
     _token: LivelinessToken,
     session: Session,
 }
@@ -184,8 +192,33 @@ fn receive(
         return;
     }
     let slot = &mut inbound.slots[k][(header.round % 2) as usize];
+    // A copy sent again two rounds ago can arrive after the neighbour's newer message of the
+    // same parity (it queued behind large messages on another link): it must not replace it.
+    if slot.round.is_some_and(|r| r > header.round) {
+        return;
+    }
     words_as_bytes_mut(&mut slot.words).copy_from_slice(bytes);
     slot.round = Some(header.round);
+}
+
+/// Subscribes agent `i` to its neighbour `j` (its `k`-th): every message lands in `shared`.
+fn subscribe_round(
+    session: &Session,
+    links: &ZenohLinks,
+    shared: &Arc<Shared>,
+    i: usize,
+    k: usize,
+    j: usize,
+    message_words: usize,
+) -> zenoh::Result<Subscriber<()>> {
+    let shared = Arc::clone(shared);
+    session
+        .declare_subscriber(links.round_key(j))
+        .callback(move |sample: Sample| {
+            let bytes = sample.payload().to_bytes();
+            shared.deliver(|inbound| receive(inbound, i, k, j, message_words, &bytes));
+        })
+        .wait()
 }
 
 /// The running team's digest (hex): that of the host that started first, if any host
@@ -236,15 +269,8 @@ impl ZenohExchange {
         });
         let mut subscribers = Vec::with_capacity(degree + 2);
         for (k, &j) in endpoint.neighbours.iter().enumerate() {
-            let shared = Arc::clone(&shared);
             subscribers.push(
-                session
-                    .declare_subscriber(links.round_key(j))
-                    .callback(move |sample: Sample| {
-                        let bytes = sample.payload().to_bytes();
-                        shared.deliver(|inbound| receive(inbound, i, k, j, message_words, &bytes));
-                    })
-                    .wait()
+                subscribe_round(&session, links, &shared, i, k, j, message_words)
                     .map_err(|e| err(format!("cannot subscribe to agent {j}: {e}")))?,
             );
         }
@@ -362,7 +388,7 @@ impl ZenohExchange {
             launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
             links: links.clone(),
             publisher,
-            _subscribers: subscribers,
+            subscribers,
             _token: token,
             session,
         };
@@ -569,6 +595,39 @@ impl ZenohExchange {
             .map_err(|e| transport(self.index, format!("publishing round {round} failed: {e}")))
     }
 
+    /// Declares again the subscriptions to the neighbours whose round-`round` message is
+    /// missing (see [`RESUBSCRIBE_AFTER`]): the new one first, so nothing is missed between.
+    fn resubscribe_missing(&mut self, round: u64) {
+        let words = self.outbox.len();
+        for k in 0..self.neighbours.len() {
+            if self.held_round[k] == Some(round) {
+                continue;
+            }
+            let j = self.neighbours[k];
+            match subscribe_round(
+                &self.session,
+                &self.links,
+                &self.shared,
+                self.index,
+                k,
+                j,
+                words,
+            ) {
+                Ok(fresh) => {
+                    tracing::debug!(
+                        round,
+                        neighbour = j,
+                        "subscribed again to a silent neighbour"
+                    );
+                    drop(std::mem::replace(&mut self.subscribers[k], fresh));
+                }
+                Err(e) => {
+                    tracing::debug!(round, neighbour = j, error = %e, "cannot subscribe again")
+                }
+            }
+        }
+    }
+
     /// Sends the own messages of rounds `round − 1` and `round` again (see [`RESEND_AFTER`]).
     fn resend(&mut self, round: u64) -> Result<(), ExchangeError> {
         for r in [round.checked_sub(1), Some(round)].into_iter().flatten() {
@@ -635,12 +694,17 @@ impl Exchange for ZenohExchange {
             deadline
         };
         let mut resend_every = RESEND_AFTER;
+        let mut resubscribed = false;
         let held = self.policy.wait_until(
             self,
             deadline,
             |s| s.take_arrived(round),
             |s, deadline| {
                 if round < RESEND_ROUNDS && Instant::now() >= resend_at {
+                    if !resubscribed && started.elapsed() >= RESUBSCRIBE_AFTER {
+                        resubscribed = true;
+                        s.resubscribe_missing(round);
+                    }
                     s.resend(round)?;
                     resend_every = (resend_every * 2).min(RESEND_AT_MOST_EVERY);
                     resend_at = Instant::now() + resend_every;

@@ -6,7 +6,7 @@ use crate::zenoh_net::ZenohError;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::session::{self, Role};
 use std::net::TcpListener;
-use zenoh::Session;
+use zenoh::{Session, Wait};
 
 /// A running router; dropping it closes it.
 pub struct HostRouter {
@@ -47,6 +47,21 @@ impl HostRouter {
     /// Announces `agent` as failed on the run of `links`, so that its Zenoh agents stop.
     pub fn announce_failure(&self, links: &ZenohLinks, agent: usize) {
         session::announce_failure(&self.session, links, agent);
+    }
+
+    /// Waits until this router has a direct link to `count` other routers, or `deadline`;
+    /// returns how many it has. Routes between routers change as links come up (a message
+    /// from a host reached over another host goes direct once their link is up), and a
+    /// message in flight while routes change can be lost: a team starts once every host
+    /// links every other directly.
+    pub fn await_routers(&self, count: usize, deadline: std::time::Instant) -> usize {
+        loop {
+            let linked = self.session.info().routers_zid().wait().count();
+            if linked >= count || std::time::Instant::now() >= deadline {
+                return linked;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
     }
 
     /// The router's session (the bridge of a mixed-mode host publishes through it).

@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""A team across four hosts with their own addresses, on one machine (needs root and `ip`).
+
+    sudo python3 bench/netns_team.py --binary target/release/admm-ta --agents 100 \
+        --transport zenoh --runs 10 [--hosts 4] [--topology random:0.1] [--round-timeout 10]
+
+Makes `--hosts` network namespaces on a bridge (veth pairs, addresses 10.232.0.K/24, no
+route anywhere else), and for each run writes a team file (random costs from the run's seed,
+the primal method, the agents split evenly over the hosts), starts in every namespace
+`admm-ta host --team T --name hK` and its agents (`admm-ta agent --team T --id I`), waits,
+and runs `admm-ta collect --check --json`. Prints one line per run (certified and optimal,
+wall time from the first process started to the last one ended, round p50/p99 from the
+agents' merged latencies, every host's exit) and a summary; removes the namespaces and
+the bridge at the end, whatever happens. Standard library only.
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+TAG = f"nt{os.getpid() % 100000}"
+
+
+def ip(*args, check=True):
+    return subprocess.run(["ip", *args], check=check, capture_output=True, text=True)
+
+
+def make_hosts(k):
+    bridge = f"{TAG}b"
+    ip("link", "add", bridge, "type", "bridge")
+    ip("link", "set", bridge, "up")
+    hosts = []
+    for h in range(k):
+        ns, inner, outer = f"{TAG}h{h}", f"{TAG}i{h}", f"{TAG}o{h}"
+        ip("netns", "add", ns)
+        ip("link", "add", inner, "type", "veth", "peer", "name", outer)
+        ip("link", "set", outer, "master", bridge)
+        ip("link", "set", outer, "up")
+        ip("link", "set", inner, "netns", ns)
+        address = f"10.232.0.{h + 1}"
+        ip("-n", ns, "addr", "add", f"{address}/24", "dev", inner)
+        ip("-n", ns, "link", "set", inner, "up")
+        ip("-n", ns, "link", "set", "lo", "up")
+        hosts.append((ns, address))
+    return bridge, hosts
+
+
+def remove_hosts(bridge, hosts):
+    for ns, _ in hosts:
+        ip("netns", "del", ns, check=False)
+    ip("link", "del", bridge, check=False)
+
+
+def team_file(path, args, hosts, run, seed):
+    n = args.agents
+    per = [n // len(hosts) + (1 if h < n % len(hosts) else 0) for h in range(len(hosts))]
+    lines = [
+        f'run = "{run}"', f"robots = {n}", 'costs = "random"', f"tasks = {n}",
+        f"seed = {seed}", f'topology = "{args.topology}"', 'results = "results"',
+        f"startup_timeout = {args.startup_timeout}", f"round_timeout = {args.round_timeout}",
+        f'transport = "{args.transport}"',
+    ]
+    first = 0
+    for h, (_, address) in enumerate(hosts):
+        agents = ", ".join(str(a) for a in range(first, first + per[h]))
+        lines += ["", "[[hosts]]", f'name = "h{h}"', f"agents = [{agents}]",
+                  f'endpoint = "tcp/{address}:7447"']
+        first += per[h]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return per
+
+
+def one_run(args, hosts, k):
+    with tempfile.TemporaryDirectory() as d:
+        team = os.path.join(d, "team.toml")
+        run = f"{TAG}r{k}"
+        per = team_file(team, args, hosts, run, args.seed + k)
+        started = time.monotonic()
+        procs = []
+        first = 0
+        for h, (ns, _) in enumerate(hosts):
+            exe = ["ip", "netns", "exec", ns, args.binary]
+            procs.append(("host", h, subprocess.Popen(
+                exe + ["host", "--team", team, "--name", f"h{h}"],
+                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)))
+            for a in range(first, first + per[h]):
+                procs.append(("agent", a, subprocess.Popen(
+                    exe + ["agent", "--team", team, "--id", str(a)],
+                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)))
+            first += per[h]
+        deadline = started + args.limit
+        outputs = {}
+        for kind, who, p in procs:
+            try:
+                out, err = p.communicate(timeout=max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                for _, _, q in procs:
+                    q.kill()
+                out, err = p.communicate()
+                err = (err or "") + " [killed at the limit]"
+            outputs[(kind, who)] = (p.returncode, (out or "") + (err or ""))
+        wall = time.monotonic() - started
+        collected = subprocess.run([args.binary, "collect", "--team", team, "--check", "--json"],
+                                   capture_output=True, text=True)
+        try:
+            result = json.loads(collected.stdout)
+        except json.JSONDecodeError:
+            result = {}
+        host_codes = [outputs[("host", h)][0] for h in range(len(hosts))]
+        failed_agents = [w for (kind, w), (rc, _) in outputs.items() if kind == "agent" and rc != 0]
+        errors = sorted({f"{kind} {w}: {text.strip().splitlines()[-1]}"
+                         for (kind, w), (rc, text) in outputs.items()
+                         if rc != 0 and text.strip()})
+        first_error = next((e for e in errors if "stopped at round" not in e),
+                           errors[0] if errors else "")
+        if args.verbose:
+            for e in errors:
+                print("   ", e[:300], file=sys.stderr)
+        latency = result.get("round_latency_us", {}).get("round", {})
+        return {
+            "run": k, "wall_s": round(wall, 2),
+            "certified": result.get("certified"), "optimal": result.get("optimal"),
+            "iterations": result.get("iterations"),
+            "round_p50_ms": round(latency.get("p50", float("nan")) / 1e3, 2),
+            "round_p99_ms": round(latency.get("p99", float("nan")) / 1e3, 2),
+            "host_codes": host_codes, "failed_agents": len(failed_agents),
+            "error": first_error[:200],
+        }
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--binary", default="target/release/admm-ta")
+    parser.add_argument("--agents", type=int, default=100)
+    parser.add_argument("--hosts", type=int, default=4)
+    parser.add_argument("--transport", choices=["zenoh", "mixed"], default="zenoh")
+    parser.add_argument("--topology", default="random:0.1")
+    parser.add_argument("--round-timeout", type=float, default=10.0)
+    parser.add_argument("--startup-timeout", type=float, default=60.0)
+    parser.add_argument("--runs", type=int, default=1)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--limit", type=float, default=300.0, help="seconds per run")
+    parser.add_argument("--verbose", action="store_true", help="every failing process's line")
+    args = parser.parse_args()
+    args.binary = os.path.abspath(args.binary)
+    if os.geteuid() != 0:
+        sys.exit("needs root (ip netns)")
+    bridge, hosts = None, []
+    try:
+        bridge, hosts = make_hosts(args.hosts)
+        rows = []
+        for k in range(args.runs):
+            row = one_run(args, hosts, k)
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+        good = [r for r in rows if r["certified"] and r["optimal"]]
+        walls = sorted(r["wall_s"] for r in good)
+        p50s = sorted(r["round_p50_ms"] for r in good)
+        print(f"{args.transport}, {args.agents} agents on {args.hosts} hosts: "
+              f"{len(good)}/{len(rows)} certified optimal"
+              + (f", wall median {walls[len(walls) // 2]} s, round p50 median "
+                 f"{p50s[len(p50s) // 2]} ms" if good else ""))
+    finally:
+        if bridge:
+            remove_hosts(bridge, hosts)
+
+
+if __name__ == "__main__":
+    main()
