@@ -125,26 +125,31 @@ pub struct Case {
 
 impl Case {
     /// A file name for the case: `10-complete-10x10-ipc-auto-neighbour` (anything but
-    /// letters, digits, `.` and `x` becomes `-`).
+    /// letters, digits, `.` and `-` becomes `-`).
     pub fn slug(&self) -> String {
-        format!(
-            "{}-{}-{}-{}-{}-{}",
-            self.agents,
-            self.topology,
-            self.payload,
-            self.transport.name(),
-            self.wait.name(),
-            self.barrier_name()
-        )
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
-                c
-            } else {
-                '-'
-            }
-        })
-        .collect()
+        self.fields()
+            .join("-")
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                    c
+                } else {
+                    '-'
+                }
+            })
+            .collect()
+    }
+
+    /// Agents, graph, payload, transport, wait, barrier.
+    fn fields(&self) -> [String; 6] {
+        [
+            self.agents.to_string(),
+            self.topology.clone(),
+            self.payload.to_string(),
+            self.transport.name().to_string(),
+            self.wait.name().to_string(),
+            self.barrier_name().to_string(),
+        ]
     }
 
     /// `global` or `neighbour`.
@@ -155,15 +160,7 @@ impl Case {
     /// The first six columns of the Markdown tables: agents, graph, payload, transport,
     /// wait, barrier.
     pub fn columns(&self) -> String {
-        format!(
-            "| {} | {} | {} | {} | {} | {} |",
-            self.agents,
-            self.topology,
-            self.payload,
-            self.transport.name(),
-            self.wait.name(),
-            self.barrier_name()
-        )
+        format!("| {} |", self.fields().join(" | "))
     }
 }
 

@@ -182,10 +182,7 @@ pub(crate) fn announce_failure(
     links: &crate::zenoh_net::links::ZenohLinks,
     failed: usize,
 ) {
-    let _ = session
-        .put(links.failure_key(), failed.to_string())
-        .congestion_control(zenoh::qos::CongestionControl::Block)
-        .wait();
+    put_failure(session, links, failed, zenoh::qos::CongestionControl::Block);
 }
 
 /// [`announce_failure`] without ever blocking: dropped where a link's queue is full (for
@@ -196,9 +193,18 @@ pub(crate) fn announce_failure_repeatedly(
     links: &crate::zenoh_net::links::ZenohLinks,
     failed: usize,
 ) {
+    put_failure(session, links, failed, zenoh::qos::CongestionControl::Drop);
+}
+
+fn put_failure(
+    session: &Session,
+    links: &crate::zenoh_net::links::ZenohLinks,
+    failed: usize,
+    congestion: zenoh::qos::CongestionControl,
+) {
     let _ = session
         .put(links.failure_key(), failed.to_string())
-        .congestion_control(zenoh::qos::CongestionControl::Drop)
+        .congestion_control(congestion)
         .wait();
 }
 
