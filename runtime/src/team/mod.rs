@@ -23,3 +23,5 @@ pub mod bridge;
 mod census;
 #[cfg(feature = "zenoh")]
 pub mod host;
+#[cfg(feature = "zenoh")]
+mod host_digest;

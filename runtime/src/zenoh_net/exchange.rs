@@ -596,15 +596,19 @@ impl ZenohExchange {
     }
 
     /// Declares again the subscriptions to the neighbours whose round-`round` message is
-    /// missing (see [`RESUBSCRIBE_AFTER`]): the new one first, so nothing is missed between.
-    fn resubscribe_missing(&mut self, round: u64) {
+    /// missing (see [`RESUBSCRIBE_AFTER`]). The old one goes first: Zenoh shares one network
+    /// declaration among a session's subscribers of a key, so only a key left without any
+    /// is declared to the routers anew (a copy arriving in between is sent again).
+    fn resubscribe_missing(&mut self, round: u64) -> Result<(), ExchangeError> {
         let words = self.outbox.len();
         for k in 0..self.neighbours.len() {
             if self.held_round[k] == Some(round) {
                 continue;
             }
             let j = self.neighbours[k];
-            match subscribe_round(
+            let placeholder = self.subscribers.swap_remove(k);
+            drop(placeholder);
+            let fresh = subscribe_round(
                 &self.session,
                 &self.links,
                 &self.shared,
@@ -612,20 +616,24 @@ impl ZenohExchange {
                 k,
                 j,
                 words,
-            ) {
-                Ok(fresh) => {
-                    tracing::debug!(
-                        round,
-                        neighbour = j,
-                        "subscribed again to a silent neighbour"
-                    );
-                    drop(std::mem::replace(&mut self.subscribers[k], fresh));
-                }
-                Err(e) => {
-                    tracing::debug!(round, neighbour = j, error = %e, "cannot subscribe again")
-                }
-            }
+            )
+            .map_err(|e| {
+                transport(
+                    self.index,
+                    format!("cannot subscribe again to agent {j}: {e}"),
+                )
+            })?;
+            // swap_remove moved the last subscriber into `k`: put things back in order.
+            self.subscribers.push(fresh);
+            let last = self.subscribers.len() - 1;
+            self.subscribers.swap(k, last);
+            tracing::debug!(
+                round,
+                neighbour = j,
+                "subscribed again to a silent neighbour"
+            );
         }
+        Ok(())
     }
 
     /// Sends the own messages of rounds `round − 1` and `round` again (see [`RESEND_AFTER`]).
@@ -703,7 +711,7 @@ impl Exchange for ZenohExchange {
                 if round < RESEND_ROUNDS && Instant::now() >= resend_at {
                     if !resubscribed && started.elapsed() >= RESUBSCRIBE_AFTER {
                         resubscribed = true;
-                        s.resubscribe_missing(round);
+                        s.resubscribe_missing(round)?;
                     }
                     s.resend(round)?;
                     resend_every = (resend_every * 2).min(RESEND_AT_MOST_EVERY);
