@@ -39,7 +39,14 @@ const TRANSPORT_MODULES: &str = "<the transports of the registry>";
 /// The runtime's layers, top to bottom, by top-level module (with their submodules).
 const LAYERS: [&[&str]; 6] = [
     // Entry points.
-    &["solve", "episodes", "probe_run", "team", "observe"],
+    &[
+        "solve",
+        "episodes",
+        "probe_run",
+        "team",
+        "standing",
+        "observe",
+    ],
     // The team runner.
     &["runner"],
     // Process orchestration.

@@ -12,6 +12,8 @@
 //!   central stop rules of the simulation;
 //! * [`episodes`]: repeated surveillance assignments by one team alive for all of them;
 //! * [`probe_run`]: a latency-benchmark team of probe agents;
+//! * [`standing`]: standing teams whose robots keep their costs private, fed episode after
+//!   episode by their robot programs (the Rust API and the `--serve` sidecar);
 //! * [`team`]: teams of independently started agents (team files, members) and the hosts
 //!   and bridges of teams across machines.
 //!
@@ -77,6 +79,7 @@ pub mod episodes;
 pub mod observe;
 pub mod probe_run;
 pub mod solve;
+pub mod standing;
 pub mod team;
 
 // The team runner.

@@ -92,6 +92,11 @@ pub struct AgentArgs {
     /// This agent's robot index.
     #[arg(long)]
     pub index: Option<usize>,
+    /// Serve a robot program on standard input and output, one JSON object per line
+    /// (a team file with costs = "private"): a row `{"costs": [...]}` in, the robot's task
+    /// out, episode after episode; end of input leaves the team (see the README).
+    #[arg(long, requires = "team")]
+    pub serve: bool,
     /// The scenario file the launcher wrote.
     #[arg(long, requires = "scenario_digest")]
     pub scenario: Option<PathBuf>,

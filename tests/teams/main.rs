@@ -7,4 +7,5 @@ mod common;
 
 mod multihost;
 mod netns;
+mod private;
 mod team;

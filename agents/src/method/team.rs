@@ -86,6 +86,11 @@ pub trait TeamMethod: Sync + 'static {
     /// Whether it has a penalty ρ (`--rho` and `--adaptive-rho` apply to it).
     const PENALTY: bool;
 
+    /// Whether its agents take new own costs between episodes
+    /// ([`crate::agent::AgentAlgorithm::set_costs`]): a standing team, and a team whose
+    /// robots keep their costs private, need it.
+    const NEW_COSTS: bool = false;
+
     /// Values of the payload exchanged every round, for `(robots, tasks)`.
     fn payload_len(&self, robots: usize, tasks: usize) -> usize;
 
@@ -133,6 +138,8 @@ pub trait AnyTeamMethod: Sync {
     /// Its own settings.
     fn settings(&self) -> &'static [SettingSpec];
     fn penalty(&self) -> bool;
+    /// Its agents take new own costs between episodes ([`TeamMethod::NEW_COSTS`]).
+    fn new_costs(&self) -> bool;
     fn payload_len(&self, robots: usize, tasks: usize) -> usize;
     /// The method with the `given` settings (each must be one of its own), checked.
     fn configure(
@@ -207,6 +214,9 @@ impl<M: TeamMethod> AnyTeamMethod for M {
     }
     fn penalty(&self) -> bool {
         M::PENALTY
+    }
+    fn new_costs(&self) -> bool {
+        M::NEW_COSTS
     }
     fn payload_len(&self, robots: usize, tasks: usize) -> usize {
         TeamMethod::payload_len(self, robots, tasks)

@@ -103,6 +103,12 @@ impl Method {
         self.info().penalty()
     }
 
+    /// Whether its agents take new own costs between episodes (a standing team, private
+    /// costs).
+    pub fn new_costs(self) -> bool {
+        self.team().is_some_and(|t| t.new_costs())
+    }
+
     /// Length of the payload exchanged every round (0: no messages).
     pub fn payload_len(self, robots: usize, tasks: usize) -> usize {
         self.team().map_or(0, |t| t.payload_len(robots, tasks))

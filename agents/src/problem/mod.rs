@@ -28,6 +28,7 @@ pub mod feasibility;
 pub mod forbidden;
 pub mod general;
 pub mod normalise;
+pub mod private;
 pub mod surveillance;
 pub mod ties;
 

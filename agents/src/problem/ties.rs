@@ -67,13 +67,19 @@ pub fn perturbed_row(
     seed: u64,
 ) -> Vec<f64> {
     let mut row = costs.row(robot).to_vec();
+    perturb(&mut row, robot, epsilon, seed);
+    row
+}
+
+/// Adds robot `robot`'s own perturbation to its `row` in place (what [`perturbed_row`]
+/// adds; a robot that holds only its own row calls this).
+pub fn perturb(row: &mut [f64], robot: usize, epsilon: Option<f64>, seed: u64) {
     if let Some(eps) = epsilon {
         let mut rng = SeededRng::for_stream(seed ^ 0x7469_6573, robot as u64);
-        for value in &mut row {
+        for value in row {
             *value += eps * rng.uniform();
         }
     }
-    row
 }
 
 #[cfg(test)]

@@ -133,10 +133,23 @@ impl RoundLoop {
         plan: &AgentPlan,
         runs: u64,
     ) -> Result<Self, ExchangeError> {
+        Self::start_with(exchange, plan, runs, &mut |out| {
+            agent.write_initial_payload(out)
+        })
+    }
+
+    /// [`RoundLoop::start`] with a round-0 message that `write` fills: a standing team's
+    /// first agreement round ([`RoundLoop::side_round`] gathers it).
+    pub fn start_with(
+        exchange: &mut dyn Exchange,
+        plan: &AgentPlan,
+        runs: u64,
+        write: &mut dyn FnMut(&mut [f64]),
+    ) -> Result<Self, ExchangeError> {
         let mine = RoundHeader::initial(plan.index);
         let mut iterate_digest = 0;
         exchange.publish_initial(mine, &mut |out| {
-            agent.write_initial_payload(out);
+            write(out);
             iterate_digest = payload_digest(out);
         })?;
         Ok(Self {
@@ -160,6 +173,38 @@ impl RoundLoop {
     /// The round last gathered.
     pub fn round(&self) -> u64 {
         self.round
+    }
+
+    /// One round whose messages carry something other than the method's iterate (a
+    /// standing team's agreement on its scale, or its iterate again after one): publishes
+    /// the next round with `write` (after [`RoundLoop::start_with`], round 0 is already
+    /// published), gathers it until `deadline` and hands the exchange, holding the
+    /// neighbours' messages, to `read`. The next [`RoundLoop::run`] computes from the
+    /// messages gathered here. Side rounds are not timed.
+    pub fn side_round(
+        &mut self,
+        exchange: &mut dyn Exchange,
+        plan: &AgentPlan,
+        deadline: Instant,
+        write: &mut dyn FnMut(&mut [f64]),
+        read: &mut dyn FnMut(&dyn Exchange),
+    ) -> Result<(), ExchangeError> {
+        if self.stopped {
+            let header = RoundHeader {
+                round: self.round + 1,
+                ..RoundHeader::initial(plan.index)
+            };
+            exchange.compute_and_publish(&mut |_, out| {
+                write(out);
+                header
+            })?;
+            self.mine = header;
+            self.round += 1;
+        }
+        exchange.gather(self.round, deadline)?;
+        read(exchange);
+        self.stopped = true;
+        Ok(())
     }
 
     /// Runs rounds until `stop` certifies or `plan.max_rounds` rounds of this run have passed;

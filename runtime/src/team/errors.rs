@@ -47,6 +47,9 @@ pub enum TeamFileError {
     NoHost { name: String, hosts: Vec<String> },
     #[error("costs = \"random\" needs tasks = M in the team file")]
     RandomNeedsTasks,
+    /// A team whose robots keep their costs (`costs = "private"`) that cannot run.
+    #[error("costs = \"private\": {0}")]
+    Private(PrivateTeamError),
     #[error(transparent)]
     Problem(#[from] ProblemError),
     /// A file the team file names (costs, forbidden pairs).
@@ -93,6 +96,37 @@ pub enum TeamFileError {
     Rho(#[from] BadRho),
     #[error(transparent)]
     LocalStop(#[from] LocalStopError),
+}
+
+/// Why a team file's private team (`costs = "private"`) cannot run.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PrivateTeamError {
+    #[error("the team file needs tasks = M (the robots' rows have M costs each)")]
+    NeedsTasks,
+    #[error(
+        "method {method} cannot keep costs private: its agents take no new costs (use method = \"primal\")"
+    )]
+    Method { method: &'static str },
+    #[error(
+        "forbidden pairs are part of each robot's row (null for a forbidden task), not a team file"
+    )]
+    ForbiddenFile,
+    #[error(
+        "{robots} robots with {tasks} task(s) leave no room in a round message for the team's agreement; a private team of fewer than 4 robots needs at least 2 tasks"
+    )]
+    TooSmall { robots: usize, tasks: usize },
+    #[error(
+        "a private team's agents take their costs from their robot program: start them with --serve"
+    )]
+    NeedsServe,
+    #[error(
+        "its robots answer their own programs (agent --serve): there are no results to collect"
+    )]
+    NothingToCollect,
+    #[error(
+        "--serve needs a team file with costs = \"private\" (the robots' rows come from their programs)"
+    )]
+    NotPrivate,
 }
 
 /// Hosts of a team file that cannot run it.

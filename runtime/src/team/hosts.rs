@@ -77,7 +77,7 @@ pub(crate) fn cost_robot_names(
     base: &Path,
     costs: &str,
 ) -> Result<Option<Vec<String>>, TeamFileError> {
-    if costs == "random" {
+    if costs == "random" || costs == "private" {
         return Ok(None);
     }
     let path = base.join(costs);

@@ -21,7 +21,7 @@ use crate::process::member_error::MemberError;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::process::team_digest::TeamDigest;
-use crate::team::errors::{CollectError, JoinError, TeamFileError};
+use crate::team::errors::{CollectError, JoinError, PrivateTeamError, TeamFileError};
 use crate::team::team_file::{HostEntry, Team};
 use crate::team::team_timeline::write_timeline;
 use crate::workload::Workload;
@@ -234,6 +234,11 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
     let _signals = crate::signals::install();
     let started = Instant::now();
     let team = Team::read(team_path).map_err(MemberError::refused)?;
+    if team.is_private() {
+        return Err(MemberError::refused(TeamFileError::Private(
+            PrivateTeamError::NeedsServe,
+        )));
+    }
     let _span = tracing::info_span!("agent", run = %team.file.run, agent = id).entered();
     tracing::debug!(team = %team_path.display(), "joining the team");
     let n = team.file.robots;
@@ -332,6 +337,9 @@ pub struct TeamResult {
 /// Reads every agent's result and checks they describe one feasible assignment.
 pub fn collect(team_path: &Path, check: bool) -> Result<TeamResult, CollectError> {
     let team = Team::read(team_path)?;
+    if team.is_private() {
+        return Err(TeamFileError::Private(PrivateTeamError::NothingToCollect).into());
+    }
     let n = team.file.robots;
     let (problem, graph) = team.problem_and_graph()?;
     let digest = TeamDigest::of(&team_scenario(&team)?).to_hex();

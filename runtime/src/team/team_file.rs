@@ -5,7 +5,9 @@
 //! ```toml
 //! run = "demo"              # letters, digits, dashes: namespaces the shared memory
 //! robots = 10
-//! costs = "costs.csv"       # a CSV (relative to this file), or "random" with tasks and seed
+//! costs = "costs.csv"       # a CSV (relative to this file), "random" with tasks and seed,
+//!                           # or "private" with tasks: each robot's program gives its own row
+//!                           # (`admm-ta agent --serve`, [`crate::standing`])
 //! forbidden = "pairs.txt"   # optional: robot,task pairs nobody may take (as solve --forbidden)
 //! maximize = false          # true: the costs are profits (as solve --maximize)
 //! topology = "ring"         # complete | chain | ring | star | grid | random:P | geometric:R | FILE.toml
@@ -39,7 +41,7 @@
 use crate::options::error::ConfigError;
 use crate::options::{SolveOptions, StopRule};
 use crate::process::namespace::RunNamespace;
-use crate::team::errors::TeamFileError;
+use crate::team::errors::{PrivateTeamError, TeamFileError};
 pub use crate::team::hosts::{Deployment, HostEntry};
 use crate::team::hosts::{check_hosts, cost_robot_names, number_host_agents};
 use crate::zenoh_net::links::ZenohLinks;
@@ -99,6 +101,18 @@ pub struct TeamFile {
     /// JSON (relative to this file) and names the critical path (`solve --timeline`).
     #[serde(default)]
     pub timeline: Option<PathBuf>,
+    /// A private team's episode deadline (seconds): how long the team waits for a robot's
+    /// row before the episode goes on without it ([`crate::standing`]).
+    #[serde(default = "sixty")]
+    pub episode_timeout: f64,
+    /// A private team starts every episode from the last one's iterates (`false`: from
+    /// zero).
+    #[serde(default = "yes")]
+    pub warm_start: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn complete() -> String {
@@ -162,6 +176,7 @@ impl Team {
         RunNamespace::check_team_name(&file.run)?;
         check_hosts(&file.run, file.robots, file.transport, &file.hosts)?;
         let team = Self { file, base };
+        team.check_private()?;
         // The settings' checks, named by the file's keys.
         team.solve_options()
             .map_err(|error| TeamFileError::Settings {
@@ -169,6 +184,48 @@ impl Team {
                 error,
             })?;
         Ok(team)
+    }
+
+    /// Whether the robots keep their costs (`costs = "private"`).
+    pub fn is_private(&self) -> bool {
+        self.file.costs == "private"
+    }
+
+    /// Refuses a private team that cannot run, with the reason.
+    fn check_private(&self) -> Result<(), TeamFileError> {
+        if !self.is_private() {
+            return Ok(());
+        }
+        let f = &self.file;
+        let refuse = |e| Err(TeamFileError::Private(e));
+        let Some(tasks) = f.tasks else {
+            return refuse(PrivateTeamError::NeedsTasks);
+        };
+        if !f.method.new_costs() {
+            return refuse(PrivateTeamError::Method {
+                method: f.method.name(),
+            });
+        }
+        if f.forbidden.is_some() {
+            return refuse(PrivateTeamError::ForbiddenFile);
+        }
+        let payload = f.method.payload_len(f.robots, tasks);
+        if payload < crate::standing::agreement::opening_words(f.robots) {
+            return refuse(PrivateTeamError::TooSmall {
+                robots: f.robots,
+                tasks,
+            });
+        }
+        if !(f.episode_timeout > 0.0 && f.episode_timeout.is_finite()) {
+            return Err(TeamFileError::Syntax {
+                path: self.base.clone(),
+                message: format!(
+                    "episode_timeout must be a positive number of seconds, got {}",
+                    f.episode_timeout
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// The robots' names, when the cost file names them (read from the file).
@@ -240,7 +297,14 @@ impl Team {
         };
         // Pairs the cost file itself marks forbidden (JSON nulls).
         let mut marked = Vec::new();
-        let costs = if f.costs == "random" {
+        let costs = if self.is_private() {
+            // No robot's costs: the team's shape (every agent is built from it and then
+            // given its own normalised row, [`crate::standing`]).
+            let tasks = f
+                .tasks
+                .ok_or(TeamFileError::Private(PrivateTeamError::NeedsTasks))?;
+            CostMatrix::new(f.robots, tasks, vec![0.0; f.robots * tasks])?
+        } else if f.costs == "random" {
             let tasks = f.tasks.ok_or(TeamFileError::RandomNeedsTasks)?;
             CostMatrix::uniform(f.robots, tasks, f.seed)?
         } else {

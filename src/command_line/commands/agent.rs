@@ -4,6 +4,7 @@ use crate::command_line::cli::AgentArgs;
 use crate::command_line::exit::{Outcome, usage_bail};
 use crate::command_line::output::outln;
 use crate::runtime::process::agent;
+use crate::runtime::standing::serve;
 use crate::runtime::team::member;
 use crate::runtime::team::team_file::Team;
 use crate::topologies::RobotRef;
@@ -15,6 +16,22 @@ use anyhow::{Context, Result};
 pub fn run(args: AgentArgs) -> Result<Outcome> {
     let mut outcome = Outcome::Success;
     let (index, result) = match args {
+        AgentArgs {
+            team: Some(team),
+            id: Some(robot),
+            serve: true,
+            ..
+        } => {
+            let id = match robot {
+                RobotRef::Index(id) => id,
+                named => Team::read(&team)
+                    .and_then(|t| t.robot(&named))
+                    .with_context(|| format!("agent {named}"))?,
+            };
+            let stdin = std::io::BufReader::new(std::io::stdin());
+            let served = serve::serve(&team, id, stdin, &mut std::io::stdout());
+            (id, served.map(|_| ()))
+        }
         AgentArgs {
             team: Some(team),
             id: Some(robot),
@@ -50,6 +67,7 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
             index: Some(index),
             scenario: Some(scenario),
             scenario_digest: Some(digest),
+            serve: false,
         } => (index, agent::run(&run, index, &scenario, &digest)),
         _ => usage_bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
     };

@@ -76,6 +76,7 @@ pub struct PrimalMethod;
 impl TeamMethod for PrimalMethod {
     type Settings = PrimalSettings;
     const PENALTY: bool = true;
+    const NEW_COSTS: bool = true;
 
     fn payload_len(&self, robots: usize, tasks: usize) -> usize {
         robots * tasks

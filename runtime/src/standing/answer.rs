@@ -1,0 +1,57 @@
+//! What a robot of a standing team gets back from an episode ([`Answer`]), and the rows it
+//! cannot give ([`RowError`]).
+
+use serde::Serialize;
+
+/// What one robot learns from one episode.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Answer {
+    /// The episode's number (from 0).
+    pub episode: u64,
+    /// This robot.
+    pub robot: usize,
+    /// Its task (`None`: the team solved nothing this episode, or the problem had no
+    /// feasible assignment).
+    pub task: Option<usize>,
+    /// The team proved the assignment optimal (the decentralized certified stop); `false`
+    /// at the round limit, where the robots' choices may conflict.
+    pub certified: bool,
+    /// Rounds the method ran this episode.
+    pub rounds: u64,
+    /// Rounds the team spent agreeing on its scale before, and on its total after.
+    pub agreement_rounds: u64,
+    /// This robot's cost of its task (its own number).
+    pub cost: Option<f64>,
+    /// The team's total cost (a profit with `maximize`), from every robot's own cost.
+    pub total_cost: Option<f64>,
+    /// Every robot's task, when the round message has room for it.
+    pub assignment: Option<Vec<usize>>,
+    /// `false`: the stacked rows have no assignment that avoids every forbidden pair.
+    pub feasible: bool,
+    /// Robots whose programs gave no row in time: the team solved nothing this episode.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub missing: Vec<usize>,
+    /// Robots that left (their programs closed their input): the team has ended.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub left: Vec<usize>,
+    /// Milliseconds from this robot's row to its answer.
+    pub ms: f64,
+}
+
+impl Answer {
+    /// The team has ended (a robot left): no further episode.
+    pub fn ended(&self) -> bool {
+        !self.left.is_empty()
+    }
+}
+
+/// A row a robot cannot give: the team never sees it (the robot may give another).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RowError {
+    #[error("{got} costs for {tasks} tasks")]
+    Length { got: usize, tasks: usize },
+    #[error("cost {index} is {value}: give a finite number (null for a forbidden task)")]
+    NotFinite { index: usize, value: f64 },
+    #[error("the team has ended (robot(s) {0:?} left)")]
+    Ended(Vec<usize>),
+}

@@ -1,0 +1,183 @@
+//! The sidecar protocol: `admm-ta agent --team FILE --id I --serve` runs robot `I` of a
+//! private team ([`crate::standing`]) for a robot program in any language, one JSON object
+//! per line each way.
+//!
+//! **Out** (standard output), one line each:
+//! * once joined: `{"ready": true, "robot": I, "robots": N, "tasks": M, "episode_timeout": S}`;
+//! * per episode, the [`Answer`]: `{"episode": k, "robot": I, "task": j or null,
+//!   "certified": bool, "rounds": r, "agreement_rounds": a, "cost": c, "total_cost": C,
+//!   "assignment": [...], "feasible": bool, "ms": t}` (plus `"missing": [...]` when robots
+//!   gave no row in time: nothing was solved, and `"left": [...]` when robots left: the team
+//!   has ended and the sidecar exits 0);
+//! * a row it cannot use: `{"error": "...", "episode": k, "robot": I}`; the team keeps
+//!   waiting for a valid row until the episode deadline.
+//!
+//! **In** (standard input), one line per episode: `{"costs": [c_0, …, c_{M−1}]}`, numbers,
+//! `null` for a task this robot may not take. No row within the team file's
+//! `episode_timeout`: the team solves nothing this episode and every robot's answer names
+//! this one in `missing`. End of input: the robot leaves, and the team ends with the next
+//! episode's agreement.
+
+use crate::process::member_error::MemberError;
+use crate::standing::answer::{Answer, RowError};
+use crate::standing::member::TeamMember;
+use serde::Deserialize;
+use std::io::{BufRead, Write};
+use std::path::Path;
+use std::sync::mpsc::{Receiver, RecvTimeoutError, sync_channel};
+use std::time::{Duration, Instant};
+
+/// Longest line read (a row of a million costs fits).
+const MAX_LINE: u64 = 64 << 20;
+
+/// How a served robot ended without failing.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ServeEnd {
+    /// Its program closed its input: it left the team.
+    Left,
+    /// Robots left (these): the team ended.
+    TeamEnded(Vec<usize>),
+    /// Its program stopped reading its answers: it left the team.
+    OutputClosed,
+}
+
+/// One line of a robot program.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RowLine {
+    costs: Vec<Option<f64>>,
+}
+
+enum Input {
+    Line(String),
+    /// End of input, or an input that cannot be read (the same for the robot).
+    End(Option<String>),
+}
+
+/// Reads `input` line by line on its own thread (a blocking read has no deadline).
+fn read_lines(input: impl BufRead + Send + 'static) -> Receiver<Input> {
+    let (sender, receiver) = sync_channel(4);
+    std::thread::Builder::new()
+        .name("serve-input".into())
+        .spawn(move || {
+            let mut input = input;
+            let input = &mut input;
+            loop {
+                let mut line = String::new();
+                let read = std::io::Read::take(&mut *input, MAX_LINE).read_line(&mut line);
+                let message = match read {
+                    Ok(0) => Input::End(None),
+                    Ok(_) if !line.ends_with('\n') && line.len() as u64 >= MAX_LINE => {
+                        Input::End(Some(format!("a line longer than {MAX_LINE} bytes")))
+                    }
+                    Ok(_) => Input::Line(line),
+                    Err(e) => Input::End(Some(e.to_string())),
+                };
+                let end = matches!(message, Input::End(_));
+                if sender.send(message).is_err() || end {
+                    return;
+                }
+            }
+        })
+        .expect("a thread for the robot program's input");
+    receiver
+}
+
+/// Writes one JSON line; `false` when the program no longer reads.
+fn send(output: &mut dyn Write, value: &serde_json::Value) -> bool {
+    writeln!(output, "{value}")
+        .and_then(|()| output.flush())
+        .is_ok()
+}
+
+fn row_error(episode: u64, robot: usize, error: &str) -> serde_json::Value {
+    serde_json::json!({"error": error, "episode": episode, "robot": robot})
+}
+
+/// A line of a robot program that gives no usable row.
+#[derive(Debug, thiserror::Error)]
+enum BadLine {
+    #[error("not a row: {0} (expected {{\"costs\": [numbers or null]}} on one line)")]
+    Json(#[from] serde_json::Error),
+    #[error(transparent)]
+    Row(#[from] RowError),
+}
+
+/// The row in one line, or why it cannot be used.
+fn parse_row(member: &TeamMember, line: &str) -> Result<Vec<Option<f64>>, BadLine> {
+    let row: RowLine = serde_json::from_str(line)?;
+    member.check_row(&row.costs)?;
+    Ok(row.costs)
+}
+
+/// Serves robot `id` of the private team in `team_path` to the program on the other end of
+/// `input` and `output` until it closes its input, the team ends, or the run fails.
+pub fn serve(
+    team_path: &Path,
+    id: usize,
+    input: impl BufRead + Send + 'static,
+    output: &mut dyn Write,
+) -> Result<ServeEnd, MemberError> {
+    let mut member = TeamMember::join(team_path, id)?;
+    let ready = serde_json::json!({
+        "ready": true,
+        "robot": id,
+        "robots": member.robots(),
+        "tasks": member.tasks(),
+        "episode_timeout": member.episode_timeout().as_secs_f64(),
+    });
+    if !send(output, &ready) {
+        member.leave()?;
+        return Ok(ServeEnd::OutputClosed);
+    }
+    let lines = read_lines(input);
+    let mut episode = 0u64;
+    loop {
+        let deadline = Instant::now() + member.episode_timeout();
+        let answer: Answer = loop {
+            if let Some(signal) = crate::signals::received() {
+                return Err(member.stop(signal));
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                tracing::info!(episode, "no row within the episode deadline");
+                break member.abstain()?;
+            }
+            let slice = (deadline - now).min(Duration::from_millis(50));
+            match lines.recv_timeout(slice) {
+                Ok(Input::Line(line)) if line.trim().is_empty() => {}
+                Ok(Input::Line(line)) => match parse_row(&member, &line) {
+                    Ok(row) => break member.assign(&row)?,
+                    Err(error) => {
+                        if !send(output, &row_error(episode, id, &error.to_string())) {
+                            member.leave()?;
+                            return Ok(ServeEnd::OutputClosed);
+                        }
+                    }
+                },
+                Ok(Input::End(why)) => {
+                    if let Some(why) = why {
+                        tracing::warn!(error = %why, "the robot program's input failed");
+                    }
+                    member.leave()?;
+                    return Ok(ServeEnd::Left);
+                }
+                Err(RecvTimeoutError::Disconnected) => {
+                    member.leave()?;
+                    return Ok(ServeEnd::Left);
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+            }
+        };
+        episode = answer.episode + 1;
+        let json = serde_json::to_value(&answer).expect("an answer serialises");
+        let delivered = send(output, &json);
+        if answer.ended() {
+            return Ok(ServeEnd::TeamEnded(answer.left));
+        }
+        if !delivered {
+            member.leave()?;
+            return Ok(ServeEnd::OutputClosed);
+        }
+    }
+}

@@ -1,0 +1,490 @@
+//! Standing teams whose robots keep their own costs (`costs = "private"`), each robot an
+//! `admm-ta agent --serve` sidecar driven through its standard input and output, as a robot
+//! program would: every episode's assignment is the centralized optimum of the stacked rows
+//! (which no process of the team ever holds) on uniform, distance, forbidden-pair,
+//! tie-heavy, constant and shifted costs, maximizing too; an infeasible episode says so and
+//! the next one is optimal again; bad rows get an error line and the team waits; a robot
+//! without a row is named by every robot; a robot whose program closes its input ends the
+//! team cleanly, with nothing left in shared memory.
+
+use crate::common;
+
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_topologies::rng::SeededRng;
+use serde_json::Value;
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::Duration;
+
+type Row = Vec<Option<f64>>;
+
+fn admm_ta() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_admm-ta"))
+}
+
+/// A private team's file; `extra` adds keys.
+fn team_file(dir: &Path, run: &str, robots: usize, tasks: usize, extra: &str) -> PathBuf {
+    let path = dir.join("team.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "run = \"{run}\"\nrobots = {robots}\ntasks = {tasks}\ncosts = \"private\"\nstartup_timeout = 30.0\nround_timeout = 20.0\n{extra}"
+        ),
+    )
+    .unwrap();
+    path
+}
+
+/// One robot's sidecar, as its program sees it.
+struct Sidecar {
+    id: usize,
+    child: Child,
+    stdin: Option<ChildStdin>,
+    lines: Receiver<String>,
+}
+
+impl Sidecar {
+    fn start(team: &Path, id: usize) -> Self {
+        let mut child = admm_ta()
+            .args(["agent", "--team", team.to_str().unwrap(), "--id"])
+            .arg(id.to_string())
+            .arg("--serve")
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let stdout = child.stdout.take().unwrap();
+        let (sender, lines) = channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines() {
+                let Ok(line) = line else { return };
+                if sender.send(line).is_err() {
+                    return;
+                }
+            }
+        });
+        let stdin = child.stdin.take();
+        Self {
+            id,
+            child,
+            stdin,
+            lines,
+        }
+    }
+
+    fn send(&mut self, line: &str) {
+        let stdin = self.stdin.as_mut().unwrap();
+        writeln!(stdin, "{line}").unwrap();
+        stdin.flush().unwrap();
+    }
+
+    fn send_row(&mut self, row: &Row) {
+        self.send(&serde_json::json!({ "costs": row }).to_string());
+    }
+
+    /// The next line, within a minute (a test never hangs).
+    fn next(&mut self) -> Value {
+        match self.lines.recv_timeout(Duration::from_secs(60)) {
+            Ok(line) => serde_json::from_str(&line).unwrap_or_else(|e| panic!("{line}: {e}")),
+            Err(_) => {
+                let _ = self.child.kill();
+                let out = self.child.wait_with_output_now();
+                panic!("robot {}: no line within 60 s; stderr: {out}", self.id)
+            }
+        }
+    }
+
+    fn close(&mut self) {
+        self.stdin = None;
+    }
+
+    /// Its exit status, within a minute, and its standard error.
+    fn finish(mut self) -> (std::process::ExitStatus, String) {
+        self.stdin = None;
+        let status = common::wait_with_deadline(&mut self.child, Duration::from_secs(60));
+        (status, self.child.wait_with_output_now())
+    }
+}
+
+trait StderrNow {
+    fn wait_with_output_now(&mut self) -> String;
+}
+
+impl StderrNow for Child {
+    fn wait_with_output_now(&mut self) -> String {
+        let mut text = String::new();
+        if let Some(mut err) = self.stderr.take() {
+            let _ = std::io::Read::read_to_string(&mut err, &mut text);
+        }
+        text
+    }
+}
+
+/// Every program closes its input (all leave at once, in one agreement); every sidecar
+/// must exit 0.
+fn finish_all(mut sidecars: Vec<Sidecar>) {
+    for s in &mut sidecars {
+        s.close();
+    }
+    for s in sidecars {
+        let id = s.id;
+        let (status, stderr) = s.finish();
+        assert!(status.success(), "robot {id}: {status}: {stderr}");
+    }
+}
+
+/// Starts every robot's sidecar; each says it is ready.
+fn start_team(team: &Path, robots: usize) -> Vec<Sidecar> {
+    let mut sidecars: Vec<Sidecar> = (0..robots).map(|i| Sidecar::start(team, i)).collect();
+    for s in &mut sidecars {
+        let ready = s.next();
+        assert_eq!(ready["ready"], true, "{ready}");
+        assert_eq!(ready["robot"], s.id);
+    }
+    sidecars
+}
+
+/// One episode: every robot gives its row, then reads its answer.
+fn episode(sidecars: &mut [Sidecar], rows: &[Row]) -> Vec<Value> {
+    for (s, row) in sidecars.iter_mut().zip(rows) {
+        s.send_row(row);
+    }
+    sidecars.iter_mut().map(Sidecar::next).collect()
+}
+
+/// The centralized optimum of the stacked rows (`None`: no feasible assignment).
+fn optimum(rows: &[Row], maximize: bool) -> Option<f64> {
+    let (n, m) = (rows.len(), rows[0].len());
+    let forbidden = if maximize {
+        f64::NEG_INFINITY
+    } else {
+        f64::INFINITY
+    };
+    let values = rows
+        .iter()
+        .flat_map(|r| r.iter().map(|v| v.unwrap_or(forbidden)))
+        .collect();
+    let costs = CostMatrix::new(n, m, values).unwrap();
+    let problem = if maximize {
+        TaskAssignmentProblem::maximizing(costs, CaseChoice::Auto)
+    } else {
+        TaskAssignmentProblem::new(costs, CaseChoice::Auto)
+    }
+    .ok()?;
+    Some(oracle::solve(&problem).unwrap().cost)
+}
+
+/// Every robot certified the same assignment, its own task in it, at the optimum.
+fn assert_optimal(answers: &[Value], rows: &[Row], maximize: bool, what: &str) {
+    let best = optimum(rows, maximize).expect("a feasible episode");
+    let assignment = &answers[0]["assignment"];
+    for (i, a) in answers.iter().enumerate() {
+        assert_eq!(a["certified"], true, "{what}: robot {i}: {a}");
+        assert_eq!(a["feasible"], true, "{what}: robot {i}: {a}");
+        assert_eq!(&a["assignment"], assignment, "{what}: robot {i}: {a}");
+        assert_eq!(a["task"], assignment[i], "{what}: robot {i}: {a}");
+        let total = a["total_cost"].as_f64().unwrap();
+        assert!(
+            common::relative_gap(total, best) <= 1e-9,
+            "{what}: robot {i} reports {total}, the optimum is {best}"
+        );
+        let task = a["task"].as_u64().unwrap() as usize;
+        assert_eq!(a["cost"].as_f64(), rows[i][task], "{what}: robot {i}");
+    }
+}
+
+/// Shared-memory files of the team `run`.
+fn shm_of(run: &str) -> Vec<String> {
+    std::fs::read_dir("/dev/shm")
+        .map(|entries| {
+            entries
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|name| name.contains(run))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+fn uniform(rng: &mut SeededRng, n: usize, m: usize, scale: f64, shift: f64) -> Vec<Row> {
+    (0..n)
+        .map(|_| {
+            (0..m)
+                .map(|_| Some(shift + scale * rng.uniform()))
+                .collect()
+        })
+        .collect()
+}
+
+fn distances(rng: &mut SeededRng, n: usize, m: usize) -> Vec<Row> {
+    let robots: Vec<(f64, f64)> = (0..n).map(|_| (rng.uniform(), rng.uniform())).collect();
+    let tasks: Vec<(f64, f64)> = (0..m).map(|_| (rng.uniform(), rng.uniform())).collect();
+    robots
+        .iter()
+        .map(|r| {
+            tasks
+                .iter()
+                .map(|t| Some(((r.0 - t.0).powi(2) + (r.1 - t.1).powi(2)).sqrt() * 100.0))
+                .collect()
+        })
+        .collect()
+}
+
+/// Integer costs in 1..=levels: many ties.
+fn ties(rng: &mut SeededRng, n: usize, m: usize, levels: usize) -> Vec<Row> {
+    (0..n)
+        .map(|_| {
+            (0..m)
+                .map(|_| Some(1.0 + rng.below(levels) as f64))
+                .collect()
+        })
+        .collect()
+}
+
+/// Integer costs with about `share` of the pairs forbidden, feasible.
+fn forbidden(rng: &mut SeededRng, n: usize, m: usize, share: f64) -> Vec<Row> {
+    loop {
+        let rows: Vec<Row> = (0..n)
+            .map(|_| {
+                (0..m)
+                    .map(|_| (rng.uniform() >= share).then(|| rng.below(20) as f64))
+                    .collect()
+            })
+            .collect();
+        if optimum(&rows, false).is_some() {
+            return rows;
+        }
+    }
+}
+
+#[test]
+fn private_rows_reach_the_optimum_of_the_stacked_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("priv-{}", std::process::id());
+    let (n, m) = (7, 5);
+    let team = team_file(dir.path(), &run, n, m, "topology = \"ring\"\nseed = 3\n");
+    let mut team_of = start_team(&team, n);
+    let mut rng = SeededRng::new(11);
+    let mut cases: Vec<(&str, Vec<Row>)> = vec![
+        ("uniform", uniform(&mut rng, n, m, 1.0, 0.0)),
+        ("uniform again", uniform(&mut rng, n, m, 1.0, 0.0)),
+        ("distance", distances(&mut rng, n, m)),
+        ("ties", ties(&mut rng, n, m, 3)),
+        ("forbidden", forbidden(&mut rng, n, m, 0.5)),
+        ("shifted", uniform(&mut rng, n, m, 1e-3, 1e9)),
+        ("negative", uniform(&mut rng, n, m, 50.0, -80.0)),
+        ("constant", vec![vec![Some(4.0); m]; n]),
+    ];
+    // A small change of the last costs (a warm episode).
+    let mut drift = cases[2].1.clone();
+    for row in &mut drift {
+        for v in row.iter_mut().flatten() {
+            *v += rng.uniform();
+        }
+    }
+    cases.insert(3, ("distance, moved", drift));
+    for (what, rows) in &cases {
+        let answers = episode(&mut team_of, rows);
+        assert_optimal(&answers, rows, false, what);
+    }
+    // No robot may do task 0: no feasible assignment, said by every robot.
+    let mut infeasible = uniform(&mut rng, n, m, 1.0, 0.0);
+    for row in &mut infeasible {
+        row[0] = None;
+    }
+    for a in episode(&mut team_of, &infeasible) {
+        assert_eq!(a["feasible"], false, "{a}");
+        assert_eq!(a["certified"], false, "{a}");
+        assert!(a["task"].is_null(), "{a}");
+    }
+    // And the next episode is optimal again.
+    let rows = distances(&mut rng, n, m);
+    assert_optimal(
+        &episode(&mut team_of, &rows),
+        &rows,
+        false,
+        "after infeasible",
+    );
+    finish_all(team_of);
+    assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
+}
+
+#[test]
+fn private_profits_are_maximised_on_a_complete_graph() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("privmax-{}", std::process::id());
+    let n = 5;
+    let team = team_file(
+        dir.path(),
+        &run,
+        n,
+        n,
+        "maximize = true\nwarm_start = false\n",
+    );
+    let mut team_of = start_team(&team, n);
+    let mut rng = SeededRng::new(4);
+    for k in 0..4 {
+        let rows = if k % 2 == 0 {
+            uniform(&mut rng, n, n, 10.0, 0.0)
+        } else {
+            forbidden(&mut rng, n, n, 0.3)
+        };
+        assert_optimal(&episode(&mut team_of, &rows), &rows, true, "maximize");
+    }
+    finish_all(team_of);
+}
+
+/// 100 consecutive episodes of a 10-robot standing team with costs changing every episode:
+/// every one optimal, nothing left in shared memory afterwards.
+#[test]
+fn a_hundred_episodes_of_ten_robots() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("priv100-{}", std::process::id());
+    let (n, m) = (10, 8);
+    let team = team_file(
+        dir.path(),
+        &run,
+        n,
+        m,
+        "topology = \"random:0.4\"\nseed = 9\n",
+    );
+    let mut team_of = start_team(&team, n);
+    let mut rng = SeededRng::new(100);
+    let mut rows = distances(&mut rng, n, m);
+    for k in 0..100 {
+        for row in &mut rows {
+            for v in row.iter_mut().flatten() {
+                *v = (*v + 4.0 * (rng.uniform() - 0.5)).max(0.0);
+            }
+        }
+        let answers = episode(&mut team_of, &rows);
+        assert_optimal(&answers, &rows, false, &format!("episode {k}"));
+        assert_eq!(answers[0]["episode"], k);
+    }
+    finish_all(team_of);
+    assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
+}
+
+/// Bad rows get an error line and change nothing; a robot without a row by the deadline is
+/// named by every robot; a robot whose program closes its input ends the team, cleanly.
+#[test]
+fn bad_rows_missing_rows_and_leaving() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("privfault-{}", std::process::id());
+    let (n, m) = (4, 4);
+    let team = team_file(
+        dir.path(),
+        &run,
+        n,
+        m,
+        "topology = \"ring\"\nepisode_timeout = 3.0\n",
+    );
+    let mut team_of = start_team(&team, n);
+    let mut rng = SeededRng::new(2);
+    let rows = uniform(&mut rng, n, m, 1.0, 0.0);
+    for bad in [
+        "not json",
+        "{\"costs\": [1, 2]}",
+        "{\"cost\": [1, 2, 3, 4]}",
+        "{\"costs\": [1, 2, \"x\", 4]}",
+        "[1, 2, 3, 4]",
+    ] {
+        team_of[2].send(bad);
+        let error = team_of[2].next();
+        let text = error["error"].as_str().unwrap_or_else(|| panic!("{error}"));
+        assert!(!text.is_empty() && error["episode"] == 0, "{error}");
+    }
+    assert_optimal(
+        &episode(&mut team_of, &rows),
+        &rows,
+        false,
+        "after bad rows",
+    );
+    // Robot 3's program gives no row in episode 1.
+    let started = std::time::Instant::now();
+    for s in &mut team_of[..3] {
+        s.send_row(&rows[s.id]);
+    }
+    for s in &mut team_of {
+        let a = s.next();
+        assert_eq!(a["missing"], serde_json::json!([3]), "{a}");
+        assert!(a["task"].is_null() && a["episode"] == 1, "{a}");
+    }
+    assert!(
+        started.elapsed() >= Duration::from_secs(2),
+        "the deadline is 3 s"
+    );
+    let rows = uniform(&mut rng, n, m, 1.0, 0.0);
+    assert_optimal(
+        &episode(&mut team_of, &rows),
+        &rows,
+        false,
+        "after a missing row",
+    );
+    // Robot 1's program ends; the others learn it in the next episode's agreement.
+    team_of[1].close();
+    for s in team_of.iter_mut().filter(|s| s.id != 1) {
+        s.send_row(&rows[s.id]);
+    }
+    for s in team_of.iter_mut().filter(|s| s.id != 1) {
+        let a = s.next();
+        assert_eq!(a["left"], serde_json::json!([1]), "{a}");
+    }
+    finish_all(team_of);
+    assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
+}
+
+#[test]
+fn private_teams_refuse_what_they_cannot_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("", vec!["agent", "--id", "0"], "start them with --serve"),
+        ("", vec!["collect"], "no results to collect"),
+        (
+            "method = \"dual\"\n",
+            vec!["agent", "--id", "0", "--serve"],
+            "cannot keep costs private",
+        ),
+        (
+            "forbidden = \"pairs.txt\"\n",
+            vec!["agent", "--id", "0", "--serve"],
+            "null for a forbidden task",
+        ),
+    ];
+    for (extra, args, expected) in cases {
+        let team = team_file(dir.path(), "privrefuse", 4, 4, extra);
+        let out = admm_ta()
+            .args(&args[..1])
+            .args(["--team", team.to_str().unwrap()])
+            .args(&args[1..])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+    }
+    // Too small a message for the agreement.
+    let team = dir.path().join("small.toml");
+    std::fs::write(
+        &team,
+        "run = \"privsmall\"\nrobots = 3\ntasks = 1\ncosts = \"private\"\n",
+    )
+    .unwrap();
+    let out = admm_ta()
+        .args([
+            "agent",
+            "--team",
+            team.to_str().unwrap(),
+            "--id",
+            "0",
+            "--serve",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("at least 2 tasks"));
+}
