@@ -488,3 +488,106 @@ fn private_teams_refuse_what_they_cannot_do() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("at least 2 tasks"));
 }
+
+/// The same standing team across two hosts (every agent on Zenoh, and iceoryx2 per host with
+/// a bridge between them), on one machine over loopback: every episode optimal, and every
+/// host ends once its robots have left.
+#[cfg(feature = "zenoh")]
+#[test]
+fn a_private_team_across_two_hosts() {
+    for transport in ["zenoh", "mixed"] {
+        let dir = tempfile::tempdir().unwrap();
+        let run = format!("privz{}-{}", &transport[..1], std::process::id());
+        let (n, m) = (6, 5);
+        let mut hosts_text = format!("topology = \"ring\"\ntransport = \"{transport}\"\n");
+        for (name, agents) in [("alpha", "[0, 1, 2]"), ("beta", "[3, 4, 5]")] {
+            hosts_text += &format!(
+                "\n[[hosts]]\nname = \"{name}\"\nagents = {agents}\nendpoint = \"tcp/127.0.0.1:{}\"\n",
+                common::loopback_port()
+            );
+        }
+        let team = team_file(dir.path(), &run, n, m, &hosts_text);
+        let mut hosts: Vec<Child> = ["alpha", "beta"]
+            .iter()
+            .map(|name| {
+                admm_ta()
+                    .args(["host", "--team", team.to_str().unwrap(), "--name", name])
+                    .stdout(Stdio::null())
+                    .stderr(Stdio::piped())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        let mut team_of = start_team(&team, n);
+        let mut rng = SeededRng::new(21);
+        for k in 0..4 {
+            let rows = match k {
+                0 => uniform(&mut rng, n, m, 1.0, 0.0),
+                1 => distances(&mut rng, n, m),
+                2 => forbidden(&mut rng, n, m, 0.4),
+                _ => ties(&mut rng, n, m, 2),
+            };
+            let what = format!("{transport} episode {k}");
+            assert_optimal(&episode(&mut team_of, &rows), &rows, false, &what);
+        }
+        finish_all(team_of);
+        for host in &mut hosts {
+            let status = common::wait_with_deadline(host, Duration::from_secs(60));
+            assert!(
+                status.success(),
+                "{transport}: {}",
+                host.wait_with_output_now()
+            );
+        }
+        assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
+    }
+}
+
+/// A termination signal to one robot's sidecar stops the whole team, idle between episodes
+/// as it is, each sidecar saying why on its output; a robot whose process dies is named by
+/// the others at the next episode. Nothing is left in shared memory either way.
+#[test]
+fn a_signal_or_a_dead_robot_stops_the_standing_team() {
+    let dir = tempfile::tempdir().unwrap();
+    for kill in [libc::SIGTERM, libc::SIGKILL] {
+        let run = format!("privsig{kill}-{}", std::process::id());
+        let n = 4;
+        let team = team_file(dir.path(), &run, n, n, "topology = \"ring\"\n");
+        let mut team_of = start_team(&team, n);
+        let mut rng = SeededRng::new(8);
+        let rows = uniform(&mut rng, n, n, 1.0, 0.0);
+        assert_optimal(&episode(&mut team_of, &rows), &rows, false, "before");
+        // SAFETY: signalling a child this test started.
+        unsafe { libc::kill(team_of[2].child.id() as i32, kill) };
+        if kill == libc::SIGKILL {
+            std::thread::sleep(Duration::from_millis(200));
+            for s in team_of.iter_mut().filter(|s| s.id != 2) {
+                s.send_row(&rows[s.id]);
+            }
+        }
+        for s in team_of.iter_mut().filter(|s| s.id != 2) {
+            let a = s.next();
+            assert_eq!(a["failed"], true, "{a}");
+            let error = a["error"].as_str().unwrap();
+            if kill == libc::SIGTERM {
+                assert!(error.contains("SIGTERM"), "{error}");
+            } else {
+                assert!(error.contains('2'), "robot 2 is named: {error}");
+            }
+        }
+        for s in team_of {
+            let id = s.id;
+            let (status, stderr) = s.finish();
+            if kill == libc::SIGTERM {
+                assert_eq!(
+                    status.code(),
+                    Some(128 + libc::SIGTERM),
+                    "robot {id}: {stderr}"
+                );
+            } else if id != 2 {
+                assert_eq!(status.code(), Some(4), "robot {id}: {stderr}");
+            }
+        }
+        assert!(shm_of(&run).is_empty(), "{kill}: {:?}", shm_of(&run));
+    }
+}

@@ -223,8 +223,34 @@ impl TeamMember {
         Ok(())
     }
 
+    /// While the robot waits for its program's row: an error when the team must stop — a
+    /// termination signal to this process (the whole team stops), or, on the team's board, a
+    /// stop request or a failed robot. (A Zenoh team has no board: its robots learn it in
+    /// the next episode's first round.)
+    pub fn check(&mut self) -> Result<(), MemberError> {
+        if self.failed {
+            return Ok(());
+        }
+        if let Some(signal) = crate::signals::received() {
+            return Err(self.stop(signal));
+        }
+        let round = self.rounds.as_ref().map_or(0, RoundLoop::round);
+        let verdict = match self.membership.as_ref().map(Membership::board) {
+            Some(board) => board.check_team(self.id, round),
+            None => Ok(()),
+        };
+        verdict.map_err(|e| {
+            self.failed = true;
+            if let ExchangeError::Stopped { signal, .. } = e {
+                // Another process got the signal: this one ends as if it had.
+                crate::signals::record(signal);
+            }
+            MemberError::failed(e)
+        })
+    }
+
     /// Stops the whole team because this process got termination signal `signal`.
-    pub fn stop(mut self, signal: i32) -> MemberError {
+    pub fn stop(&mut self, signal: i32) -> MemberError {
         crate::signals::record(signal);
         if let Some(board) = self.membership.as_ref().map(Membership::board) {
             let _ = board.request_stop(signal, Some(self.id));

@@ -10,7 +10,10 @@
 //!   gave no row in time: nothing was solved, and `"left": [...]` when robots left: the team
 //!   has ended and the sidecar exits 0);
 //! * a row it cannot use: `{"error": "...", "episode": k, "robot": I}`; the team keeps
-//!   waiting for a valid row until the episode deadline.
+//!   waiting for a valid row until the episode deadline;
+//! * the team failed (a robot's process died, a deadline passed, a signal):
+//!   `{"error": "...", "failed": true, "episode": k, "robot": I}`, and the sidecar exits
+//!   with the code of `agent` (4, or the signal's).
 //!
 //! **In** (standard input), one line per episode: `{"costs": [c_0, …, c_{M−1}]}`, numbers,
 //! `null` for a task this robot may not take. No row within the team file's
@@ -94,6 +97,17 @@ fn row_error(episode: u64, robot: usize, error: &str) -> serde_json::Value {
     serde_json::json!({"error": error, "episode": episode, "robot": robot})
 }
 
+/// The robot program learns why its robot stopped (the same line goes to standard error).
+fn tell_failure(output: &mut dyn Write, episode: u64, robot: usize, error: &MemberError) {
+    let line = serde_json::json!({
+        "error": error.text(),
+        "failed": true,
+        "episode": episode,
+        "robot": robot,
+    });
+    let _ = send(output, &line);
+}
+
 /// A line of a robot program that gives no usable row.
 #[derive(Debug, thiserror::Error)]
 enum BadLine {
@@ -135,19 +149,25 @@ pub fn serve(
     loop {
         let deadline = Instant::now() + member.episode_timeout();
         let answer: Answer = loop {
-            if let Some(signal) = crate::signals::received() {
-                return Err(member.stop(signal));
-            }
+            member
+                .check()
+                .inspect_err(|e| tell_failure(output, episode, id, e))?;
             let now = Instant::now();
             if now >= deadline {
                 tracing::info!(episode, "no row within the episode deadline");
-                break member.abstain()?;
+                break member
+                    .abstain()
+                    .inspect_err(|e| tell_failure(output, episode, id, e))?;
             }
             let slice = (deadline - now).min(Duration::from_millis(50));
             match lines.recv_timeout(slice) {
                 Ok(Input::Line(line)) if line.trim().is_empty() => {}
                 Ok(Input::Line(line)) => match parse_row(&member, &line) {
-                    Ok(row) => break member.assign(&row)?,
+                    Ok(row) => {
+                        break member
+                            .assign(&row)
+                            .inspect_err(|e| tell_failure(output, episode, id, e))?;
+                    }
                     Err(error) => {
                         if !send(output, &row_error(episode, id, &error.to_string())) {
                             member.leave()?;
