@@ -388,7 +388,10 @@ fn bad_rows_missing_rows_and_leaving() {
     let rows = uniform(&mut rng, n, m, 1.0, 0.0);
     for bad in [
         "not json",
-        "{\"costs\": [1, 2]}",
+        "{\"costs\": [1, 2, 3, 4, 5]}",
+        "{\"costs\": []}",
+        "{\"costs\": [1, 2, 3, 4], \"available\": false}",
+        "{\"available\": true}",
         "{\"cost\": [1, 2, 3, 4]}",
         "{\"costs\": [1, 2, \"x\", 4]}",
         "[1, 2, 3, 4]",
@@ -590,4 +593,118 @@ fn a_signal_or_a_dead_robot_stops_the_standing_team() {
         }
         assert!(shm_of(&run).is_empty(), "{kill}: {:?}", shm_of(&run));
     }
+}
+
+/// Every robot that took part certified the optimum of the rows of those that took part;
+/// the others relayed (no task).
+fn assert_optimal_part(answers: &[Value], rows: &[Option<Row>], what: &str) {
+    let taking: Vec<Row> = rows.iter().flatten().cloned().collect();
+    let best = optimum(&taking, false).expect("a feasible episode");
+    let assignment = &answers[0]["assignment"];
+    for (i, a) in answers.iter().enumerate() {
+        assert_eq!(&a["assignment"], assignment, "{what}: robot {i}: {a}");
+        assert_eq!(a["certified"], true, "{what}: robot {i}: {a}");
+        let total = a["total_cost"].as_f64().unwrap();
+        assert!(
+            common::relative_gap(total, best) <= 1e-9,
+            "{what}: robot {i} reports {total}, the optimum is {best}"
+        );
+        match &rows[i] {
+            Some(row) => {
+                let task = a["task"].as_u64().unwrap() as usize;
+                assert_eq!(a["task"], assignment[i], "{what}: robot {i}");
+                assert_eq!(a["cost"].as_f64(), row[task], "{what}: robot {i}");
+            }
+            None => assert!(
+                a["task"].is_null() && assignment[i].is_null(),
+                "{what}: {a}"
+            ),
+        }
+    }
+}
+
+/// Episodes with robots that take no part (unavailable, or without a row and
+/// `on_failure = "continue"`) and with fewer tasks than declared: the optimum of what takes
+/// part; too few robots, or rows of different lengths, solve nothing and say why.
+#[test]
+fn unavailable_robots_missing_rows_and_fewer_tasks() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("privpart-{}", std::process::id());
+    let (n, m) = (6, 5);
+    let team = team_file(
+        dir.path(),
+        &run,
+        n,
+        m,
+        "topology = \"ring\"\non_failure = \"continue\"\nepisode_timeout = 2.0\n",
+    );
+    let mut team_of = start_team(&team, n);
+    let mut rng = SeededRng::new(31);
+    // (robots without a part: unavailable, missing), tasks
+    let plans: [(&[usize], &[usize], usize); 6] = [
+        (&[], &[], 5),
+        (&[2], &[], 5),
+        (&[], &[], 3),
+        (&[1, 4], &[], 4),
+        (&[], &[3], 5),
+        (&[], &[], 5),
+    ];
+    for (k, (unavailable, missing, tasks)) in plans.iter().enumerate() {
+        let full = distances(&mut rng, n, *tasks);
+        let rows: Vec<Option<Row>> = (0..n)
+            .map(|i| (!unavailable.contains(&i) && !missing.contains(&i)).then(|| full[i].clone()))
+            .collect();
+        for s in &mut team_of {
+            match &rows[s.id] {
+                Some(row) => s.send_row(row),
+                None if unavailable.contains(&s.id) => s.send("{\"available\": false}"),
+                None => {}
+            }
+        }
+        let answers: Vec<Value> = team_of.iter_mut().map(Sidecar::next).collect();
+        let what = format!("episode {k}");
+        assert_optimal_part(&answers, &rows, &what);
+        for a in &answers {
+            assert_eq!(
+                a["unavailable"].as_array().map_or(0, Vec::len),
+                unavailable.len()
+            );
+            assert_eq!(a["missing"].as_array().map_or(0, Vec::len), missing.len());
+        }
+    }
+    // Four robots for five tasks: infeasible, said by every robot.
+    let full = uniform(&mut rng, n, m, 1.0, 0.0);
+    for s in &mut team_of {
+        if s.id < 2 {
+            s.send("{\"available\": false}");
+        } else {
+            s.send_row(&full[s.id]);
+        }
+    }
+    for s in &mut team_of {
+        let a = s.next();
+        assert!(a["task"].is_null() && a["feasible"] == false, "{a}");
+        assert!(
+            a["unsolved"].as_str().unwrap().contains("infeasible"),
+            "{a}"
+        );
+    }
+    // Rows of different lengths: nothing solved, and why.
+    for s in &mut team_of {
+        let len = if s.id == 0 { 4 } else { 5 };
+        s.send_row(&full[s.id][..len].to_vec());
+    }
+    for s in &mut team_of {
+        let a = s.next();
+        assert!(a["task"].is_null(), "{a}");
+        assert!(
+            a["unsolved"].as_str().unwrap().contains("4 to 5 costs"),
+            "{a}"
+        );
+    }
+    // And everybody again.
+    let rows = uniform(&mut rng, n, m, 1.0, 0.0);
+    assert_optimal(&episode(&mut team_of, &rows), &rows, false, "all again");
+    finish_all(team_of);
+    assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
 }

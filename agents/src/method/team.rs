@@ -91,6 +91,11 @@ pub trait TeamMethod: Sync + 'static {
     /// robots keep their costs private, need it.
     const NEW_COSTS: bool = false;
 
+    /// Whether its round message is the team's `m × n` assignment matrix (column-major
+    /// tasks × robots), so that a team may run it on part of its robots and tasks
+    /// ([`crate::method::masked`]).
+    const MASKABLE: bool = false;
+
     /// Values of the payload exchanged every round, for `(robots, tasks)`.
     fn payload_len(&self, robots: usize, tasks: usize) -> usize;
 
@@ -140,6 +145,8 @@ pub trait AnyTeamMethod: Sync {
     fn penalty(&self) -> bool;
     /// Its agents take new own costs between episodes ([`TeamMethod::NEW_COSTS`]).
     fn new_costs(&self) -> bool;
+    /// Its message is the team's assignment matrix ([`TeamMethod::MASKABLE`]).
+    fn maskable(&self) -> bool;
     fn payload_len(&self, robots: usize, tasks: usize) -> usize;
     /// The method with the `given` settings (each must be one of its own), checked.
     fn configure(
@@ -217,6 +224,9 @@ impl<M: TeamMethod> AnyTeamMethod for M {
     }
     fn new_costs(&self) -> bool {
         M::NEW_COSTS
+    }
+    fn maskable(&self) -> bool {
+        M::MASKABLE
     }
     fn payload_len(&self, robots: usize, tasks: usize) -> usize {
         TeamMethod::payload_len(self, robots, tasks)

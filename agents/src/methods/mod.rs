@@ -109,6 +109,12 @@ impl Method {
         self.team().is_some_and(|t| t.new_costs())
     }
 
+    /// Whether a team may run it on part of its robots and tasks (its message is the team's
+    /// assignment matrix).
+    pub fn maskable(self) -> bool {
+        self.team().is_some_and(|t| t.maskable())
+    }
+
     /// Length of the payload exchanged every round (0: no messages).
     pub fn payload_len(self, robots: usize, tasks: usize) -> usize {
         self.team().map_or(0, |t| t.payload_len(robots, tasks))

@@ -30,7 +30,7 @@ use serde::Serialize;
 use std::time::Duration;
 
 /// What the team does when an agent fails.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum OnFailure {
     /// Stop every agent and report the failure (the default).

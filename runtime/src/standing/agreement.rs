@@ -4,10 +4,10 @@
 //! commutative, associative and idempotent.
 //!
 //! * **Before** the episode ([`Opening`]): the scale of the stacked rows
-//!   ([`TeamScale`]: lowest and highest allowed cost, their lattice) and who has no row this
-//!   episode (its program sent none in time) or is leaving the team (its program closed its
-//!   input): two bits per robot, 26 robots per word (integers below 2⁵³ are exact in an
-//!   `f64`).
+//!   ([`TeamScale`]: lowest and highest allowed cost, their lattice), the shortest and the
+//!   longest row (the episode's tasks), and who has no row (its program sent none in time),
+//!   takes no task (unavailable: it relays) or leaves the team (its program closed its
+//!   input): bits, 52 per word (integers below 2⁵³ are exact in an `f64`).
 //! * **After** the episode ([`Closing`]): every robot's cost of its own task (`+∞` when that
 //!   pair is forbidden: the problem had no feasible assignment) and, when the message has
 //!   room, its task: the team's total cost and assignment, which every robot then reports.
@@ -16,12 +16,13 @@
 
 use admm_ta_agents::problem::private::TeamScale;
 
-/// Robots per status word (two bits each, below 2⁵³).
-const ROBOTS_PER_WORD: usize = 26;
+/// Bits per word (integers below 2⁵³ are exact in an `f64`).
+const BITS_PER_WORD: usize = 52;
 
-/// Values the opening agreement of a team of `robots` needs in a message.
-pub fn opening_words(robots: usize) -> usize {
-    TeamScale::WORDS + robots.div_ceil(ROBOTS_PER_WORD)
+/// Values the opening agreement of a team of `robots` and up to `tasks` tasks needs in a
+/// message.
+pub fn opening_words(robots: usize, tasks: usize) -> usize {
+    TeamScale::WORDS + (2 * tasks + 3 * robots).div_ceil(BITS_PER_WORD)
 }
 
 /// What the robots flood: written into a message, merged from a neighbour's.
@@ -32,82 +33,117 @@ pub trait Flooded {
     fn merge(&mut self, words: &[f64]);
 }
 
-/// What a robot knows before an episode: the team's scale and who takes no part.
+/// How a robot takes part in an episode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Presence {
+    /// It gave a row of `len` costs.
+    Row { len: usize },
+    /// Its program gave no row in time.
+    Missing,
+    /// It takes no task this episode and relays for its neighbours.
+    Unavailable,
+    /// Its program closed its input: it leaves the team.
+    Leaving,
+}
+
+/// What a robot knows before an episode: the team's scale, the rows' lengths and who
+/// takes no part. The bits: `[0, m)` "some row is longer than `j`" and `[m, 2m)` "some row
+/// is shorter than `m − j`" (thermometer codes: their OR is the longest and the shortest
+/// row), then three per robot (missing, unavailable, leaving).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Opening {
     pub scale: TeamScale,
-    /// Per word, two bits per robot: `01` no row this episode, `10` leaving the team.
-    status: Vec<u64>,
+    tasks: usize,
+    robots: usize,
+    bits: Vec<u64>,
 }
 
 impl Opening {
-    /// Robot `index`'s own opening: its row's scale (`None`: it has no row this episode),
-    /// and whether it leaves.
-    pub fn own(robots: usize, index: usize, scale: Option<TeamScale>, leaving: bool) -> Self {
-        let mut status = vec![0u64; robots.div_ceil(ROBOTS_PER_WORD)];
-        let bits = u64::from(scale.is_none() && !leaving) | (u64::from(leaving) << 1);
-        status[index / ROBOTS_PER_WORD] |= bits << (2 * (index % ROBOTS_PER_WORD));
-        Self {
-            scale: scale.unwrap_or(TeamScale::EMPTY),
-            status,
+    /// Robot `index`'s own opening: how it takes part, and its row's scale.
+    pub fn own(
+        robots: usize,
+        tasks: usize,
+        index: usize,
+        presence: Presence,
+        scale: TeamScale,
+    ) -> Self {
+        let mut own = Self {
+            scale,
+            tasks,
+            robots,
+            bits: vec![0; (2 * tasks + 3 * robots).div_ceil(BITS_PER_WORD)],
+        };
+        let status = 2 * tasks + 3 * index;
+        match presence {
+            Presence::Row { len } => {
+                for j in 0..len.min(tasks) {
+                    own.set(j);
+                }
+                for j in 0..tasks.saturating_sub(len) {
+                    own.set(tasks + j);
+                }
+            }
+            Presence::Missing => own.set(status),
+            Presence::Unavailable => own.set(status + 1),
+            Presence::Leaving => own.set(status + 2),
         }
+        own
+    }
+
+    fn set(&mut self, bit: usize) {
+        self.bits[bit / BITS_PER_WORD] |= 1 << (bit % BITS_PER_WORD);
+    }
+
+    fn get(&self, bit: usize) -> bool {
+        self.bits[bit / BITS_PER_WORD] >> (bit % BITS_PER_WORD) & 1 != 0
     }
 
     fn write_words(&self, out: &mut [f64]) {
         self.scale.write(out);
-        for (slot, word) in out[TeamScale::WORDS..].iter_mut().zip(&self.status) {
+        for (slot, word) in out[TeamScale::WORDS..].iter_mut().zip(&self.bits) {
             *slot = *word as f64;
         }
     }
 
     fn merge_words(&mut self, words: &[f64]) {
         self.scale.join(&TeamScale::read(words));
-        for (word, theirs) in self.status.iter_mut().zip(&words[TeamScale::WORDS..]) {
-            // A corrupt word cannot set bits beyond the team's robots.
-            if theirs.is_finite() && *theirs >= 0.0 && *theirs < (1u64 << 52) as f64 {
+        let limit = (1u64 << BITS_PER_WORD) as f64;
+        for (word, theirs) in self.bits.iter_mut().zip(&words[TeamScale::WORDS..]) {
+            // A corrupt word cannot set bits beyond a word's.
+            if theirs.is_finite() && *theirs >= 0.0 && *theirs < limit {
                 *word |= *theirs as u64;
             }
         }
     }
 
-    fn with_bit(&self, bit: u64) -> Vec<usize> {
-        let mut robots = Vec::new();
-        for (w, word) in self.status.iter().enumerate() {
-            for k in 0..ROBOTS_PER_WORD {
-                if word >> (2 * k) & bit != 0 {
-                    robots.push(w * ROBOTS_PER_WORD + k);
-                }
-            }
-        }
-        robots
+    fn status(&self, offset: usize) -> Vec<usize> {
+        (0..self.robots)
+            .filter(|i| self.get(2 * self.tasks + 3 * i + offset))
+            .collect()
     }
 
     /// The robots with no row this episode.
     pub fn missing(&self) -> Vec<usize> {
-        self.with_bit(1)
+        self.status(0)
+    }
+
+    /// The robots that take no task this episode and relay.
+    pub fn unavailable(&self) -> Vec<usize> {
+        self.status(1)
     }
 
     /// The robots leaving the team.
     pub fn leaving(&self) -> Vec<usize> {
-        self.with_bit(2)
+        self.status(2)
     }
-}
 
-impl Flooded for Opening {
-    fn write(&self, out: &mut [f64]) {
-        self.write_words(out)
-    }
-    fn merge(&mut self, words: &[f64]) {
-        self.merge_words(words)
-    }
-}
-
-impl Flooded for Closing {
-    fn write(&self, out: &mut [f64]) {
-        self.write_words(out)
-    }
-    fn merge(&mut self, words: &[f64]) {
-        self.merge_words(words)
+    /// The shortest and the longest row, if any robot gave one.
+    pub fn lengths(&self) -> Option<(usize, usize)> {
+        let longest = (0..self.tasks).filter(|&j| self.get(j)).count();
+        let shortfall = (0..self.tasks)
+            .filter(|&j| self.get(self.tasks + j))
+            .count();
+        (longest > 0).then(|| (self.tasks - shortfall, longest))
     }
 }
 
@@ -115,21 +151,30 @@ impl Flooded for Closing {
 /// the message has room, its task.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Closing {
-    /// Per robot its cost (user's numbers; `+∞`: a forbidden pair; NaN: not heard of yet).
+    /// Per robot its cost (user's numbers; `+∞`: a forbidden pair; 0 for a relay; NaN: not
+    /// heard of yet).
     pub costs: Vec<f64>,
-    /// Per robot its task (NaN: not heard of yet); empty when the message has no room.
+    /// Per robot its task (`−1`: a relay; NaN: not heard of yet); empty when the message
+    /// has no room.
     pub tasks: Vec<f64>,
 }
 
 impl Closing {
-    /// Robot `index`'s own closing, in a message of `payload_len` values.
-    pub fn own(robots: usize, payload_len: usize, index: usize, task: usize, cost: f64) -> Self {
+    /// Robot `index`'s own closing (`task` `None`: a relay), in a message of `payload_len`
+    /// values.
+    pub fn own(
+        robots: usize,
+        payload_len: usize,
+        index: usize,
+        task: Option<usize>,
+        cost: f64,
+    ) -> Self {
         let mut costs = vec![f64::NAN; robots];
         costs[index] = cost;
         let mut tasks = Vec::new();
         if payload_len >= 2 * robots {
             tasks = vec![f64::NAN; robots];
-            tasks[index] = task as f64;
+            tasks[index] = task.map_or(-1.0, |t| t as f64);
         }
         Self { costs, tasks }
     }
@@ -160,11 +205,34 @@ impl Closing {
         complete.then(|| self.costs.iter().sum())
     }
 
-    /// The team's assignment, once every robot is heard of (when the message had room).
-    pub fn assignment(&self) -> Option<Vec<usize>> {
-        let valid = |t: &f64| t.is_finite() && *t >= 0.0 && t.fract() == 0.0;
-        (!self.tasks.is_empty() && self.tasks.iter().all(valid))
-            .then(|| self.tasks.iter().map(|&t| t as usize).collect())
+    /// The team's assignment (`None` for a relay), once every robot is heard of (when the
+    /// message had room).
+    pub fn assignment(&self) -> Option<Vec<Option<usize>>> {
+        let valid = |t: &f64| t.is_finite() && *t >= -1.0 && t.fract() == 0.0;
+        (!self.tasks.is_empty() && self.tasks.iter().all(valid)).then(|| {
+            self.tasks
+                .iter()
+                .map(|&t| (t >= 0.0).then_some(t as usize))
+                .collect()
+        })
+    }
+}
+
+impl Flooded for Opening {
+    fn write(&self, out: &mut [f64]) {
+        self.write_words(out)
+    }
+    fn merge(&mut self, words: &[f64]) {
+        self.merge_words(words)
+    }
+}
+
+impl Flooded for Closing {
+    fn write(&self, out: &mut [f64]) {
+        self.write_words(out)
+    }
+    fn merge(&mut self, words: &[f64]) {
+        self.merge_words(words)
     }
 }
 
@@ -174,38 +242,58 @@ mod tests {
 
     #[test]
     fn openings_merge_to_the_whole_team() {
-        let n = 60;
-        let scales: Vec<Option<TeamScale>> = (0..n)
-            .map(|i| (i % 7 != 3).then(|| TeamScale::of_row(&[Some(i as f64)], false)))
-            .collect();
+        let (n, m) = (60, 7);
         let own: Vec<Opening> = (0..n)
-            .map(|i| Opening::own(n, i, scales[i], i == 41))
+            .map(|i| {
+                let presence = match i {
+                    41 => Presence::Leaving,
+                    17 | 23 => Presence::Unavailable,
+                    _ if i % 7 == 3 => Presence::Missing,
+                    _ => Presence::Row {
+                        len: if i == 5 { 4 } else { 6 },
+                    },
+                };
+                let scale = match presence {
+                    Presence::Row { .. } => TeamScale::of_row(&[Some(i as f64)], false),
+                    _ => TeamScale::EMPTY,
+                };
+                Opening::own(n, m, i, presence, scale)
+            })
             .collect();
-        let mut words = vec![0.0; opening_words(n)];
+        let mut words = vec![0.0; opening_words(n, m)];
         let mut merged = own[0].clone();
         for o in &own[1..] {
             o.write(&mut words);
             merged.merge(&words);
         }
-        let expected: Vec<usize> = (0..n).filter(|i| i % 7 == 3).collect();
-        assert_eq!(merged.missing(), expected);
+        let missing: Vec<usize> = (0..n).filter(|i| i % 7 == 3).collect();
+        assert_eq!(merged.missing(), missing);
+        assert_eq!(merged.unavailable(), vec![17, 23]);
         assert_eq!(merged.leaving(), vec![41]);
+        assert_eq!(merged.lengths(), Some((4, 6)));
         assert_eq!((merged.scale.lo, merged.scale.hi), (0.0, 59.0));
         assert_eq!(merged.scale.step, 1.0);
+        let alone = Opening::own(3, 2, 1, Presence::Missing, TeamScale::EMPTY);
+        assert_eq!(alone.lengths(), None);
+        assert_eq!(
+            opening_words(2, 2),
+            4,
+            "a 2 × 2 team's agreement fits its message"
+        );
     }
 
     #[test]
     fn closings_total_once_complete() {
-        let mut a = Closing::own(3, 9, 0, 2, 1.5);
+        let mut a = Closing::own(3, 9, 0, Some(2), 1.5);
         assert_eq!(a.total(), None);
         let mut words = vec![0.0; 9];
-        Closing::own(3, 9, 1, 0, 2.0).write(&mut words);
+        Closing::own(3, 9, 1, None, 0.0).write(&mut words);
         a.merge(&words);
-        Closing::own(3, 9, 2, 1, -0.5).write(&mut words);
+        Closing::own(3, 9, 2, Some(1), -0.5).write(&mut words);
         a.merge(&words);
-        assert_eq!(a.total(), Some(3.0));
-        assert_eq!(a.assignment(), Some(vec![2, 0, 1]));
-        let narrow = Closing::own(3, 4, 0, 0, 1.0);
+        assert_eq!(a.total(), Some(1.0));
+        assert_eq!(a.assignment(), Some(vec![Some(2), None, Some(1)]));
+        let narrow = Closing::own(3, 4, 0, Some(0), 1.0);
         assert!(narrow.tasks.is_empty() && narrow.assignment().is_none());
     }
 }

@@ -24,13 +24,21 @@ pub struct Answer {
     pub cost: Option<f64>,
     /// The team's total cost (a profit with `maximize`), from every robot's own cost.
     pub total_cost: Option<f64>,
-    /// Every robot's task, when the round message has room for it.
-    pub assignment: Option<Vec<usize>>,
-    /// `false`: the stacked rows have no assignment that avoids every forbidden pair.
+    /// Every robot's task (`None`: it took no part), when the round message has room for it.
+    pub assignment: Option<Vec<Option<usize>>>,
+    /// `false`: the stacked rows have no assignment that avoids every forbidden pair, or
+    /// fewer robots took part than the episode has tasks.
     pub feasible: bool,
-    /// Robots whose programs gave no row in time: the team solved nothing this episode.
+    /// Why the team solved nothing this episode (no task for anybody), if it did not.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unsolved: Option<String>,
+    /// Robots whose programs gave no row in time (they relayed, or the team solved nothing:
+    /// the team file's `on_failure`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub missing: Vec<usize>,
+    /// Robots that took no task this episode and relayed.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unavailable: Vec<usize>,
     /// Robots that left (their programs closed their input): the team has ended.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub left: Vec<usize>,
@@ -48,7 +56,7 @@ impl Answer {
 /// A row a robot cannot give: the team never sees it (the robot may give another).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RowError {
-    #[error("{got} costs for {tasks} tasks")]
+    #[error("{got} costs: give one per task of the episode, 1 to {tasks}")]
     Length { got: usize, tasks: usize },
     #[error("cost {index} is {value}: give a finite number (null for a forbidden task)")]
     NotFinite { index: usize, value: f64 },

@@ -2,23 +2,18 @@
 
 use crate::board::Board;
 use crate::endpoint::AgentEndpoint;
-use crate::exchange::round_loop::{AgentPlan, RoundLoop};
-use crate::exchange::{Exchange, ExchangeError};
+use crate::exchange::ExchangeError;
 use crate::process::connect::connect;
 use crate::process::member_error::MemberError;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::signals::SignalGuard;
-use crate::standing::agreement::{Closing, Flooded, Opening};
+use crate::standing::agreement::Presence;
 use crate::standing::answer::{Answer, RowError};
+use crate::standing::episode::{EpisodeError, Episodes};
 use crate::team::errors::{JoinError, PrivateTeamError, TeamFileError};
 use crate::team::member::{Membership, member_scenario};
 use crate::team::team_file::Team;
-use admm_ta_agents::agent::ConsensusAgent;
-use admm_ta_agents::method::agent::MethodAgent;
-use admm_ta_agents::problem::private::TeamScale;
-use admm_ta_agents::problem::ties;
-use admm_ta_topologies::Graph;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -28,9 +23,11 @@ use std::time::{Duration, Instant};
 ///
 /// Around every episode the team floods, for the graph's diameter `D` rounds each, its
 /// scale (lowest and highest allowed cost and their lattice, so that every robot normalises
-/// its own row as a solve of the stacked rows would) before, and every robot's cost of its
-/// own task after (the total and the feasibility). The method then starts from the last
-/// episode's iterates (`warm_start`, the default) with a fresh certified stop.
+/// its own row as a solve of the stacked rows would), the episode's tasks and who takes no
+/// part before, and every robot's cost of its own task after (the total and the
+/// feasibility) — [`crate::standing::agreement`]. The method then starts from the last
+/// episode's iterates (`warm_start`, the default, when the same robots and tasks take part)
+/// with a fresh certified stop.
 ///
 /// ```no_run
 /// use admm_ta_runtime::standing::TeamMember;
@@ -42,26 +39,13 @@ use std::time::{Duration, Instant};
 ///     let answer = me.assign(&row)?;
 ///     println!("episode {}: task {:?}, certified {}", answer.episode, answer.task, answer.certified);
 /// }
+/// me.unavailable()?; // an episode without this robot: it relays for its neighbours
 /// me.leave()?;
 /// # Ok(()) }
 /// ```
 pub struct TeamMember {
-    id: usize,
-    robots: usize,
-    tasks: usize,
-    maximize: bool,
-    warm: bool,
-    seed: u64,
-    episode_timeout: Duration,
-    round_timeout: Duration,
+    episodes: Episodes,
     scenario: Scenario,
-    graph: Graph,
-    plan: AgentPlan,
-    agent: MethodAgent,
-    rounds: Option<RoundLoop>,
-    /// Room for one round message (the agreement's).
-    message: Vec<f64>,
-    solved: u64,
     episode: u64,
     /// Robots that left: the team has ended.
     left: Vec<usize>,
@@ -92,6 +76,7 @@ impl TeamMember {
                 robots: n,
             }));
         }
+        let options = team.solve_options().map_err(MemberError::refused)?;
         let host = team
             .file
             .transport
@@ -114,8 +99,6 @@ impl TeamMember {
             None
         };
         let plan = scenario.plan(id).map_err(MemberError::refused)?;
-        // Built from the team's shape (no costs); each episode gives it its own row.
-        let agent = scenario.agent(id).map_err(MemberError::refused)?;
         let endpoint = match connect(&scenario, &graph, id, &namespace.dir, false, deadline) {
             Ok(endpoint) => endpoint,
             Err(e) => {
@@ -128,21 +111,24 @@ impl TeamMember {
         tracing::debug!(robot = id, "joined the standing team");
         let payload_len = scenario.payload_len();
         Ok(Self {
-            id,
-            robots: n,
-            tasks: scenario.tasks,
-            maximize: team.file.maximize,
-            warm: team.file.warm_start,
-            seed: team.file.seed,
-            episode_timeout: Duration::from_secs_f64(team.file.episode_timeout),
-            round_timeout: Duration::from_millis(scenario.round_timeout_ms),
+            episodes: Episodes {
+                id,
+                robots: n,
+                tasks: scenario.tasks,
+                maximize: team.file.maximize,
+                warm: team.file.warm_start,
+                seed: team.file.seed,
+                on_failure: team.file.on_failure.unwrap_or_default(),
+                episode_timeout: Duration::from_secs_f64(team.file.episode_timeout),
+                round_timeout: Duration::from_millis(scenario.round_timeout_ms),
+                options,
+                graph,
+                plan,
+                agent: None,
+                rounds: None,
+                message: vec![0.0; payload_len],
+            },
             scenario,
-            graph,
-            plan,
-            agent,
-            rounds: None,
-            message: vec![0.0; payload_len],
-            solved: 0,
             episode: 0,
             left: Vec::new(),
             failed: false,
@@ -155,22 +141,22 @@ impl TeamMember {
 
     /// This robot's number.
     pub fn id(&self) -> usize {
-        self.id
+        self.episodes.id
     }
 
-    /// Costs per row.
+    /// The most costs a row may have (the team's declared number of tasks).
     pub fn tasks(&self) -> usize {
-        self.tasks
+        self.episodes.tasks
     }
 
     /// The team's robots.
     pub fn robots(&self) -> usize {
-        self.robots
+        self.episodes.robots
     }
 
     /// How long the team waits for a robot's row ([`TeamMember::abstain`] when it has none).
     pub fn episode_timeout(&self) -> Duration {
-        self.episode_timeout
+        self.episodes.episode_timeout
     }
 
     /// Checks `row` as [`TeamMember::assign`] would, without the team.
@@ -178,10 +164,10 @@ impl TeamMember {
         if !self.left.is_empty() {
             return Err(RowError::Ended(self.left.clone()));
         }
-        if row.len() != self.tasks {
+        if row.is_empty() || row.len() > self.tasks() {
             return Err(RowError::Length {
                 got: row.len(),
-                tasks: self.tasks,
+                tasks: self.tasks(),
             });
         }
         match row
@@ -197,28 +183,33 @@ impl TeamMember {
         }
     }
 
-    /// One episode with this robot's `row` (`None`: a task it may not take): its task once
-    /// the team has agreed. A row that cannot be used is refused before the team sees it
-    /// ([`RowError`], inside [`MemberError::Refused`]).
+    /// One episode with this robot's `row`, one cost per task of the episode (every robot
+    /// gives as many; at most the team's `tasks`; `None`: a task it may not take): its task
+    /// once the team has agreed. A row that cannot be used is refused before the team sees
+    /// it ([`RowError`], inside [`MemberError::Refused`]).
     pub fn assign(&mut self, row: &[Option<f64>]) -> Result<Answer, MemberError> {
         self.check_row(row).map_err(MemberError::refused)?;
-        self.episode_with(Some(row), false)
+        self.episode_with(Some(row), Presence::Row { len: row.len() })
     }
 
-    /// One episode without a row (the robot's program had none in time): the team solves
-    /// nothing and every robot's answer names this one in `missing`.
+    /// One episode without a row (the robot's program had none in time): every robot's
+    /// answer names this one in `missing`; the team solves nothing (`on_failure = "abort"`,
+    /// the default) or solves without it while it relays (`"continue"`).
     pub fn abstain(&mut self) -> Result<Answer, MemberError> {
-        if !self.left.is_empty() {
-            return Err(MemberError::refused(RowError::Ended(self.left.clone())));
-        }
-        self.episode_with(None, false)
+        self.episode_with(None, Presence::Missing)
+    }
+
+    /// One episode in which this robot takes no task: it relays for its neighbours, and the
+    /// others share the tasks (every robot's answer names it in `unavailable`).
+    pub fn unavailable(&mut self) -> Result<Answer, MemberError> {
+        self.episode_with(None, Presence::Unavailable)
     }
 
     /// Leaves the team: the other robots learn it in the next episode's agreement (their
     /// answers name this robot in `left`) and the team ends. Returns once they have heard.
     pub fn leave(mut self) -> Result<(), MemberError> {
         if self.left.is_empty() && !self.failed {
-            self.episode_with(None, true)?;
+            self.episode_with(None, Presence::Leaving)?;
         }
         Ok(())
     }
@@ -234,9 +225,9 @@ impl TeamMember {
         if let Some(signal) = crate::signals::received() {
             return Err(self.stop(signal));
         }
-        let round = self.rounds.as_ref().map_or(0, RoundLoop::round);
+        let round = self.episodes.round();
         let verdict = match self.membership.as_ref().map(Membership::board) {
-            Some(board) => board.check_team(self.id, round),
+            Some(board) => board.check_team(self.id(), round),
             None => Ok(()),
         };
         verdict.map_err(|e| {
@@ -253,14 +244,14 @@ impl TeamMember {
     pub fn stop(&mut self, signal: i32) -> MemberError {
         crate::signals::record(signal);
         if let Some(board) = self.membership.as_ref().map(Membership::board) {
-            let _ = board.request_stop(signal, Some(self.id));
+            let _ = board.request_stop(signal, Some(self.id()));
         }
         if let Some(endpoint) = &self.endpoint {
             endpoint.announce_stop(signal);
         }
         self.failed = true;
         MemberError::failed(ExchangeError::Stopped {
-            agent: self.id,
+            agent: self.id(),
             signal,
         })
     }
@@ -268,153 +259,43 @@ impl TeamMember {
     fn episode_with(
         &mut self,
         row: Option<&[Option<f64>]>,
-        leaving: bool,
+        presence: Presence,
     ) -> Result<Answer, MemberError> {
-        if self.failed {
+        if self.failed || !self.left.is_empty() {
             return Err(MemberError::refused(RowError::Ended(self.left.clone())));
         }
         let began = Instant::now();
-        let result = self.run_episode(row, leaving, began);
-        if let Err(e) = &result {
-            self.failed = true;
-            self.blame(e);
-        }
-        let (task, certified, rounds, agreement_rounds, closing, opening) =
-            result.map_err(MemberError::failed)?;
+        let exchange = self
+            .endpoint
+            .as_mut()
+            .expect("joined until dropped")
+            .exchange();
+        let outcome = match self.episodes.run(exchange, row, presence) {
+            Ok(outcome) => outcome,
+            Err(e) => {
+                self.failed = true;
+                self.blame(&e);
+                return Err(e.into_member_error());
+            }
+        };
         let episode = self.episode;
         self.episode += 1;
-        self.left = opening.leaving();
-        let cost = task.map(|t| row.and_then(|r| r[t]).unwrap_or(f64::INFINITY));
-        let total = closing.as_ref().and_then(Closing::total);
-        let feasible = !opening.scale.is_empty() && total.is_none_or(|t| t.is_finite());
-        Ok(Answer {
-            episode,
-            robot: self.id,
-            task: task.filter(|_| feasible),
-            certified: certified && feasible,
-            rounds,
-            agreement_rounds,
-            cost: cost.filter(|c| c.is_finite()),
-            total_cost: total.filter(|t| t.is_finite()),
-            assignment: closing
-                .as_ref()
-                .and_then(Closing::assignment)
-                .filter(|_| feasible),
-            feasible,
-            missing: opening.missing(),
-            left: opening.leaving(),
-            ms: began.elapsed().as_secs_f64() * 1e3,
-        })
-    }
-
-    /// The agreement, the method and the closing of one episode.
-    #[allow(clippy::type_complexity)]
-    fn run_episode(
-        &mut self,
-        row: Option<&[Option<f64>]>,
-        leaving: bool,
-        began: Instant,
-    ) -> Result<(Option<usize>, bool, u64, u64, Option<Closing>, Opening), ExchangeError> {
-        let (n, m, id) = (self.robots, self.tasks, self.id);
-        // At least one round: a team of one robot has diameter 0.
-        let spread_rounds = (self.graph.diameter().unwrap_or(0) as u64).max(1);
-        let exchange = self.endpoint.as_mut().expect("joined").exchange();
-        let mut opening = Opening::own(
-            n,
-            id,
-            row.map(|r| TeamScale::of_row(r, self.maximize)),
-            leaving,
-        );
-        // The slowest robot's program may take the episode deadline to give its row.
-        let wait = self.episode_timeout + self.round_timeout;
-        if self.rounds.is_none() {
-            write_message(&opening, &mut self.message);
-            let message = &self.message;
-            let first = RoundLoop::start_with(exchange, &self.plan, 1, &mut |out| {
-                out.copy_from_slice(message)
-            })?;
-            self.rounds = Some(first);
-        }
-        let rounds = self.rounds.as_mut().expect("started");
-        let plan = &self.plan;
-        let message = &mut self.message;
-        flood(
-            rounds,
-            exchange,
-            plan,
-            &mut opening,
-            spread_rounds,
-            wait,
-            message,
-        )?;
-        let (Some(row), true, true) = (
-            row,
-            opening.missing().is_empty() && opening.leaving().is_empty(),
-            !opening.scale.is_empty(),
-        ) else {
-            // Somebody has no row, leaves, or no pair is allowed: nothing to solve.
-            return Ok((None, false, 0, spread_rounds, None, opening));
-        };
-        // Its own row as a solve of the stacked rows would normalise and perturb it.
-        let mut normalised = opening.scale.normalised_row(row, self.maximize, n, m);
-        ties::perturb(&mut normalised, id, opening.scale.epsilon(n), self.seed);
-        let warm = self.warm && self.solved > 0;
-        self.agent
-            .set_costs(&normalised, warm)
-            .map_err(|e| ExchangeError::Transport {
-                agent: id,
-                what: e.to_string(),
-            })?;
-        // Its iterate again, so that the method's first step reads the neighbours' iterates.
-        let agent = &self.agent;
-        rounds.side_round(
-            exchange,
-            plan,
-            Instant::now() + self.round_timeout,
-            &mut |out| agent.write_initial_payload(out),
-            &mut |_| {},
-        )?;
-        let before = rounds.round();
-        let (task, certified) = rounds.run(&mut self.agent, exchange, plan, plan.stop.clone())?;
-        let method_rounds = rounds.round() - before;
-        self.solved += 1;
-        let cost = row[task].unwrap_or(f64::INFINITY);
-        let mut closing = Closing::own(n, message.len(), id, task, cost);
-        flood(
-            rounds,
-            exchange,
-            plan,
-            &mut closing,
-            spread_rounds,
-            self.round_timeout,
-            message,
-        )?;
-        tracing::debug!(
-            episode = self.episode,
-            task,
-            rounds = method_rounds,
-            ms = began.elapsed().as_secs_f64() * 1e3,
-            "episode answered"
-        );
-        Ok((
-            Some(task),
-            certified.is_some(),
-            method_rounds,
-            spread_rounds * 2 + 1,
-            Some(closing),
-            opening,
-        ))
+        self.left = outcome.opening.leaving();
+        Ok(outcome.answer(episode, self.id(), row, began.elapsed()))
     }
 
     /// After a failed episode: who is to blame, on the board and to the other agents.
-    fn blame(&self, error: &ExchangeError) {
+    fn blame(&self, error: &EpisodeError) {
+        let EpisodeError::Exchange(error) = error else {
+            return;
+        };
         let Some(endpoint) = &self.endpoint else {
             return;
         };
         if let ExchangeError::Stopped { signal, .. } = error {
             if crate::signals::received().is_some() {
                 if let Some(board) = self.membership.as_ref().map(Membership::board) {
-                    let _ = board.request_stop(*signal, Some(self.id));
+                    let _ = board.request_stop(*signal, Some(self.id()));
                 }
                 endpoint.announce_stop(*signal);
             }
@@ -422,55 +303,20 @@ impl TeamMember {
         } else {
             endpoint.blame_for(error);
             if let Some(board) = self.membership.as_ref().map(Membership::board) {
-                let _ = board.mark_failed(self.id);
+                let _ = board.mark_failed(self.id());
             }
         }
     }
-}
-
-/// `value` as a whole message (zeros after it).
-fn write_message(value: &dyn Flooded, message: &mut [f64]) {
-    message.fill(0.0);
-    value.write(message);
-}
-
-/// `times` side rounds in which every robot sends `value` and merges its neighbours'
-/// (`message`: room for one message, filled here).
-fn flood(
-    rounds: &mut RoundLoop,
-    exchange: &mut dyn Exchange,
-    plan: &AgentPlan,
-    value: &mut dyn Flooded,
-    times: u64,
-    wait: Duration,
-    message: &mut [f64],
-) -> Result<(), ExchangeError> {
-    for _ in 0..times {
-        write_message(value, message);
-        let message = &*message;
-        rounds.side_round(
-            exchange,
-            plan,
-            Instant::now() + wait,
-            &mut |out| out.copy_from_slice(message),
-            &mut |ex| {
-                for k in 0..ex.degree() {
-                    value.merge(ex.neighbour_payload(k));
-                }
-            },
-        )?;
-    }
-    Ok(())
 }
 
 impl Drop for TeamMember {
     /// Leaves the team's transport and board (the last member removes its shared memory);
     /// finished, not dead, for the others.
     fn drop(&mut self) {
-        if let Ok(board) = Board::open(&self.scenario.board_shm, self.robots)
+        if let Ok(board) = Board::open(&self.scenario.board_shm, self.robots())
             && !self.failed
         {
-            board.set_finished(self.id);
+            board.set_finished(self.id());
         }
         drop(self.endpoint.take());
         if let Some(membership) = self.membership.take() {

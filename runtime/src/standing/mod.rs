@@ -7,6 +7,8 @@
 //! each episode every robot's cost of its own task and its task.
 //!
 //! * [`member`]: [`TeamMember`], one robot (join, then [`TeamMember::assign`] per episode);
+//! * `episode`: one episode as one robot runs it (agreement, the method on the part of the
+//!   team that takes part, closing);
 //! * [`serve`]: `admm-ta agent --team FILE --id I --serve`, the same over JSON lines on
 //!   standard input and output, for robot programs in any language;
 //! * [`answer`]: what a robot gets back per episode, and the rows it cannot give;
@@ -14,6 +16,7 @@
 
 pub mod agreement;
 pub mod answer;
+mod episode;
 pub mod member;
 pub mod serve;
 

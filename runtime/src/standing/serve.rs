@@ -15,11 +15,14 @@
 //!   `{"error": "...", "failed": true, "episode": k, "robot": I}`, and the sidecar exits
 //!   with the code of `agent` (4, or the signal's).
 //!
-//! **In** (standard input), one line per episode: `{"costs": [c_0, …, c_{M−1}]}`, numbers,
-//! `null` for a task this robot may not take. No row within the team file's
-//! `episode_timeout`: the team solves nothing this episode and every robot's answer names
-//! this one in `missing`. End of input: the robot leaves, and the team ends with the next
-//! episode's agreement.
+//! **In** (standard input), one line per episode: `{"costs": [c_0, …, c_{k−1}]}`, numbers,
+//! `null` for a task this robot may not take, one per task of the episode (`k` at most the
+//! team file's `tasks`, the same at every robot: fewer tasks than declared are the first
+//! `k`); or `{"available": false}`: this robot takes no task this episode and relays for its
+//! neighbours. No row within the team file's `episode_timeout`: every robot's answer names
+//! this one in `missing`, and the team solves nothing (`on_failure = "abort"`, the default)
+//! or solves without it (`"continue"`). End of input: the robot leaves, and the team ends
+//! with the next episode's agreement.
 
 use crate::process::member_error::MemberError;
 use crate::standing::answer::{Answer, RowError};
@@ -48,7 +51,16 @@ pub enum ServeEnd {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RowLine {
-    costs: Vec<Option<f64>>,
+    #[serde(default)]
+    costs: Option<Vec<Option<f64>>>,
+    #[serde(default)]
+    available: Option<bool>,
+}
+
+/// What a robot program's line asks for.
+enum Request {
+    Row(Vec<Option<f64>>),
+    Unavailable,
 }
 
 enum Input {
@@ -111,17 +123,30 @@ fn tell_failure(output: &mut dyn Write, episode: u64, robot: usize, error: &Memb
 /// A line of a robot program that gives no usable row.
 #[derive(Debug, thiserror::Error)]
 enum BadLine {
-    #[error("not a row: {0} (expected {{\"costs\": [numbers or null]}} on one line)")]
+    #[error(
+        "not a row: {0} (expected {{\"costs\": [numbers or null]}} or {{\"available\": false}} on one line)"
+    )]
     Json(#[from] serde_json::Error),
     #[error(transparent)]
     Row(#[from] RowError),
+    #[error("give costs, or \"available\": false for an episode without this robot")]
+    Neither,
+    #[error("an unavailable robot gives no costs")]
+    Both,
 }
 
-/// The row in one line, or why it cannot be used.
-fn parse_row(member: &TeamMember, line: &str) -> Result<Vec<Option<f64>>, BadLine> {
-    let row: RowLine = serde_json::from_str(line)?;
-    member.check_row(&row.costs)?;
-    Ok(row.costs)
+/// What one line asks for, or why it cannot be used.
+fn parse_line(member: &TeamMember, line: &str) -> Result<Request, BadLine> {
+    let line: RowLine = serde_json::from_str(line)?;
+    match (line.costs, line.available) {
+        (Some(_), Some(false)) => Err(BadLine::Both),
+        (None, Some(false)) => Ok(Request::Unavailable),
+        (None, _) => Err(BadLine::Neither),
+        (Some(costs), _) => {
+            member.check_row(&costs)?;
+            Ok(Request::Row(costs))
+        }
+    }
 }
 
 /// Serves robot `id` of the private team in `team_path` to the program on the other end of
@@ -162,11 +187,13 @@ pub fn serve(
             let slice = (deadline - now).min(Duration::from_millis(50));
             match lines.recv_timeout(slice) {
                 Ok(Input::Line(line)) if line.trim().is_empty() => {}
-                Ok(Input::Line(line)) => match parse_row(&member, &line) {
-                    Ok(row) => {
-                        break member
-                            .assign(&row)
-                            .inspect_err(|e| tell_failure(output, episode, id, e))?;
+                Ok(Input::Line(line)) => match parse_line(&member, &line) {
+                    Ok(request) => {
+                        let answer = match request {
+                            Request::Row(row) => member.assign(&row),
+                            Request::Unavailable => member.unavailable(),
+                        };
+                        break answer.inspect_err(|e| tell_failure(output, episode, id, e))?;
                     }
                     Err(error) => {
                         if !send(output, &row_error(episode, id, &error.to_string())) {

@@ -109,6 +109,10 @@ pub struct TeamFile {
     /// zero).
     #[serde(default = "yes")]
     pub warm_start: bool,
+    /// A private team's episode when a robot gave no row in time: `abort` (nothing is
+    /// solved; the default) or `continue` (the others solve it; that robot relays).
+    #[serde(default)]
+    pub on_failure: Option<crate::options::OnFailure>,
 }
 
 fn yes() -> bool {
@@ -194,6 +198,12 @@ impl Team {
     /// Refuses a private team that cannot run, with the reason.
     fn check_private(&self) -> Result<(), TeamFileError> {
         if !self.is_private() {
+            if self.file.on_failure.is_some() {
+                return Err(TeamFileError::Syntax {
+                    path: self.base.clone(),
+                    message: "on_failure is a private team's (costs = \"private\"): what its episode does without a robot's row".into(),
+                });
+            }
             return Ok(());
         }
         let f = &self.file;
@@ -201,7 +211,7 @@ impl Team {
         let Some(tasks) = f.tasks else {
             return refuse(PrivateTeamError::NeedsTasks);
         };
-        if !f.method.new_costs() {
+        if !(f.method.new_costs() && f.method.maskable()) {
             return refuse(PrivateTeamError::Method {
                 method: f.method.name(),
             });
@@ -210,7 +220,7 @@ impl Team {
             return refuse(PrivateTeamError::ForbiddenFile);
         }
         let payload = f.method.payload_len(f.robots, tasks);
-        if payload < crate::standing::agreement::opening_words(f.robots) {
+        if payload < crate::standing::agreement::opening_words(f.robots, tasks) {
             return refuse(PrivateTeamError::TooSmall {
                 robots: f.robots,
                 tasks,

@@ -77,6 +77,7 @@ impl TeamMethod for PrimalMethod {
     type Settings = PrimalSettings;
     const PENALTY: bool = true;
     const NEW_COSTS: bool = true;
+    const MASKABLE: bool = true;
 
     fn payload_len(&self, robots: usize, tasks: usize) -> usize {
         robots * tasks

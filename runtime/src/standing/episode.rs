@@ -1,0 +1,360 @@
+//! One episode of a standing team, as one robot runs it: the opening agreement, the method
+//! on the part of the team that takes part, the closing agreement.
+
+use crate::exchange::round_loop::{AgentPlan, AgentStop, RoundLoop};
+use crate::exchange::{Exchange, ExchangeError};
+use crate::options::OnFailure;
+use crate::options::SolveOptions;
+use crate::process::member_error::MemberError;
+use crate::standing::agreement::{Closing, Flooded, Opening, Presence};
+use crate::standing::answer::Answer;
+use crate::workload::plan::{BadRho, prepare};
+use admm_ta_agents::agent::ConsensusAgent;
+use admm_ta_agents::certify::local_stop::{LocalCertifiedStop, LocalStopError};
+use admm_ta_agents::method::masked::{MaskedAgent, Part};
+use admm_ta_agents::problem::private::TeamScale;
+use admm_ta_agents::problem::ties;
+use admm_ta_agents::problem::{AssignmentCase, CostMatrix, ProblemError, TaskAssignmentProblem};
+use admm_ta_topologies::Graph;
+use std::time::{Duration, Instant};
+
+/// Why an episode failed.
+#[derive(Debug, thiserror::Error)]
+pub(super) enum EpisodeError {
+    #[error(transparent)]
+    Exchange(#[from] ExchangeError),
+    /// The agent of the episode's part could not be built (it can only be a bug: the part's
+    /// shape is checked before).
+    #[error("the episode's agent: {0}")]
+    Agent(String),
+}
+
+impl EpisodeError {
+    pub(super) fn into_member_error(self) -> MemberError {
+        MemberError::failed(self)
+    }
+}
+
+impl From<ProblemError> for EpisodeError {
+    fn from(e: ProblemError) -> Self {
+        Self::Agent(e.to_string())
+    }
+}
+
+impl From<BadRho> for EpisodeError {
+    fn from(e: BadRho) -> Self {
+        Self::Agent(e.to_string())
+    }
+}
+
+impl From<LocalStopError> for EpisodeError {
+    fn from(e: LocalStopError) -> Self {
+        Self::Agent(e.to_string())
+    }
+}
+
+/// What one robot saw of an episode.
+pub(super) struct Outcome {
+    pub(super) opening: Opening,
+    /// Its task (`None`: it relayed, or nothing was solved).
+    task: Option<usize>,
+    certified: bool,
+    rounds: u64,
+    agreement_rounds: u64,
+    closing: Option<Closing>,
+    /// Why nothing was solved.
+    unsolved: Option<String>,
+    /// The episode has no feasible assignment.
+    infeasible: bool,
+}
+
+impl Outcome {
+    /// The robot's answer (`row`: the row it gave).
+    pub(super) fn answer(
+        self,
+        episode: u64,
+        robot: usize,
+        row: Option<&[Option<f64>]>,
+        took: Duration,
+    ) -> Answer {
+        let total = self.closing.as_ref().and_then(Closing::total);
+        // A forbidden pair in the certified optimum: the rows have no feasible assignment.
+        let feasible = !self.infeasible && total.is_none_or(f64::is_finite);
+        let solved = feasible && self.unsolved.is_none();
+        let cost = self
+            .task
+            .map(|t| row.and_then(|r| r[t]).unwrap_or(f64::INFINITY));
+        Answer {
+            episode,
+            robot,
+            task: self.task.filter(|_| solved),
+            certified: self.certified && solved,
+            rounds: self.rounds,
+            agreement_rounds: self.agreement_rounds,
+            cost: cost.filter(|c| c.is_finite() && solved),
+            total_cost: total.filter(|t| t.is_finite()),
+            assignment: self
+                .closing
+                .as_ref()
+                .and_then(Closing::assignment)
+                .filter(|_| solved),
+            feasible,
+            unsolved: self.unsolved.or_else(|| {
+                (!feasible)
+                    .then(|| "infeasible: no assignment avoids every forbidden pair".to_string())
+            }),
+            missing: self.opening.missing(),
+            unavailable: self.opening.unavailable(),
+            left: self.opening.leaving(),
+            ms: took.as_secs_f64() * 1e3,
+        }
+    }
+}
+
+/// Why the episode's agreement leaves nothing to solve, if it does (every robot reaches the
+/// same verdict: they hold the same opening).
+fn nothing_to_solve(opening: &Opening, on_failure: OnFailure) -> Option<String> {
+    if !opening.leaving().is_empty() {
+        return Some(format!("robot(s) {:?} left the team", opening.leaving()));
+    }
+    let missing = opening.missing();
+    if !missing.is_empty() && on_failure == OnFailure::Abort {
+        return Some(format!(
+            "robot(s) {missing:?} gave no costs within the episode deadline"
+        ));
+    }
+    let Some((shortest, longest)) = opening.lengths() else {
+        return Some("no robot gave costs".into());
+    };
+    if shortest != longest {
+        return Some(format!(
+            "the robots gave rows of {shortest} to {longest} costs: every row needs one cost per task of the episode"
+        ));
+    }
+    None
+}
+
+/// `times` side rounds in which every robot sends `value` and merges its neighbours'
+/// (`message`: room for one message, filled here).
+fn flood(
+    rounds: &mut RoundLoop,
+    exchange: &mut dyn Exchange,
+    plan: &AgentPlan,
+    value: &mut dyn Flooded,
+    times: u64,
+    wait: Duration,
+    message: &mut [f64],
+) -> Result<(), ExchangeError> {
+    for _ in 0..times {
+        message.fill(0.0);
+        value.write(message);
+        let message = &*message;
+        rounds.side_round(
+            exchange,
+            plan,
+            Instant::now() + wait,
+            &mut |out| out.copy_from_slice(message),
+            &mut |ex| {
+                for k in 0..ex.degree() {
+                    value.merge(ex.neighbour_payload(k));
+                }
+            },
+        )?;
+    }
+    Ok(())
+}
+
+/// A robot's side of its standing team's episodes: what every episode needs and what
+/// goes on from one to the next (the round loop, the agent of the last part).
+pub(super) struct Episodes {
+    pub(super) id: usize,
+    pub(super) robots: usize,
+    pub(super) tasks: usize,
+    pub(super) maximize: bool,
+    pub(super) warm: bool,
+    pub(super) seed: u64,
+    pub(super) on_failure: OnFailure,
+    pub(super) episode_timeout: Duration,
+    pub(super) round_timeout: Duration,
+    pub(super) options: SolveOptions,
+    pub(super) graph: Graph,
+    pub(super) plan: AgentPlan,
+    /// The agent of the last episode's part of the team (built on the first episode), with
+    /// its stop rule.
+    pub(super) agent: Option<(MaskedAgent, LocalCertifiedStop)>,
+    pub(super) rounds: Option<RoundLoop>,
+    /// Room for one round message (the agreement's).
+    pub(super) message: Vec<f64>,
+}
+
+impl Episodes {
+    /// The round last gathered.
+    pub(super) fn round(&self) -> u64 {
+        self.rounds.as_ref().map_or(0, RoundLoop::round)
+    }
+
+    /// The agent of `part` (this robot at `place` among its robots, or a relay) and the
+    /// episode's stop rule.
+    fn part_agent(
+        &self,
+        part: &Part,
+        place: Option<usize>,
+    ) -> Result<(MaskedAgent, LocalCertifiedStop), EpisodeError> {
+        let (r, k) = (part.robots.len(), part.tasks.len());
+        let case = if r == k {
+            AssignmentCase::One
+        } else {
+            AssignmentCase::Two
+        };
+        // The part's shape (no costs: each robot gives its agent its own row).
+        let shape = CostMatrix::new(r, k, vec![0.0; r * k])?;
+        let problem = TaskAssignmentProblem::internal_from(shape, case)?;
+        let setup = self
+            .options
+            .method_setup()
+            .ok_or_else(|| EpisodeError::Agent("a method without agents".into()))?;
+        let plan = prepare(&problem, &self.graph, &self.options, setup)?;
+        let inner = plan.agents.agent(place.unwrap_or(0));
+        let stop = LocalCertifiedStop::new(plan.diameter, self.robots, plan.tolerance)?
+            .with_cadence(plan.stop_cadence);
+        let degree = self.graph.degree(self.id);
+        let agent = MaskedAgent::new(inner, self.tasks, self.robots, part.clone(), place, degree);
+        Ok((agent, stop))
+    }
+
+    /// The agreement, the method and the closing of one episode.
+    pub(super) fn run(
+        &mut self,
+        exchange: &mut dyn Exchange,
+        row: Option<&[Option<f64>]>,
+        presence: Presence,
+    ) -> Result<Outcome, EpisodeError> {
+        let (n, m, id) = (self.robots, self.tasks, self.id);
+        // At least one round: a team of one robot has diameter 0.
+        let spread_rounds = (self.graph.diameter().unwrap_or(0) as u64).max(1);
+        let scale = row.map_or(TeamScale::EMPTY, |r| TeamScale::of_row(r, self.maximize));
+        let mut opening = Opening::own(n, m, id, presence, scale);
+        // The slowest robot's program may take the episode deadline to give its row.
+        let wait = self.episode_timeout + self.round_timeout;
+        {
+            if self.rounds.is_none() {
+                self.message.fill(0.0);
+                opening.write(&mut self.message);
+                let message = &self.message;
+                let first = RoundLoop::start_with(exchange, &self.plan, 1, &mut |out| {
+                    out.copy_from_slice(message)
+                })?;
+                self.rounds = Some(first);
+            }
+            let rounds = self.rounds.as_mut().expect("started");
+            let message = &mut self.message;
+            flood(
+                rounds,
+                exchange,
+                &self.plan,
+                &mut opening,
+                spread_rounds,
+                wait,
+                message,
+            )?;
+        }
+        let unsolved = |opening: Opening, why: String, infeasible: bool| Outcome {
+            opening,
+            task: None,
+            certified: false,
+            rounds: 0,
+            agreement_rounds: spread_rounds,
+            closing: None,
+            unsolved: Some(why),
+            infeasible,
+        };
+        if let Some(why) = nothing_to_solve(&opening, self.on_failure) {
+            return Ok(unsolved(opening, why, false));
+        }
+        let (_, k) = opening.lengths().expect("checked: some robot gave costs");
+        let absent: Vec<usize> = opening
+            .missing()
+            .into_iter()
+            .chain(opening.unavailable())
+            .collect();
+        let robots: Vec<usize> = (0..n).filter(|i| !absent.contains(i)).collect();
+        if robots.len() < k {
+            let why = format!(
+                "infeasible: {} robot(s) took part for {k} tasks, and every task needs one",
+                robots.len()
+            );
+            return Ok(unsolved(opening, why, true));
+        }
+        if opening.scale.is_empty() {
+            let why = "infeasible: every task is forbidden to every robot".to_string();
+            return Ok(unsolved(opening, why, true));
+        }
+        let part = Part {
+            robots,
+            tasks: (0..k).collect(),
+        };
+        let place = part.robots.iter().position(|&r| r == id);
+        // The same part warm-starts from the last episode's iterates; another part starts
+        // from zero.
+        let same_part = self.agent.as_ref().is_some_and(|(a, _)| a.part() == &part);
+        if !same_part {
+            self.agent = Some(self.part_agent(&part, place)?);
+        }
+        let warm = self.warm && same_part;
+        let costs = match (place, row) {
+            (Some(_), Some(row)) => {
+                // Its own row as a solve of the stacked rows would normalise and perturb it.
+                let robots = part.robots.len();
+                let mut costs = opening.scale.normalised_row(row, self.maximize, robots, k);
+                ties::perturb(&mut costs, id, opening.scale.epsilon(robots), self.seed);
+                costs
+            }
+            // A relay adds nothing to the team's costs.
+            _ => vec![0.0; k],
+        };
+        let (agent, stop) = self.agent.as_mut().expect("built above");
+        agent
+            .set_costs(&costs, warm)
+            .map_err(|e| EpisodeError::Agent(e.to_string()))?;
+        let rounds = self.rounds.as_mut().expect("started");
+        let plan = &self.plan;
+        // Its iterate again, so that the method's first step reads the neighbours' iterates.
+        let current = &*agent;
+        rounds.side_round(
+            exchange,
+            plan,
+            Instant::now() + self.round_timeout,
+            &mut |out| current.write_initial_payload(out),
+            &mut |_| {},
+        )?;
+        let before = rounds.round();
+        let (task, certified) =
+            rounds.run(agent, exchange, plan, AgentStop::Local(stop.clone()))?;
+        let method_rounds = rounds.round() - before;
+        let (task, cost) = match (place, row) {
+            (Some(_), Some(row)) => (Some(task), row[task].unwrap_or(f64::INFINITY)),
+            _ => (None, 0.0),
+        };
+        let message = &mut self.message;
+        let mut closing = Closing::own(n, message.len(), id, task, cost);
+        flood(
+            rounds,
+            exchange,
+            plan,
+            &mut closing,
+            spread_rounds,
+            self.round_timeout,
+            message,
+        )?;
+        Ok(Outcome {
+            opening,
+            task,
+            certified: certified.is_some(),
+            rounds: method_rounds,
+            agreement_rounds: spread_rounds * 2 + 1,
+            closing: Some(closing),
+            unsolved: None,
+            infeasible: false,
+        })
+    }
+}
