@@ -8,6 +8,8 @@ Two calls:
 * :func:`solve` — the decentralized solve of the ``admm-ta solve`` command line: every
   robot an agent that talks only to its neighbours (in this process, in threads, or as
   agent processes over iceoryx2 shared memory), with every option the command line has.
+* :class:`TeamMember` — one robot of a standing team whose robots keep their own costs:
+  join once, then ``assign(my_costs)`` episode after episode.
 
 >>> import admm_ta
 >>> admm_ta.linear_sum_assignment([[4, 1, 3], [2, 0, 5], [3, 2, 2]])
@@ -25,6 +27,7 @@ from . import _core
 from ._core import linear_sum_assignment
 from ._errors import NotCertifiedError, NotOptimalError, SolveError
 from ._solve import SolveResult, solve
+from ._team import TeamMember
 
 __all__ = [
     "linear_sum_assignment",
@@ -33,6 +36,7 @@ __all__ = [
     "SolveError",
     "NotCertifiedError",
     "NotOptimalError",
+    "TeamMember",
     "__version__",
 ]
 

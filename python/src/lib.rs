@@ -18,11 +18,13 @@ use admm_ta::agents::numerics::lsap::{LsapError, ScipyLsap};
 use admm_ta::command_line::commands::shared::set_agent_program;
 use admm_ta::command_line::{self as cli, GivenInput, Outcome};
 use admm_ta::runtime::options::run::AgentProgram;
+use admm_ta::runtime::process::member_error::MemberError;
 use admm_ta::runtime::signals;
+use admm_ta::runtime::standing::TeamMember as StandingMember;
 use admm_ta::{CostMatrix, Graph};
 use numpy::npyffi::{NPY_ARRAY_DEFAULT, NPY_TYPES, PY_ARRAY_API};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use std::ffi::c_int;
 use std::path::PathBuf;
@@ -310,6 +312,112 @@ fn set_agent_command(program: PathBuf, args: Vec<String>) -> PyResult<()> {
     Ok(())
 }
 
+/// Runs `f` on this thread without the interpreter, with the library's signal handlers
+/// installed: a SIGINT, SIGTERM or SIGHUP stops the robot's team cleanly; when the call
+/// returns, Python's handlers are back and the signal is raised again (Ctrl-C:
+/// `KeyboardInterrupt`). Signals Python handles itself run their handlers after the call.
+fn in_team<T>(py: Python<'_>, f: impl FnOnce() -> T) -> PyResult<T> {
+    /// `f` and its value stay on this thread: `detach` runs the closure here, without
+    /// the interpreter (a standing team's member is not `Send`: its transport's ports are
+    /// this thread's).
+    struct OnThisThread<T>(T);
+    // SAFETY: `Python::detach` runs its closure on the calling thread; nothing moves.
+    unsafe impl<T> Send for OnThisThread<T> {}
+    let guard = signals::install();
+    let f = OnThisThread(f);
+    let value = py.detach(move || {
+        let f = f;
+        OnThisThread((f.0)())
+    });
+    drop(guard);
+    if let Some(signal) = signals::received() {
+        // SAFETY: raising a signal in this process; Python's handler is installed again.
+        unsafe { libc::raise(signal) };
+        py.check_signals()?;
+    }
+    Ok(value.0)
+}
+
+/// A member's error as Python's: a refusal (a bad team file, a bad row) is a `ValueError`,
+/// a failure of the team a `RuntimeError`.
+fn member_error(error: MemberError) -> PyErr {
+    if error.is_refusal() {
+        PyValueError::new_err(error.text())
+    } else {
+        PyRuntimeError::new_err(error.text())
+    }
+}
+
+/// One robot of a standing team whose robots keep their own costs (a team file with
+/// `costs = "private"`): see `admm_ta.TeamMember`.
+#[pyclass(unsendable, module = "admm_ta._core")]
+struct TeamMember {
+    member: Option<StandingMember>,
+}
+
+impl TeamMember {
+    fn member(&mut self) -> PyResult<&mut StandingMember> {
+        self.member
+            .as_mut()
+            .ok_or_else(|| PyValueError::new_err("this robot has left its team"))
+    }
+}
+
+#[pymethods]
+impl TeamMember {
+    #[new]
+    fn new(py: Python<'_>, team: PathBuf, robot: usize) -> PyResult<Self> {
+        let member = in_team(py, || StandingMember::join(&team, robot))?.map_err(member_error)?;
+        Ok(Self {
+            member: Some(member),
+        })
+    }
+
+    /// The episode's answer (JSON) for this robot's row (`None`: a forbidden task).
+    fn assign(&mut self, py: Python<'_>, costs: Vec<Option<f64>>) -> PyResult<String> {
+        let member = self.member()?;
+        let answer = in_team(py, || member.assign(&costs))?.map_err(member_error)?;
+        Ok(serde_json::to_string(&answer).expect("an answer serialises"))
+    }
+
+    /// An episode in which this robot takes no task and relays (JSON answer).
+    fn unavailable(&mut self, py: Python<'_>) -> PyResult<String> {
+        let member = self.member()?;
+        let answer = in_team(py, || member.unavailable())?.map_err(member_error)?;
+        Ok(serde_json::to_string(&answer).expect("an answer serialises"))
+    }
+
+    /// An episode without this robot's row (JSON answer).
+    fn abstain(&mut self, py: Python<'_>) -> PyResult<String> {
+        let member = self.member()?;
+        let answer = in_team(py, || member.abstain())?.map_err(member_error)?;
+        Ok(serde_json::to_string(&answer).expect("an answer serialises"))
+    }
+
+    /// Leaves the team (the team ends with the next episode's agreement).
+    fn leave(&mut self, py: Python<'_>) -> PyResult<()> {
+        match self.member.take() {
+            Some(member) => in_team(py, || member.leave())?.map_err(member_error),
+            None => Ok(()),
+        }
+    }
+
+    #[getter]
+    fn robot(&mut self) -> PyResult<usize> {
+        Ok(self.member()?.id())
+    }
+
+    #[getter]
+    fn robots(&mut self) -> PyResult<usize> {
+        Ok(self.member()?.robots())
+    }
+
+    #[getter]
+    fn tasks(&mut self) -> PyResult<usize> {
+        Ok(self.member()?.tasks())
+    }
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // Structured logs when `RUST_LOG` asks for them (README, "Logs"); a bad filter is
@@ -319,6 +427,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(main, m)?)?;
     m.add_function(wrap_pyfunction!(set_agent_command, m)?)?;
+    m.add_class::<TeamMember>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

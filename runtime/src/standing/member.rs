@@ -7,7 +7,6 @@ use crate::process::connect::connect;
 use crate::process::member_error::MemberError;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
-use crate::signals::SignalGuard;
 use crate::standing::agreement::Presence;
 use crate::standing::answer::{Answer, RowError};
 use crate::standing::episode::{EpisodeError, Episodes};
@@ -54,14 +53,17 @@ pub struct TeamMember {
     endpoint: Option<Box<dyn AgentEndpoint>>,
     membership: Option<Membership>,
     namespace: RunNamespace,
-    _signals: SignalGuard,
 }
 
 impl TeamMember {
     /// Joins the team of `team_path` as robot `id`, waiting for its neighbours until the
     /// team file's start-up deadline.
+    ///
+    /// While it joins, and while an episode runs, termination signals are recorded (the
+    /// team stops cleanly: the call returns the stop and every robot of the team stops);
+    /// between calls the process's own handlers apply.
     pub fn join(team_path: &Path, id: usize) -> Result<Self, MemberError> {
-        let signals = crate::signals::install();
+        let _signals = crate::signals::install();
         let started = Instant::now();
         let team = Team::read(team_path).map_err(MemberError::refused)?;
         if !team.is_private() {
@@ -135,7 +137,6 @@ impl TeamMember {
             endpoint: Some(endpoint),
             membership,
             namespace,
-            _signals: signals,
         })
     }
 

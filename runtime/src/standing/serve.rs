@@ -157,6 +157,8 @@ pub fn serve(
     input: impl BufRead + Send + 'static,
     output: &mut dyn Write,
 ) -> Result<ServeEnd, MemberError> {
+    // Termination signals stop the team cleanly, between episodes too.
+    let _signals = crate::signals::install();
     let mut member = TeamMember::join(team_path, id)?;
     let ready = serde_json::json!({
         "ready": true,

@@ -1,0 +1,98 @@
+"""A robot of a standing team whose robots keep their own costs (a team file with
+``costs = "private"``; see the README's "Robots that keep their own costs")."""
+
+from __future__ import annotations
+
+import json
+import math
+
+from . import _core
+
+TYPE_CHECKING = False
+
+if TYPE_CHECKING:
+    from os import PathLike
+    from typing import Any, Dict, Iterable, List, Optional, Union
+
+
+def _row(costs: Iterable[Optional[float]]) -> List[Optional[float]]:
+    """``None``, ``inf`` and ``-inf`` mark a task this robot may not take."""
+    row: List[Optional[float]] = []
+    for k, cost in enumerate(costs):
+        if cost is None:
+            row.append(None)
+            continue
+        value = float(cost)
+        if math.isnan(value):
+            raise ValueError(f"cost {k} is NaN: give a number (None for a forbidden task)")
+        row.append(None if math.isinf(value) else value)
+    return row
+
+
+class TeamMember:
+    """One robot of a standing team: it joins once, then gives its own cost row episode
+    after episode and gets its task back. No process of the team ever sees another robot's
+    costs.
+
+    ``TeamMember(team, robot)`` joins the team of the team file ``team`` as robot ``robot``,
+    waiting for its neighbours (until the file's ``startup_timeout``). Each call runs one
+    episode with every other robot of the team and returns this robot's answer, a ``dict``:
+    ``episode``, ``task`` (``None``: nothing solved, see ``unsolved``), ``certified``,
+    ``rounds``, ``cost``, ``total_cost``, ``assignment``, ``feasible``, and ``missing``,
+    ``unavailable``, ``left`` when robots took no part. A row that cannot be used raises
+    ``ValueError`` (the team never sees it); a team that failed raises ``RuntimeError``;
+    Ctrl-C stops the whole team and raises ``KeyboardInterrupt``. Used as a context manager
+    it leaves the team on exit.
+
+    >>> import admm_ta                                             # doctest: +SKIP
+    >>> with admm_ta.TeamMember("fleet.toml", 2) as me:            # doctest: +SKIP
+    ...     answer = me.assign([3.0, 1.0, None, 7.5])
+    ...     answer["task"], answer["certified"]
+    (1, True)
+    """
+
+    def __init__(self, team: Union[str, PathLike[str]], robot: int) -> None:
+        self._member = _core.TeamMember(team, robot)
+
+    @property
+    def robot(self) -> int:
+        """This robot's number."""
+        return self._member.robot
+
+    @property
+    def robots(self) -> int:
+        """The team's robots."""
+        return self._member.robots
+
+    @property
+    def tasks(self) -> int:
+        """The most costs a row may have (the team's declared tasks)."""
+        return self._member.tasks
+
+    def assign(self, costs: Iterable[Optional[float]]) -> Dict[str, Any]:
+        """One episode with this robot's costs, one per task of the episode (``None``,
+        ``inf``: a task it may not take)."""
+        answer: Dict[str, Any] = json.loads(self._member.assign(_row(costs)))
+        return answer
+
+    def unavailable(self) -> Dict[str, Any]:
+        """One episode in which this robot takes no task: it relays for its neighbours."""
+        answer: Dict[str, Any] = json.loads(self._member.unavailable())
+        return answer
+
+    def abstain(self) -> Dict[str, Any]:
+        """One episode without this robot's row (as if its costs came too late)."""
+        answer: Dict[str, Any] = json.loads(self._member.abstain())
+        return answer
+
+    def leave(self) -> None:
+        """Leaves the team: it ends with the next episode's agreement (this call returns
+        once the others have heard)."""
+        self._member.leave()
+
+    def __enter__(self) -> TeamMember:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if exc[0] is None:
+            self.leave()
