@@ -8,7 +8,8 @@ own admm-ta sidecar, and waits for them.
 It writes the team file (costs = "private": every robot keeps its own costs) into --dir
 (default: a new temporary directory), starts one robot.py per robot, and prints each
 episode's assignment and total cost as the robots reported them. Exit code 0 when every
-robot answered every episode and they all reported the same assignment.
+robot answered every episode and they all reported the same certified assignment (or all
+said the episode had no feasible assignment: tasks beyond every robot's battery range).
 """
 
 import argparse
@@ -63,11 +64,14 @@ def main():
         answers = by_episode[episode]
         views = {json.dumps(a.get("assignment")) for a in answers}
         same = len(views) == 1 and len(answers) == args.robots
-        ok &= same and all(a["certified"] for a in answers)
+        certified = all(a["certified"] for a in answers)
+        # Tasks out of every robot's battery range: no feasible assignment, said by all.
+        infeasible = all(a["feasible"] is False for a in answers)
+        ok &= same and (certified or infeasible)
         first = answers[0]
         print(f"episode {episode}: assignment {first.get('assignment')} total "
-              f"{first.get('total_cost')} rounds {first['rounds']}"
-              f" certified={all(a['certified'] for a in answers)}"
+              f"{first.get('total_cost')} rounds {first['rounds']} certified={certified}"
+              f"{' (infeasible: ' + first.get('unsolved', '') + ')' if infeasible else ''}"
               f"{'' if same else ' (robots disagree)'}")
     if len(by_episode) != args.episodes:
         ok = False

@@ -708,3 +708,31 @@ fn unavailable_robots_missing_rows_and_fewer_tasks() {
     finish_all(team_of);
     assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
 }
+
+/// The README's Python robot example (standard library only) runs a standing team of its
+/// robot programs to the end.
+#[test]
+fn the_python_robot_example_runs_a_standing_team() {
+    if Command::new("python3").arg("--version").output().is_err() {
+        eprintln!("skipped: python3 is not on PATH");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/robots/start_team.py");
+    let out = Command::new("python3")
+        .arg(script)
+        .args(["--admm-ta", env!("CARGO_BIN_EXE_admm-ta")])
+        .args(["--robots", "6", "--tasks", "4", "--episodes", "8"])
+        .args(["--run", &format!("pyrobots-{}", std::process::id())])
+        .arg("--dir")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("8 episodes") && stdout.ends_with("ok\n"), "{stdout}");
+}
