@@ -263,10 +263,22 @@ fn forbidden(rng: &mut SeededRng, n: usize, m: usize, share: f64) -> Vec<Row> {
 
 #[test]
 fn private_rows_reach_the_optimum_of_the_stacked_rows() {
+    for transport in ["ipc", "shm", "uds"] {
+        stacked_rows_optimal_over(transport);
+    }
+}
+
+fn stacked_rows_optimal_over(transport: &str) {
     let dir = tempfile::tempdir().unwrap();
-    let run = format!("priv-{}", std::process::id());
+    let run = format!("priv{transport}-{}", std::process::id());
     let (n, m) = (7, 5);
-    let team = team_file(dir.path(), &run, n, m, "topology = \"ring\"\nseed = 3\n");
+    let team = team_file(
+        dir.path(),
+        &run,
+        n,
+        m,
+        &format!("topology = \"ring\"\nseed = 3\ntransport = \"{transport}\"\n"),
+    );
     let mut team_of = start_team(&team, n);
     let mut rng = SeededRng::new(11);
     let mut cases: Vec<(&str, Vec<Row>)> = vec![
@@ -289,7 +301,7 @@ fn private_rows_reach_the_optimum_of_the_stacked_rows() {
     cases.insert(3, ("distance, moved", drift));
     for (what, rows) in &cases {
         let answers = episode(&mut team_of, rows);
-        assert_optimal(&answers, rows, false, what);
+        assert_optimal(&answers, rows, false, &format!("{transport}: {what}"));
     }
     // No robot may do task 0: no feasible assignment, said by every robot.
     let mut infeasible = uniform(&mut rng, n, m, 1.0, 0.0);
@@ -734,5 +746,8 @@ fn the_python_robot_example_runs_a_standing_team() {
         "{stdout}{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert!(stdout.contains("8 episodes") && stdout.ends_with("ok\n"), "{stdout}");
+    assert!(
+        stdout.contains("8 episodes") && stdout.ends_with("ok\n"),
+        "{stdout}"
+    );
 }

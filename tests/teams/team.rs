@@ -381,10 +381,9 @@ fn bad_host_tables() -> Vec<(String, &'static str)> {
             format!("{base}transport = \"carrier-pigeon\"\n"),
             "unknown variant",
         ),
-        // The shared-slot reference transport runs under a launcher only (`solve`).
         (
-            format!("{base}transport = \"shm\"\n"),
-            "unknown variant `shm`, expected one of `iceoryx2`, `ipc`, `zenoh`, `mixed`",
+            format!("{base}transport = \"threads\"\n"),
+            "unknown variant `threads`, expected one of `iceoryx2`, `ipc`, `shm`, `uds`, `zenoh`, `mixed`",
         ),
     ]
 }
@@ -740,4 +739,30 @@ fn a_team_file_timeline_is_written_by_collect() {
         assert_eq!(waits, rounds, "agent {agent}");
     }
     assert!(team_shm_left(&run).is_empty());
+}
+
+/// The shared-slot reference transport and the copying socket baseline run a team file too
+/// (the first member creates what the transport needs, the last removes it).
+#[test]
+fn independently_started_agents_over_shm_and_uds() {
+    let instance = common::oracle_instances()
+        .into_iter()
+        .find(|i| i.name == "case2_uniform_10x2")
+        .unwrap();
+    let robots = instance.optimal_assignment.len();
+    for transport in ["shm", "uds"] {
+        let dir = tempfile::tempdir().unwrap();
+        let run = format!("t{transport}{}", std::process::id());
+        let team = team_file(dir.path(), &run, robots, &instance.csv, "ring", 60.0);
+        let text = std::fs::read_to_string(&team).unwrap();
+        std::fs::write(&team, format!("{text}transport = \"{transport}\"\n")).unwrap();
+        let children = shuffled(robots, 5)
+            .into_iter()
+            .map(|id| (id, start(&team, id)))
+            .collect::<Vec<_>>();
+        all_converge(children);
+        let result = collect_json(&team, &["--check"]);
+        assert_eq!(result["optimal"], true, "{transport}: {result}");
+        assert!(team_shm_left(&run).is_empty(), "{:?}", team_shm_left(&run));
+    }
 }

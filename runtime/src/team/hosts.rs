@@ -16,10 +16,11 @@ use std::path::Path;
 /// It is not a [`Transport`]: `mixed` is two transports at once (iceoryx2 among the agents of
 /// a host, Zenoh between hosts through each host's bridge), and a deployment decides more
 /// than an agent's exchange — whether the team has hosts, a shared board per host, bridges.
-/// [`Deployment::agent_transport`] is the exchange each agent runs. The `shm` and `uds`
-/// transports run under a launcher only (`solve --transport shm`): a team file names no
-/// such deployment and is refused (the launcher creates and removes the shm slot table,
-/// and finds dead agents by `waitpid`).
+/// [`Deployment::agent_transport`] is the exchange each agent runs. On one machine a team
+/// may also run the `shm` reference transport (one shared slot table, created by the first
+/// member) or the copying `uds` baseline, as `solve --transport` does: without a launcher
+/// to `waitpid` them, a dead agent is found by its neighbours' round deadline on `shm`
+/// (its socket closes at once on `uds`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Deployment {
@@ -28,6 +29,10 @@ pub enum Deployment {
     #[default]
     #[serde(alias = "ipc")]
     Iceoryx2,
+    /// Every agent on this machine, one shared table of slots (futex wake-ups).
+    Shm,
+    /// Every agent on this machine, payloads copied through Unix-domain sockets.
+    Uds,
     /// Every agent a Zenoh client of its host's router.
     Zenoh,
     /// iceoryx2 among the agents of a host; the host's bridge carries what crosses hosts.
@@ -39,13 +44,15 @@ impl Deployment {
     pub fn agent_transport(self) -> Transport {
         match self {
             Self::Iceoryx2 | Self::Mixed => Transport::Ipc,
+            Self::Shm => Transport::Shm,
+            Self::Uds => Transport::Uds,
             Self::Zenoh => Transport::Zenoh,
         }
     }
 
     /// The team spans machines, named by its `[[hosts]]`.
     pub fn across_hosts(self) -> bool {
-        self != Self::Iceoryx2
+        matches!(self, Self::Zenoh | Self::Mixed)
     }
 
     /// The agents of a host share a board in shared memory (iceoryx2 and mixed teams); a
