@@ -22,7 +22,7 @@ const BITS_PER_WORD: usize = 52;
 /// Values the opening agreement of a team of `robots` and up to `tasks` tasks needs in a
 /// message.
 pub fn opening_words(robots: usize, tasks: usize) -> usize {
-    TeamScale::WORDS + (2 * tasks + 3 * robots).div_ceil(BITS_PER_WORD)
+    TeamScale::WORDS + (2 * tasks + 3 * robots + 1).div_ceil(BITS_PER_WORD)
 }
 
 /// What the robots flood: written into a message, merged from a neighbour's.
@@ -49,7 +49,9 @@ pub enum Presence {
 /// What a robot knows before an episode: the team's scale, the rows' lengths and who
 /// takes no part. The bits: `[0, m)` "some row is longer than `j`" and `[m, 2m)` "some row
 /// is shorter than `m − j`" (thermometer codes: their OR is the longest and the shortest
-/// row), then three per robot (missing, unavailable, leaving).
+/// row), then three per robot (missing, unavailable, leaving), then one: some robot's costs
+/// moved far since the last episode (the team starts from zero rather than from the last
+/// iterates).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Opening {
     pub scale: TeamScale,
@@ -71,7 +73,7 @@ impl Opening {
             scale,
             tasks,
             robots,
-            bits: vec![0; (2 * tasks + 3 * robots).div_ceil(BITS_PER_WORD)],
+            bits: vec![0; (2 * tasks + 3 * robots + 1).div_ceil(BITS_PER_WORD)],
         };
         let status = 2 * tasks + 3 * index;
         match presence {
@@ -135,6 +137,16 @@ impl Opening {
     /// The robots leaving the team.
     pub fn leaving(&self) -> Vec<usize> {
         self.status(2)
+    }
+
+    /// Marks that this robot's costs moved far since the last episode.
+    pub fn set_moved(&mut self) {
+        self.set(2 * self.tasks + 3 * self.robots);
+    }
+
+    /// Some robot's costs moved far since the last episode.
+    pub fn moved(&self) -> bool {
+        self.get(2 * self.tasks + 3 * self.robots)
     }
 
     /// The shortest and the longest row, if any robot gave one.
@@ -266,12 +278,18 @@ mod tests {
             o.write(&mut words);
             merged.merge(&words);
         }
-        let missing: Vec<usize> = (0..n).filter(|i| i % 7 == 3).collect();
+        let missing: Vec<usize> = (0..n).filter(|i| i % 7 == 3 && *i != 17).collect();
         assert_eq!(merged.missing(), missing);
         assert_eq!(merged.unavailable(), vec![17, 23]);
         assert_eq!(merged.leaving(), vec![41]);
         assert_eq!(merged.lengths(), Some((4, 6)));
-        assert_eq!((merged.scale.lo, merged.scale.hi), (0.0, 59.0));
+        assert!(!merged.moved());
+        let mut moved = Opening::own(n, m, 59, Presence::Row { len: 6 }, TeamScale::EMPTY);
+        moved.set_moved();
+        moved.write(&mut words);
+        merged.merge(&words);
+        assert!(merged.moved() && merged.missing().len() == 8);
+        assert_eq!((merged.scale.lo, merged.scale.hi), (0.0, 58.0));
         assert_eq!(merged.scale.step, 1.0);
         let alone = Opening::own(3, 2, 1, Presence::Missing, TeamScale::EMPTY);
         assert_eq!(alone.lengths(), None);

@@ -129,6 +129,7 @@ impl TeamMember {
                 agent: None,
                 rounds: None,
                 message: vec![0.0; payload_len],
+                last: None,
             },
             scenario,
             episode: 0,
