@@ -203,8 +203,9 @@ fn moved_far(row: &[Option<f64>], last: &[Option<f64>], scale: &TeamScale) -> bo
     let range = scale.hi - scale.lo;
     row.iter().zip(last).any(|(new, old)| match (new, old) {
         (Some(new), Some(old)) => {
-            let change = (new - old).abs();
-            !(change <= WARM_WITHIN * range)
+            // NaN (an infinite range) counts as far.
+            let within = (new - old).abs() <= WARM_WITHIN * range;
+            !within
         }
         (None, None) => false,
         _ => true,
