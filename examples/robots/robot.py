@@ -74,7 +74,9 @@ def main():
         for (tx, ty) in places:
             d = math.hypot(tx - x, ty - y)
             costs.append(round(d, 6) if d <= reach else None)
-        sidecar.stdin.write(json.dumps({"costs": costs}) + "\n")
+        # The episode number: a row that missed its episode's deadline is refused, not
+        # used for the next one.
+        sidecar.stdin.write(json.dumps({"costs": costs, "episode": episode}) + "\n")
         sidecar.stdin.flush()
         answer = read()
         while answer is not None and "error" in answer:

@@ -15,17 +15,24 @@ if TYPE_CHECKING:
     from typing import Any, Dict, Iterable, List, Optional, Union
 
 
-def _row(costs: Iterable[Optional[float]]) -> List[Optional[float]]:
-    """``None``, ``inf`` and ``-inf`` mark a task this robot may not take."""
+def _row(costs: Iterable[Optional[float]], maximize: bool = False) -> List[Optional[float]]:
+    """``None`` and ``inf`` (``-inf`` with ``maximize``, as scipy) mark a task this robot
+    may not take."""
+    forbidden = -math.inf if maximize else math.inf
     row: List[Optional[float]] = []
     for k, cost in enumerate(costs):
         if cost is None:
             row.append(None)
             continue
         value = float(cost)
-        if math.isnan(value):
-            raise ValueError(f"cost {k} is NaN: give a number (None for a forbidden task)")
-        row.append(None if math.isinf(value) else value)
+        if value == forbidden:
+            row.append(None)
+        elif not math.isfinite(value):
+            raise ValueError(
+                f"cost {k} is {value}: give a number (None or {forbidden} for a forbidden task)"
+            )
+        else:
+            row.append(value)
     return row
 
 
@@ -70,9 +77,10 @@ class TeamMember:
         return self._member.tasks
 
     def assign(self, costs: Iterable[Optional[float]]) -> Dict[str, Any]:
-        """One episode with this robot's costs, one per task of the episode (``None``,
-        ``inf``: a task it may not take)."""
-        answer: Dict[str, Any] = json.loads(self._member.assign(_row(costs)))
+        """One episode with this robot's costs, one per task of the episode (``None``, or
+        ``inf`` (``-inf`` with ``maximize``): a task it may not take)."""
+        row = _row(costs, self._member.maximize)
+        answer: Dict[str, Any] = json.loads(self._member.assign(row))
         return answer
 
     def unavailable(self) -> Dict[str, Any]:
@@ -94,5 +102,10 @@ class TeamMember:
         return self
 
     def __exit__(self, *exc: object) -> None:
-        if exc[0] is None:
+        # A failed team or Ctrl-C already stopped every robot; after anything else (an
+        # exception in the robot's own code) the robot leaves, so that the others end
+        # their team at once rather than at the episode deadline.
+        if exc[0] is None or not (
+            isinstance(exc[1], (KeyboardInterrupt, RuntimeError, SystemExit))
+        ):
             self.leave()

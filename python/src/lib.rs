@@ -416,6 +416,11 @@ impl TeamMember {
     fn tasks(&mut self) -> PyResult<usize> {
         Ok(self.member()?.tasks())
     }
+
+    #[getter]
+    fn maximize(&mut self) -> PyResult<bool> {
+        Ok(self.member()?.maximize())
+    }
 }
 
 #[pymodule]

@@ -107,5 +107,9 @@ def test_a_team_file_that_is_not_private_is_refused(tmp_path):
     path.write_text('run = "pyplain"\nrobots = 4\ncosts = "random"\ntasks = 4\n')
     with pytest.raises(ValueError, match="private"):
         admm_ta.TeamMember(path, 0)
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(ValueError, match="nan"):
         admm_ta._team._row([1.0, float("nan")])
+    assert admm_ta._team._row([1, float("inf")]) == [1.0, None]
+    assert admm_ta._team._row([1, float("-inf")], maximize=True) == [1.0, None]
+    with pytest.raises(ValueError, match="-inf"):
+        admm_ta._team._row([1, float("-inf")])

@@ -404,6 +404,7 @@ fn bad_rows_missing_rows_and_leaving() {
         "{\"costs\": []}",
         "{\"costs\": [1, 2, 3, 4], \"available\": false}",
         "{\"available\": true}",
+        "{\"costs\": [1, 2, 3, 4], \"episode\": 5}",
         "{\"cost\": [1, 2, 3, 4]}",
         "{\"costs\": [1, 2, \"x\", 4]}",
         "[1, 2, 3, 4]",
@@ -501,7 +502,7 @@ fn private_teams_refuse_what_they_cannot_do() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("at least 2 tasks"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("its agreement needs 4"));
 }
 
 /// The same standing team across two hosts (every agent on Zenoh, and iceoryx2 per host with
@@ -750,4 +751,41 @@ fn the_python_robot_example_runs_a_standing_team() {
         stdout.contains("8 episodes") && stdout.ends_with("ok\n"),
         "{stdout}"
     );
+}
+
+/// Robots that take no part on graphs whose robots have different numbers of neighbours (a
+/// star's hub and leaves, a chain's ends): each runs its place in the part with its own
+/// neighbours.
+#[test]
+fn parts_on_irregular_graphs() {
+    for topology in ["star", "chain"] {
+        let dir = tempfile::tempdir().unwrap();
+        let run = format!("privirr{topology}-{}", std::process::id());
+        let (n, m) = (6, 4);
+        let team = team_file(
+            dir.path(),
+            &run,
+            n,
+            m,
+            &format!("topology = \"{topology}\"\n"),
+        );
+        let mut team_of = start_team(&team, n);
+        let mut rng = SeededRng::new(17);
+        for away in [vec![3], vec![0], vec![0, 5]] {
+            let full = distances(&mut rng, n, m);
+            let rows: Vec<Option<Row>> = (0..n)
+                .map(|i| (!away.contains(&i)).then(|| full[i].clone()))
+                .collect();
+            for s in &mut team_of {
+                match &rows[s.id] {
+                    Some(row) => s.send_row(row),
+                    None => s.send("{\"available\": false, \"episode\": null}"),
+                }
+            }
+            let answers: Vec<Value> = team_of.iter_mut().map(Sidecar::next).collect();
+            assert_optimal_part(&answers, &rows, &format!("{topology}, away {away:?}"));
+        }
+        finish_all(team_of);
+        assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
+    }
 }

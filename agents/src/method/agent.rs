@@ -60,7 +60,12 @@ impl MethodAgent {
         costs: &[f64],
         warm: bool,
     ) -> Result<(), crate::agent::NewCostsError> {
-        self.algorithm.set_costs(costs, warm)
+        self.algorithm.set_costs(costs, warm)?;
+        if !warm {
+            // A cold start follows its ρ schedule from the beginning again.
+            self.steps = 0;
+        }
+        Ok(())
     }
 }
 

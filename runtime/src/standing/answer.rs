@@ -62,4 +62,6 @@ pub enum RowError {
     NotFinite { index: usize, value: f64 },
     #[error("the team has ended (robot(s) {0:?} left)")]
     Ended(Vec<usize>),
+    #[error("the team failed in an earlier episode")]
+    Failed,
 }

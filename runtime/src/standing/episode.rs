@@ -78,8 +78,11 @@ impl Outcome {
         took: Duration,
     ) -> Answer {
         let total = self.closing.as_ref().and_then(Closing::total);
-        // A forbidden pair in the certified optimum: the rows have no feasible assignment.
-        let feasible = !self.infeasible && total.is_none_or(f64::is_finite);
+        // A forbidden pair in the certified optimum: the rows have no feasible assignment
+        // (at the round limit a robot on a forbidden pair proves nothing).
+        let forbidden_pair = total.is_some_and(|t| !t.is_finite());
+        let infeasible = self.infeasible || (self.certified && forbidden_pair);
+        let feasible = !infeasible;
         let solved = feasible && self.unsolved.is_none();
         let cost = self
             .task
@@ -239,10 +242,11 @@ impl Episodes {
             .method_setup()
             .ok_or_else(|| EpisodeError::Agent("a method without agents".into()))?;
         let plan = prepare(&problem, &self.graph, &self.options, setup)?;
-        let inner = plan.agents.agent(place.unwrap_or(0));
+        // Its own neighbours, whatever its place among the robots that take part.
+        let degree = self.graph.degree(self.id);
+        let inner = plan.agents.agent_with_degree(place.unwrap_or(0), degree);
         let stop = LocalCertifiedStop::new(plan.diameter, self.robots, plan.tolerance)?
             .with_cadence(plan.stop_cadence);
-        let degree = self.graph.degree(self.id);
         let agent = MaskedAgent::new(inner, self.tasks, self.robots, part.clone(), place, degree);
         Ok((agent, stop))
     }

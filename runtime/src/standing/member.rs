@@ -118,10 +118,10 @@ impl TeamMember {
                 robots: n,
                 tasks: scenario.tasks,
                 maximize: team.file.maximize,
-                warm: team.file.warm_start,
+                warm: team.file.warm_start.unwrap_or(true),
                 seed: team.file.seed,
                 on_failure: team.file.on_failure.unwrap_or_default(),
-                episode_timeout: Duration::from_secs_f64(team.file.episode_timeout),
+                episode_timeout: Duration::from_secs_f64(team.episode_timeout()),
                 round_timeout: Duration::from_millis(scenario.round_timeout_ms),
                 options,
                 graph,
@@ -149,6 +149,11 @@ impl TeamMember {
     /// The most costs a row may have (the team's declared number of tasks).
     pub fn tasks(&self) -> usize {
         self.episodes.tasks
+    }
+
+    /// The rows are profits (the team file's `maximize`).
+    pub fn maximize(&self) -> bool {
+        self.episodes.maximize
     }
 
     /// The team's robots.
@@ -263,10 +268,15 @@ impl TeamMember {
         row: Option<&[Option<f64>]>,
         presence: Presence,
     ) -> Result<Answer, MemberError> {
-        if self.failed || !self.left.is_empty() {
+        if self.failed {
+            return Err(MemberError::refused(RowError::Failed));
+        }
+        if !self.left.is_empty() {
             return Err(MemberError::refused(RowError::Ended(self.left.clone())));
         }
         let began = Instant::now();
+        // A termination signal while the episode runs stops the team cleanly.
+        let _signals = crate::signals::install();
         let exchange = self
             .endpoint
             .as_mut()

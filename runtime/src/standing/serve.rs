@@ -55,6 +55,9 @@ struct RowLine {
     costs: Option<Vec<Option<f64>>>,
     #[serde(default)]
     available: Option<bool>,
+    /// The episode the row is for (optional: a row for another episode is refused).
+    #[serde(default)]
+    episode: Option<u64>,
 }
 
 /// What a robot program's line asks for.
@@ -133,11 +136,18 @@ enum BadLine {
     Neither,
     #[error("an unavailable robot gives no costs")]
     Both,
+    #[error(
+        "a row for episode {given}, but the team is at episode {current} (a row after its episode's deadline?)"
+    )]
+    OtherEpisode { given: u64, current: u64 },
 }
 
 /// What one line asks for, or why it cannot be used.
-fn parse_line(member: &TeamMember, line: &str) -> Result<Request, BadLine> {
+fn parse_line(member: &TeamMember, line: &str, current: u64) -> Result<Request, BadLine> {
     let line: RowLine = serde_json::from_str(line)?;
+    if let Some(given) = line.episode.filter(|&given| given != current) {
+        return Err(BadLine::OtherEpisode { given, current });
+    }
     match (line.costs, line.available) {
         (Some(_), Some(false)) => Err(BadLine::Both),
         (None, Some(false)) => Ok(Request::Unavailable),
@@ -189,7 +199,7 @@ pub fn serve(
             let slice = (deadline - now).min(Duration::from_millis(50));
             match lines.recv_timeout(slice) {
                 Ok(Input::Line(line)) if line.trim().is_empty() => {}
-                Ok(Input::Line(line)) => match parse_line(&member, &line) {
+                Ok(Input::Line(line)) => match parse_line(&member, &line, episode) {
                     Ok(request) => {
                         let answer = match request {
                             Request::Row(row) => member.assign(&row),

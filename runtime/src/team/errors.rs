@@ -48,7 +48,7 @@ pub enum TeamFileError {
     #[error("costs = \"random\" needs tasks = M in the team file")]
     RandomNeedsTasks,
     /// A team whose robots keep their costs (`costs = "private"`) that cannot run.
-    #[error("costs = \"private\": {0}")]
+    #[error("{0}")]
     Private(PrivateTeamError),
     #[error(transparent)]
     Problem(#[from] ProblemError),
@@ -101,26 +101,35 @@ pub enum TeamFileError {
 /// Why a team file's private team (`costs = "private"`) cannot run.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum PrivateTeamError {
-    #[error("the team file needs tasks = M (the robots' rows have M costs each)")]
+    #[error(
+        "costs = \"private\" needs tasks = M in the team file (the most costs a robot's row has)"
+    )]
     NeedsTasks,
     #[error(
         "method {method} cannot keep costs private: its agents take no new costs (use method = \"primal\")"
     )]
     Method { method: &'static str },
     #[error(
-        "forbidden pairs are part of each robot's row (null for a forbidden task), not a team file"
+        "a private team's forbidden pairs are part of each robot's row (null for a forbidden task), not a file"
     )]
     ForbiddenFile,
     #[error(
-        "{robots} robots with {tasks} task(s) leave no room in a round message for the team's agreement; a private team of fewer than 4 robots needs at least 2 tasks"
+        "a private team of {robots} robot(s) × {tasks} task(s) has {payload} values in a round message, and its agreement needs {needed}: give it more tasks (or robots)"
     )]
-    TooSmall { robots: usize, tasks: usize },
+    TooSmall {
+        robots: usize,
+        tasks: usize,
+        payload: usize,
+        needed: usize,
+    },
+    #[error("{key} is a private team's key (costs = \"private\")")]
+    NotPrivateKey { key: &'static str },
     #[error(
         "a private team's agents take their costs from their robot program: start them with --serve"
     )]
     NeedsServe,
     #[error(
-        "its robots answer their own programs (agent --serve): there are no results to collect"
+        "a private team's robots answer their own programs (agent --serve): there are no results to collect"
     )]
     NothingToCollect,
     #[error(

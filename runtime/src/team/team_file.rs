@@ -103,20 +103,16 @@ pub struct TeamFile {
     pub timeline: Option<PathBuf>,
     /// A private team's episode deadline (seconds): how long the team waits for a robot's
     /// row before the episode goes on without it ([`crate::standing`]).
-    #[serde(default = "sixty")]
-    pub episode_timeout: f64,
+    #[serde(default)]
+    pub episode_timeout: Option<f64>,
     /// A private team starts every episode from the last one's iterates (`false`: from
-    /// zero).
-    #[serde(default = "yes")]
-    pub warm_start: bool,
+    /// zero); default true.
+    #[serde(default)]
+    pub warm_start: Option<bool>,
     /// A private team's episode when a robot gave no row in time: `abort` (nothing is
     /// solved; the default) or `continue` (the others solve it; that robot relays).
     #[serde(default)]
     pub on_failure: Option<crate::options::OnFailure>,
-}
-
-fn yes() -> bool {
-    true
 }
 
 fn complete() -> String {
@@ -190,6 +186,11 @@ impl Team {
         Ok(team)
     }
 
+    /// A private team's episode deadline in seconds (default 60).
+    pub fn episode_timeout(&self) -> f64 {
+        self.file.episode_timeout.unwrap_or(60.0)
+    }
+
     /// Whether the robots keep their costs (`costs = "private"`).
     pub fn is_private(&self) -> bool {
         self.file.costs == "private"
@@ -198,11 +199,16 @@ impl Team {
     /// Refuses a private team that cannot run, with the reason.
     fn check_private(&self) -> Result<(), TeamFileError> {
         if !self.is_private() {
-            if self.file.on_failure.is_some() {
-                return Err(TeamFileError::Syntax {
-                    path: self.base.clone(),
-                    message: "on_failure is a private team's (costs = \"private\"): what its episode does without a robot's row".into(),
-                });
+            let f = &self.file;
+            let set = [
+                ("on_failure", f.on_failure.is_some()),
+                ("episode_timeout", f.episode_timeout.is_some()),
+                ("warm_start", f.warm_start.is_some()),
+            ];
+            if let Some((key, _)) = set.into_iter().find(|(_, set)| *set) {
+                return Err(TeamFileError::Private(PrivateTeamError::NotPrivateKey {
+                    key,
+                }));
             }
             return Ok(());
         }
@@ -220,18 +226,21 @@ impl Team {
             return refuse(PrivateTeamError::ForbiddenFile);
         }
         let payload = f.method.payload_len(f.robots, tasks);
-        if payload < crate::standing::agreement::opening_words(f.robots, tasks) {
+        let needed = crate::standing::agreement::opening_words(f.robots, tasks);
+        if payload < needed {
             return refuse(PrivateTeamError::TooSmall {
                 robots: f.robots,
                 tasks,
+                payload,
+                needed,
             });
         }
-        if !(f.episode_timeout > 0.0 && f.episode_timeout.is_finite()) {
+        let timeout = self.episode_timeout();
+        if !(timeout > 0.0 && timeout.is_finite()) {
             return Err(TeamFileError::Syntax {
                 path: self.base.clone(),
                 message: format!(
-                    "episode_timeout must be a positive number of seconds, got {}",
-                    f.episode_timeout
+                    "episode_timeout must be a positive number of seconds, got {timeout}"
                 ),
             });
         }

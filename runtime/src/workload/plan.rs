@@ -58,13 +58,20 @@ impl<'a> AgentFactory<'a> {
 
     /// Robot `i`'s agent, with its own (optionally perturbed) costs.
     pub fn agent(&self, i: usize) -> MethodAgent {
+        self.agent_with_degree(i, self.graph.degree(i))
+    }
+
+    /// Robot `i`'s agent with `degree` neighbours: a standing team's robot that runs
+    /// robot `i`'s part of an episode's problem from another place of the graph (or relays
+    /// from it).
+    pub fn agent_with_degree(&self, i: usize, degree: usize) -> MethodAgent {
         let costs = ties::perturbed_row(self.problem.costs(), i, self.epsilon, self.seed);
         MethodAgent::new(self.team.agent(AgentInit {
             index: i,
             costs,
             robots: self.problem.robots(),
             case: self.problem.case(),
-            degree: self.graph.degree(i),
+            degree,
         }))
         .with_schedule(self.schedule)
     }
