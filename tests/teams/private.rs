@@ -789,3 +789,72 @@ fn parts_on_irregular_graphs() {
         assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
     }
 }
+
+/// `agent --row FILE`: robots started with only their own row, each from its own file (CSV
+/// or JSON, inf or null for a forbidden task), solve one episode and leave together.
+#[test]
+fn robots_started_with_their_own_row_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("privrow-{}", std::process::id());
+    let (n, m) = (5, 4);
+    let team = team_file(dir.path(), &run, n, m, "topology = \"chain\"\n");
+    let mut rng = SeededRng::new(12);
+    let mut rows = forbidden(&mut rng, n, m, 0.3);
+    rows[0][0] = Some(2.5);
+    let children: Vec<Child> = (0..n)
+        .map(|i| {
+            let path = dir.path().join(format!("row-{i}"));
+            let text = if i % 2 == 0 {
+                let cells: Vec<String> = rows[i]
+                    .iter()
+                    .map(|v| v.map_or("inf".into(), |v| v.to_string()))
+                    .collect();
+                cells.join(",") + "\n"
+            } else {
+                serde_json::json!([rows[i]]).to_string()
+            };
+            std::fs::write(&path, text).unwrap();
+            admm_ta()
+                .args(["agent", "--team", team.to_str().unwrap(), "--id"])
+                .arg(i.to_string())
+                .arg("--row")
+                .arg(&path)
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let answers: Vec<Value> = children
+        .into_iter()
+        .map(|mut child| {
+            let status = common::wait_with_deadline(&mut child, Duration::from_secs(60));
+            let out = child.wait_with_output().unwrap();
+            assert!(status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            serde_json::from_slice(&out.stdout).unwrap()
+        })
+        .collect();
+    assert_optimal(&answers, &rows, false, "row files");
+    assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
+    // A team whose costs are not private takes no row.
+    let plain = dir.path().join("plain.toml");
+    std::fs::write(
+        &plain,
+        "run = \"privrowplain\"\nrobots = 2\ncosts = \"random\"\ntasks = 2\n",
+    )
+    .unwrap();
+    let out = admm_ta()
+        .args([
+            "agent",
+            "--team",
+            plain.to_str().unwrap(),
+            "--id",
+            "0",
+            "--row",
+        ])
+        .arg(dir.path().join("row-0"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("costs = \"private\""));
+}
