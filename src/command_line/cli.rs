@@ -95,8 +95,13 @@ pub struct AgentArgs {
     /// Serve a robot program on standard input and output, one JSON object per line
     /// (a team file with costs = "private"): a row `{"costs": [...]}` in, the robot's task
     /// out, episode after episode; end of input leaves the team (see the README).
-    #[arg(long, requires = "team")]
+    #[arg(long, requires = "team", conflicts_with = "row")]
     pub serve: bool,
+    /// One episode of a private team with this robot's row from FILE (`-`: standard input;
+    /// one CSV line or a JSON list, null or inf for a forbidden task): prints the answer
+    /// and leaves with the others.
+    #[arg(long, requires = "team", value_name = "FILE")]
+    pub row: Option<PathBuf>,
     /// The scenario file the launcher wrote.
     #[arg(long, requires = "scenario_digest")]
     pub scenario: Option<PathBuf>,

@@ -159,6 +159,66 @@ fn parse_line(member: &TeamMember, line: &str, current: u64) -> Result<Request, 
     }
 }
 
+/// A robot's row file that cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum RowFileError {
+    #[error("row file {}", path.display())]
+    Read {
+        path: std::path::PathBuf,
+        #[source]
+        source: admm_ta_agents::problem::ProblemError,
+    },
+    #[error("row file {}: one row of costs, got {rows} rows", path.display())]
+    Rows {
+        path: std::path::PathBuf,
+        rows: usize,
+    },
+}
+
+/// A robot's own row from a file (`-`: standard input): one CSV line or a JSON list (`null`,
+/// or `inf` — `-inf` with `maximize` — for a task it may not take), as the cost files of
+/// `solve` are read.
+pub fn read_row(path: &Path, maximize: bool) -> Result<Vec<Option<f64>>, RowFileError> {
+    use admm_ta_agents::problem::{cost_file, read_cost_text};
+    let read = |source| RowFileError::Read {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = read_cost_text(path)
+        .and_then(|text| cost_file::parse(&text, None))
+        .map_err(read)?;
+    if file.costs.robots() != 1 {
+        return Err(RowFileError::Rows {
+            path: path.to_path_buf(),
+            rows: file.costs.robots(),
+        });
+    }
+    let forbidden = if maximize {
+        f64::NEG_INFINITY
+    } else {
+        f64::INFINITY
+    };
+    Ok(file
+        .costs
+        .row(0)
+        .iter()
+        .enumerate()
+        .map(|(t, &v)| (!file.forbidden.contains(&(0, t)) && v != forbidden).then_some(v))
+        .collect())
+}
+
+/// Robot `id` of the private team in `team_path` for one episode with the row in
+/// `row_path` ([`read_row`]): it joins, gives its row, and leaves with the others.
+pub fn one_episode(team_path: &Path, id: usize, row_path: &Path) -> Result<Answer, MemberError> {
+    let _signals = crate::signals::install();
+    let team = crate::team::team_file::Team::read(team_path).map_err(MemberError::refused)?;
+    let row = read_row(row_path, team.file.maximize).map_err(MemberError::refused)?;
+    let mut member = TeamMember::join(team_path, id)?;
+    let answer = member.assign(&row)?;
+    member.leave()?;
+    Ok(answer)
+}
+
 /// Serves robot `id` of the private team in `team_path` to the program on the other end of
 /// `input` and `output` until it closes its input, the team ends, or the run fails.
 pub fn serve(

@@ -1,5 +1,6 @@
 //! `admm-ta agent`: one agent process, of an independently started team or of a launcher's run.
 
+use crate::agents::problem::ProblemError;
 use crate::command_line::cli::AgentArgs;
 use crate::command_line::exit::{Outcome, usage_bail};
 use crate::command_line::output::outln;
@@ -31,6 +32,32 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
             let stdin = std::io::BufReader::new(std::io::stdin());
             let served = serve::serve(&team, id, stdin, &mut std::io::stdout());
             (id, served.map(|_| ()))
+        }
+        AgentArgs {
+            team: Some(team),
+            id: Some(robot),
+            row: Some(row),
+            ..
+        } => {
+            let id = match robot {
+                RobotRef::Index(id) => id,
+                named => Team::read(&team)
+                    .and_then(|t| t.robot(&named))
+                    .with_context(|| format!("agent {named}"))?,
+            };
+            let answer = serve::one_episode(&team, id, &row);
+            if let Ok(a) = &answer {
+                outln!("{}", serde_json::to_string(a)?);
+                if !a.feasible {
+                    return Err(anyhow::Error::from(ProblemError::Infeasible(
+                        a.unsolved.clone().unwrap_or_default(),
+                    )));
+                }
+                if !a.certified {
+                    outcome = Outcome::Uncertified;
+                }
+            }
+            (id, answer.map(|_| ()))
         }
         AgentArgs {
             team: Some(team),
@@ -68,6 +95,7 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
             scenario: Some(scenario),
             scenario_digest: Some(digest),
             serve: false,
+            row: None,
         } => (index, agent::run(&run, index, &scenario, &digest)),
         _ => usage_bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
     };
