@@ -21,6 +21,7 @@ import argparse
 import json
 import math
 import random
+import re
 import subprocess
 import sys
 
@@ -29,6 +30,16 @@ def tasks_at(episode, tasks, seed):
     """Where the tasks are in an episode: public, the same at every robot."""
     rng = random.Random(f"{seed}-tasks-{episode}")
     return [(rng.random(), rng.random()) for _ in range(tasks)]
+
+
+def tasks_of(team):
+    """The team file's `tasks` (the tasks every episode has here)."""
+    with open(team, encoding="utf-8") as f:
+        for line in f:
+            match = re.match(r"\s*tasks\s*=\s*(\d+)", line)
+            if match:
+                return int(match.group(1))
+    raise SystemExit(f"{team}: no tasks = N")
 
 
 def main():
@@ -61,11 +72,7 @@ def main():
             answers.flush()
         return json.loads(line)
 
-    ready = read()
-    if not ready or not ready.get("ready"):
-        print(f"robot {args.id}: the sidecar did not start", file=sys.stderr)
-        return 1
-    tasks = ready["tasks"]
+    tasks = tasks_of(args.team)
     answered = 0
     for episode in range(args.episodes):
         places = tasks_at(episode, tasks, args.seed)

@@ -2,8 +2,8 @@
 //! private team ([`crate::standing`]) for a robot program in any language, one JSON object
 //! per line each way.
 //!
-//! **Out** (standard output), one line each:
-//! * once joined: `{"ready": true, "robot": I, "robots": N, "tasks": M, "episode_timeout": S}`;
+//! **Out** (standard output), one line each (nothing else: rows written before the sidecar
+//! has joined its team wait in the pipe):
 //! * per episode, the [`Answer`]: `{"episode": k, "robot": I, "task": j or null,
 //!   "certified": bool, "rounds": r, "agreement_rounds": a, "cost": c, "total_cost": C,
 //!   "assignment": [...], "feasible": bool, "ms": t}` (plus `"missing": [...]` when robots
@@ -230,17 +230,12 @@ pub fn serve(
     // Termination signals stop the team cleanly, between episodes too.
     let _signals = crate::signals::install();
     let mut member = TeamMember::join(team_path, id)?;
-    let ready = serde_json::json!({
-        "ready": true,
-        "robot": id,
-        "robots": member.robots(),
-        "tasks": member.tasks(),
-        "episode_timeout": member.episode_timeout().as_secs_f64(),
-    });
-    if !send(output, &ready) {
-        member.leave()?;
-        return Ok(ServeEnd::OutputClosed);
-    }
+    tracing::info!(
+        robot = id,
+        robots = member.robots(),
+        tasks = member.tasks(),
+        "joined the team: reading rows"
+    );
     let lines = read_lines(input);
     let mut episode = 0u64;
     loop {
