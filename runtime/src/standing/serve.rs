@@ -15,10 +15,10 @@
 //!   `{"error": "...", "failed": true, "episode": k, "robot": I}`, and the sidecar exits
 //!   with the code of `agent` (4, or the signal's).
 //!
-//! **In** (standard input), one line per episode: `{"costs": [c_0, …, c_{k−1}]}`, numbers,
-//! `null` for a task this robot may not take, one per task of the episode (`k` at most the
-//! team file's `tasks`, the same at every robot: fewer tasks than declared are the first
-//! `k`); or `{"available": false}`: this robot takes no task this episode and relays for its
+//! **In** (standard input), one line per episode: `{"costs": [c_0, …, c_{M−1}]}`, numbers,
+//! `null` for a task this robot may not take, one per task of the team file (`M`); an
+//! episode with fewer tasks says so, `{"costs": [c_0, …, c_{k−1}], "tasks": k}` (the first
+//! `k` tasks exist, the same `k` at every robot); or `{"available": false}`: this robot takes no task this episode and relays for its
 //! neighbours. No row within the team file's `episode_timeout`: every robot's answer names
 //! this one in `missing`, and the team solves nothing (`on_failure = "abort"`, the default)
 //! or solves without it (`"continue"`). End of input: the robot leaves, and the team ends
@@ -58,6 +58,9 @@ struct RowLine {
     /// The episode the row is for (optional: a row for another episode is refused).
     #[serde(default)]
     episode: Option<u64>,
+    /// The episode's tasks, when fewer than the team's (the row then has that many costs).
+    #[serde(default)]
+    tasks: Option<usize>,
 }
 
 /// What a robot program's line asks for.
@@ -140,6 +143,12 @@ enum BadLine {
         "a row for episode {given}, but the team is at episode {current} (a row after its episode's deadline?)"
     )]
     OtherEpisode { given: u64, current: u64 },
+    #[error(
+        "{got} costs for {tasks} tasks (an episode with fewer tasks says so: \"tasks\": {got})"
+    )]
+    Length { got: usize, tasks: usize },
+    #[error("\"tasks\": {said}, but {got} costs")]
+    TasksDiffer { said: usize, got: usize },
 }
 
 /// What one line asks for, or why it cannot be used.
@@ -153,6 +162,21 @@ fn parse_line(member: &TeamMember, line: &str, current: u64) -> Result<Request, 
         (None, Some(false)) => Ok(Request::Unavailable),
         (None, _) => Err(BadLine::Neither),
         (Some(costs), _) => {
+            match line.tasks {
+                Some(said) if said != costs.len() => {
+                    return Err(BadLine::TasksDiffer {
+                        said,
+                        got: costs.len(),
+                    });
+                }
+                None if costs.len() != member.tasks() => {
+                    return Err(BadLine::Length {
+                        got: costs.len(),
+                        tasks: member.tasks(),
+                    });
+                }
+                _ => {}
+            }
             member.check_row(&costs)?;
             Ok(Request::Row(costs))
         }

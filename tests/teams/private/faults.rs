@@ -30,6 +30,8 @@ fn bad_rows_missing_rows_and_leaving() {
     for bad in [
         "not json",
         "{\"costs\": [1, 2, 3, 4, 5]}",
+        "{\"costs\": [1, 2, 3]}",
+        "{\"costs\": [1, 2, 3], \"tasks\": 2}",
         "{\"costs\": []}",
         "{\"costs\": [1, 2, 3, 4], \"available\": false}",
         "{\"available\": true}",

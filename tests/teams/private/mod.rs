@@ -96,8 +96,9 @@ impl Sidecar {
         stdin.flush().unwrap();
     }
 
+    /// Its row (an episode with fewer tasks than the team's says how many).
     pub(super) fn send_row(&mut self, row: &Row) {
-        self.send(&serde_json::json!({ "costs": row }).to_string());
+        self.send(&serde_json::json!({ "costs": row, "tasks": row.len() }).to_string());
     }
 
     /// The next line, within a minute (a test never hangs).
