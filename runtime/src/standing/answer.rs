@@ -65,3 +65,25 @@ pub enum RowError {
     #[error("the team failed in an earlier episode")]
     Failed,
 }
+
+/// Refuses a row that no episode of a team of up to `tasks` tasks can use: no costs, more
+/// costs than tasks, or a cost that is not a finite number.
+pub fn check_row(row: &[Option<f64>], tasks: usize) -> Result<(), RowError> {
+    if row.is_empty() || row.len() > tasks {
+        return Err(RowError::Length {
+            got: row.len(),
+            tasks,
+        });
+    }
+    match row
+        .iter()
+        .enumerate()
+        .find(|(_, v)| v.is_some_and(|v| !v.is_finite()))
+    {
+        Some((index, value)) => Err(RowError::NotFinite {
+            index,
+            value: value.unwrap_or(f64::NAN),
+        }),
+        None => Ok(()),
+    }
+}

@@ -171,23 +171,7 @@ impl TeamMember {
         if !self.left.is_empty() {
             return Err(RowError::Ended(self.left.clone()));
         }
-        if row.is_empty() || row.len() > self.tasks() {
-            return Err(RowError::Length {
-                got: row.len(),
-                tasks: self.tasks(),
-            });
-        }
-        match row
-            .iter()
-            .enumerate()
-            .find(|(_, v)| v.is_some_and(|v| !v.is_finite()))
-        {
-            Some((index, value)) => Err(RowError::NotFinite {
-                index,
-                value: value.unwrap_or(f64::NAN),
-            }),
-            None => Ok(()),
-        }
+        crate::standing::answer::check_row(row, self.tasks())
     }
 
     /// One episode with this robot's `row`, one cost per task of the episode (every robot

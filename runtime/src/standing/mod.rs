@@ -12,6 +12,8 @@
 //! * [`serve`]: `admm-ta agent --team FILE --id I --serve`, the same over JSON lines on
 //!   standard input and output, for robot programs in any language;
 //! * [`answer`]: what a robot gets back per episode, and the rows it cannot give;
+//! * [`threads`]: a standing team in one process, a thread per robot (benchmarks,
+//!   simulations);
 //! * [`agreement`]: what the team floods around an episode and how it merges.
 
 pub mod agreement;
@@ -19,6 +21,7 @@ pub mod answer;
 mod episode;
 pub mod member;
 pub mod serve;
+pub mod threads;
 
 pub use answer::{Answer, RowError};
 pub use member::TeamMember;
