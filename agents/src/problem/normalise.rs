@@ -59,6 +59,36 @@ pub fn check_hall(costs: &CostMatrix, case: AssignmentCase) -> Result<(), Proble
     }
 }
 
+/// The map of the allowed costs `[lo, hi]` (minimisation sign) onto `[0, 1]`: `(c − lo) /
+/// (hi − lo)`, 0 for constant costs, in halves for spreads beyond the largest double.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnitMap {
+    lo: f64,
+    /// `hi − lo`, or `hi/2 − lo/2` in halves.
+    scale: f64,
+    halves: bool,
+}
+
+impl UnitMap {
+    pub fn new(lo: f64, hi: f64) -> Self {
+        // Halves keep `hi − lo` finite for spreads beyond the largest double.
+        let halves = !(hi - lo).is_finite();
+        let scale = if halves { hi / 2.0 - lo / 2.0 } else { hi - lo };
+        Self { lo, scale, halves }
+    }
+
+    /// `c` in `[0, 1]`.
+    pub fn map(&self, c: f64) -> f64 {
+        if self.scale <= 0.0 {
+            0.0
+        } else if self.halves {
+            ((c / 2.0 - self.lo / 2.0) / self.scale).clamp(0.0, 1.0)
+        } else {
+            ((c - self.lo) / self.scale).clamp(0.0, 1.0)
+        }
+    }
+}
+
 /// Costs in the minimisation sign: `c`, or `−c` for profits.
 pub fn signed(maximize: bool, value: f64) -> f64 {
     if maximize { -value } else { value }
@@ -106,18 +136,9 @@ pub fn normalise(
             (lo.min(v), hi.max(v))
         });
     let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 0.0) };
-    // Halves keep `hi − lo` finite for spreads beyond the largest double.
-    let halves = !(hi - lo).is_finite();
-    let scale = if halves { hi / 2.0 - lo / 2.0 } else { hi - lo };
-    let normalise = |v: f64| {
-        if scale <= 0.0 {
-            0.0
-        } else if halves {
-            ((v / 2.0 - lo / 2.0) / scale).clamp(0.0, 1.0)
-        } else {
-            ((v - lo) / scale).clamp(0.0, 1.0)
-        }
-    };
+    let unit = UnitMap::new(lo, hi);
+    let normalise = |v: f64| unit.map(v);
+    let (halves, scale) = (unit.halves, unit.scale);
     let (columns, internal_case, idle_task) = internal_shape(n, m, case);
     let raise = if idle_task { 1.0 } else { 0.0 };
     let transposed = transposed(n, m, case);

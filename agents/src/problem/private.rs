@@ -27,7 +27,7 @@
 //! assert_eq!(team.epsilon(2), Some(0.5 / 3.0)); // integer costs: step 2 of a range of 4
 //! ```
 
-use crate::problem::normalise::{RESOLUTION, signed};
+use crate::problem::normalise::{RESOLUTION, UnitMap, signed};
 
 /// What the team agrees on about its stacked cost rows (minimisation sign, allowed pairs
 /// only): their bounds and the lattice they lie on.
@@ -139,23 +139,9 @@ impl TeamScale {
         } else {
             (self.lo, self.hi)
         };
-        // Halves keep `hi − lo` finite for spreads beyond the largest double.
-        let halves = !(hi - lo).is_finite();
-        let scale = if halves { hi / 2.0 - lo / 2.0 } else { hi - lo };
+        let unit = UnitMap::new(lo, hi);
         row.iter()
-            .map(|v| match v {
-                None => penalty,
-                Some(v) => {
-                    let v = signed(maximize, *v);
-                    if scale <= 0.0 {
-                        0.0
-                    } else if halves {
-                        ((v / 2.0 - lo / 2.0) / scale).clamp(0.0, 1.0)
-                    } else {
-                        ((v - lo) / scale).clamp(0.0, 1.0)
-                    }
-                }
-            })
+            .map(|v| v.map_or(penalty, |v| unit.map(signed(maximize, v))))
             .collect()
     }
 

@@ -6,8 +6,10 @@ use crate::exchange::{Exchange, ExchangeError};
 use crate::options::OnFailure;
 use crate::options::SolveOptions;
 use crate::process::member_error::MemberError;
+use crate::process::scenario::Scenario;
 use crate::standing::agreement::{Closing, Flooded, Opening, Presence};
 use crate::standing::answer::Answer;
+use crate::team::team_file::Team;
 use crate::workload::plan::{BadRho, prepare};
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::local_stop::{LocalCertifiedStop, LocalStopError};
@@ -216,6 +218,36 @@ fn moved_far(row: &[Option<f64>], last: &[Option<f64>], scale: &TeamScale) -> bo
 }
 
 impl Episodes {
+    /// Robot `id`'s side of the private team in `team` (whose `scenario` every robot derives
+    /// alike), with its round `plan`, on `graph`.
+    pub(super) fn new(
+        team: &Team,
+        id: usize,
+        scenario: &Scenario,
+        options: SolveOptions,
+        graph: Graph,
+        plan: AgentPlan,
+    ) -> Self {
+        Self {
+            id,
+            robots: scenario.robots,
+            tasks: scenario.tasks,
+            maximize: team.file.maximize,
+            warm: team.file.warm_start.unwrap_or(true),
+            seed: team.file.seed,
+            on_failure: team.file.on_failure.unwrap_or_default(),
+            episode_timeout: Duration::from_secs_f64(team.episode_timeout()),
+            round_timeout: plan.round_timeout,
+            options,
+            graph,
+            plan,
+            agent: None,
+            rounds: None,
+            message: vec![0.0; scenario.payload_len()],
+            last: None,
+        }
+    }
+
     /// The round last gathered.
     pub(super) fn round(&self) -> u64 {
         self.rounds.as_ref().map_or(0, RoundLoop::round)

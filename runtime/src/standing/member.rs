@@ -111,26 +111,8 @@ impl TeamMember {
             }
         };
         tracing::debug!(robot = id, "joined the standing team");
-        let payload_len = scenario.payload_len();
         Ok(Self {
-            episodes: Episodes {
-                id,
-                robots: n,
-                tasks: scenario.tasks,
-                maximize: team.file.maximize,
-                warm: team.file.warm_start.unwrap_or(true),
-                seed: team.file.seed,
-                on_failure: team.file.on_failure.unwrap_or_default(),
-                episode_timeout: Duration::from_secs_f64(team.episode_timeout()),
-                round_timeout: Duration::from_millis(scenario.round_timeout_ms),
-                options,
-                graph,
-                plan,
-                agent: None,
-                rounds: None,
-                message: vec![0.0; payload_len],
-                last: None,
-            },
+            episodes: Episodes::new(&team, id, &scenario, options, graph, plan),
             scenario,
             episode: 0,
             left: Vec::new(),

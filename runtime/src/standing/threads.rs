@@ -29,7 +29,7 @@ use crate::team::errors::{PrivateTeamError, TeamFileError};
 use crate::team::member::team_scenario;
 use crate::team::team_file::Team;
 use admm_ta_agents::methods::probe::{ProbeAgent, ProbeStep};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// What a robot gives in an episode.
 #[derive(Debug, Clone, PartialEq)]
@@ -73,24 +73,14 @@ pub fn run_on_threads(
                 plan: &crate::exchange::round_loop::AgentPlan|
      -> Result<Vec<Answer>, ExchangeError> {
         let id = plan.index;
-        let mut robot = Episodes {
+        let mut robot = Episodes::new(
+            team,
             id,
-            robots: n,
-            tasks: scenario.tasks,
-            maximize: team.file.maximize,
-            warm: team.file.warm_start.unwrap_or(true),
-            seed: team.file.seed,
-            on_failure: team.file.on_failure.unwrap_or_default(),
-            episode_timeout: Duration::from_secs_f64(team.episode_timeout()),
-            round_timeout: plan.round_timeout,
-            options: options.clone(),
-            graph: graph.clone(),
-            plan: plan.clone(),
-            agent: None,
-            rounds: None,
-            message: vec![0.0; payload_len],
-            last: None,
-        };
+            &scenario,
+            options.clone(),
+            graph.clone(),
+            plan.clone(),
+        );
         let mut answers = Vec::with_capacity(episodes as usize);
         for episode in 0..episodes {
             let input = rows(episode, id);

@@ -11,6 +11,16 @@ use crate::runtime::team::team_file::Team;
 use crate::topologies::RobotRef;
 use anyhow::{Context, Result};
 
+/// The number of robot `robot` of the team in `team` (a name looked up in its cost file).
+fn robot_number(team: &std::path::Path, robot: RobotRef) -> Result<usize> {
+    Ok(match robot {
+        RobotRef::Index(id) => id,
+        named => Team::read(team)
+            .and_then(|t| t.robot(&named))
+            .with_context(|| format!("agent {named}"))?,
+    })
+}
+
 /// Runs the agent. An independently started agent whose team reached the round limit before
 /// any certificate ends with [`Outcome::Uncertified`] (5), as `solve` and `collect` do; an
 /// agent of a launcher's run leaves that to the launcher.
@@ -23,12 +33,7 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
             serve: true,
             ..
         } => {
-            let id = match robot {
-                RobotRef::Index(id) => id,
-                named => Team::read(&team)
-                    .and_then(|t| t.robot(&named))
-                    .with_context(|| format!("agent {named}"))?,
-            };
+            let id = robot_number(&team, robot)?;
             let stdin = std::io::BufReader::new(std::io::stdin());
             let served = serve::serve(&team, id, stdin, &mut std::io::stdout());
             (id, served.map(|_| ()))
@@ -39,12 +44,7 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
             row: Some(row),
             ..
         } => {
-            let id = match robot {
-                RobotRef::Index(id) => id,
-                named => Team::read(&team)
-                    .and_then(|t| t.robot(&named))
-                    .with_context(|| format!("agent {named}"))?,
-            };
+            let id = robot_number(&team, robot)?;
             let answer = serve::one_episode(&team, id, &row);
             if let Ok(a) = &answer {
                 outln!("{}", serde_json::to_string(a)?);
@@ -64,12 +64,7 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
             id: Some(robot),
             ..
         } => {
-            let id = match robot {
-                RobotRef::Index(id) => id,
-                named => Team::read(&team)
-                    .and_then(|t| t.robot(&named))
-                    .with_context(|| format!("agent {named}"))?,
-            };
+            let id = robot_number(&team, robot)?;
             let report = member::run_member(&team, id);
             if let Ok(r) = &report {
                 if !r.outcome.converged {
