@@ -137,6 +137,17 @@ impl FastConsensus {
         self.readout.invalidate();
     }
 
+    /// Restarts the readout filter's history (a warm start: the multipliers and edge
+    /// variables are kept, the extrapolation starts over from the new episode's rounds).
+    pub fn restart_readout(&mut self) {
+        if let Some(f) = &mut self.filter {
+            f.updates = 0;
+            f.increments.fill(0);
+            f.q.fill(0.0);
+        }
+        self.readout.invalidate();
+    }
+
     /// `Σ_i Q_i = 0` holds exactly (the robot's neighbour sums are exact).
     pub fn exact(&self) -> bool {
         self.exact
