@@ -71,6 +71,8 @@ enum Request {
 
 enum Input {
     Line(String),
+    /// A line that is no text, or too long: an error line, and the next line.
+    Bad(String),
     /// End of input, or an input that cannot be read (the same for the robot).
     End(Option<String>),
 }
@@ -84,14 +86,29 @@ fn read_lines(input: impl BufRead + Send + 'static) -> Receiver<Input> {
             let mut input = input;
             let input = &mut input;
             loop {
-                let mut line = String::new();
-                let read = std::io::Read::take(&mut *input, MAX_LINE).read_line(&mut line);
+                let mut bytes = Vec::new();
+                let read = std::io::Read::take(&mut *input, MAX_LINE).read_until(b'\n', &mut bytes);
                 let message = match read {
                     Ok(0) => Input::End(None),
-                    Ok(_) if !line.ends_with('\n') && line.len() as u64 >= MAX_LINE => {
-                        Input::End(Some(format!("a line longer than {MAX_LINE} bytes")))
+                    Ok(_) if !bytes.ends_with(b"\n") && bytes.len() as u64 >= MAX_LINE => {
+                        // The rest of the line goes too.
+                        let mut rest = Vec::new();
+                        loop {
+                            rest.clear();
+                            match std::io::Read::take(&mut *input, MAX_LINE)
+                                .read_until(b'\n', &mut rest)
+                            {
+                                Ok(0) | Err(_) => break,
+                                Ok(_) if rest.ends_with(b"\n") => break,
+                                Ok(_) => {}
+                            }
+                        }
+                        Input::Bad(format!("a line longer than {MAX_LINE} bytes"))
                     }
-                    Ok(_) => Input::Line(line),
+                    Ok(_) => match String::from_utf8(bytes) {
+                        Ok(line) => Input::Line(line),
+                        Err(_) => Input::Bad("a line that is not UTF-8 text".into()),
+                    },
                     Err(e) => Input::End(Some(e.to_string())),
                 };
                 let end = matches!(message, Input::End(_));
@@ -293,6 +310,12 @@ pub fn serve(
                         }
                     }
                 },
+                Ok(Input::Bad(why)) => {
+                    if !send(output, &row_error(episode, id, &why)) {
+                        member.leave()?;
+                        return Ok(ServeEnd::OutputClosed);
+                    }
+                }
                 Ok(Input::End(why)) => {
                     if let Some(why) = why {
                         tracing::warn!(error = %why, "the robot program's input failed");

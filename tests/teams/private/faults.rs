@@ -45,6 +45,12 @@ fn bad_rows_missing_rows_and_leaving() {
         let text = error["error"].as_str().unwrap_or_else(|| panic!("{error}"));
         assert!(!text.is_empty() && error["episode"] == 0, "{error}");
     }
+    team_of[2].send_bytes(b"\xff\xfe not text\n");
+    let error = team_of[2].next();
+    assert!(
+        error["error"].as_str().is_some_and(|e| e.contains("UTF-8")),
+        "{error}"
+    );
     assert_optimal(
         &episode(&mut team_of, &rows),
         &rows,

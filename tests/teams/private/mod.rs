@@ -96,6 +96,13 @@ impl Sidecar {
         stdin.flush().unwrap();
     }
 
+    /// Raw bytes (a line that is no text).
+    pub(super) fn send_bytes(&mut self, bytes: &[u8]) {
+        let stdin = self.stdin.as_mut().unwrap();
+        stdin.write_all(bytes).unwrap();
+        stdin.flush().unwrap();
+    }
+
     /// Its row (an episode with fewer tasks than the team's says how many).
     pub(super) fn send_row(&mut self, row: &Row) {
         self.send(&serde_json::json!({ "costs": row, "tasks": row.len() }).to_string());
