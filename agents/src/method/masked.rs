@@ -14,7 +14,7 @@
 //! adding nothing to that robot's cost column): the certificate's `Σ_i G_i = C` still holds
 //! over the robots that take part, and the stop protocol counts the relay like any robot.
 
-use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, NewCostsError, StepReport};
+use crate::agent::{ConsensusAgent, Inbox, NewCostsError, StepReport};
 use crate::method::agent::MethodAgent;
 
 /// Which robots take part and which tasks exist (both sorted, both non-empty).
@@ -172,12 +172,6 @@ impl ConsensusAgent for MaskedAgent {
 
     fn own_column(&self) -> &[f64] {
         self.inner.own_column()
-    }
-}
-
-impl AgentAlgorithm for MaskedAgent {
-    fn set_costs(&mut self, costs: &[f64], warm: bool) -> Result<(), NewCostsError> {
-        self.inner.set_costs(costs, warm)
     }
 }
 

@@ -5,6 +5,7 @@
 //! round loop and writes its outcome as `result-I.json` into the run directory. It always
 //! returns (never `process::exit`), so iceoryx2's `Drop`s release its shared memory.
 
+use crate::endpoint::AgentEndpoint;
 use crate::exchange::ExchangeError;
 use crate::exchange::round_loop::{AgentOutcome, run_agent};
 use crate::process::connect::connect;
@@ -132,22 +133,8 @@ pub fn run_scenario(
     };
     let (outcome, episodes) = ran.map_err(|e| {
         tracing::warn!(error = %e, "stopped");
-        if let ExchangeError::Stopped { signal, .. } = e {
-            if crate::signals::received().is_some() {
-                // Our own signal: the rest of the team stops too (nobody failed). The stop
-                // request goes on the board first (the first request wins), where the other
-                // agents and a launcher read who got it, then to agents that do not read the
-                // board; a team without a board on this machine skips it.
-                if let Ok(board) = crate::board::Board::open(&scenario.board_shm, scenario.robots) {
-                    let _ = board.request_stop(signal, Some(index));
-                }
-                endpoint.announce_stop(signal);
-            }
-            // Not a failure: the process ends as if it had got the signal itself.
-            crate::signals::record(signal);
-        } else {
-            endpoint.blame_for(&e);
-        }
+        let board = crate::board::Board::open(&scenario.board_shm, scenario.robots).ok();
+        tell_the_team(&*endpoint, board.as_ref(), index, &e);
         MemberError::failed(e)
     })?;
     // Finished, not dead: a neighbour that scans the run's nodes while this one's node goes
@@ -183,6 +170,30 @@ pub fn run_scenario(
             })
         })?;
     Ok(report)
+}
+
+/// After agent `index`'s run ended with `error`: a termination signal to this process stops
+/// the rest of the team too (nobody failed): the stop request goes on the `board` first (the
+/// first request wins), where the other agents and a launcher read who got it, then to
+/// agents that do not read the board; the process then ends as if it had got the signal
+/// itself, whoever got it. Any other error points the others at the agent to blame.
+pub(crate) fn tell_the_team(
+    endpoint: &dyn AgentEndpoint,
+    board: Option<&crate::board::Board>,
+    index: usize,
+    error: &ExchangeError,
+) {
+    if let ExchangeError::Stopped { signal, .. } = *error {
+        if crate::signals::received().is_some() {
+            if let Some(board) = board {
+                let _ = board.request_stop(signal, Some(index));
+            }
+            endpoint.announce_stop(signal);
+        }
+        crate::signals::record(signal);
+    } else {
+        endpoint.blame_for(error);
+    }
 }
 
 /// The agent's result could not be written.

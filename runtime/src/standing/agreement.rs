@@ -100,24 +100,6 @@ impl Opening {
         self.bits[bit / BITS_PER_WORD] >> (bit % BITS_PER_WORD) & 1 != 0
     }
 
-    fn write_words(&self, out: &mut [f64]) {
-        self.scale.write(out);
-        for (slot, word) in out[TeamScale::WORDS..].iter_mut().zip(&self.bits) {
-            *slot = *word as f64;
-        }
-    }
-
-    fn merge_words(&mut self, words: &[f64]) {
-        self.scale.join(&TeamScale::read(words));
-        let limit = (1u64 << BITS_PER_WORD) as f64;
-        for (word, theirs) in self.bits.iter_mut().zip(&words[TeamScale::WORDS..]) {
-            // A corrupt word cannot set bits beyond a word's.
-            if theirs.is_finite() && *theirs >= 0.0 && *theirs < limit {
-                *word |= *theirs as u64;
-            }
-        }
-    }
-
     fn status(&self, offset: usize) -> Vec<usize> {
         (0..self.robots)
             .filter(|i| self.get(2 * self.tasks + 3 * i + offset))
@@ -159,6 +141,26 @@ impl Opening {
     }
 }
 
+impl Flooded for Opening {
+    fn write(&self, out: &mut [f64]) {
+        self.scale.write(out);
+        for (slot, word) in out[TeamScale::WORDS..].iter_mut().zip(&self.bits) {
+            *slot = *word as f64;
+        }
+    }
+
+    fn merge(&mut self, words: &[f64]) {
+        self.scale.join(&TeamScale::read(words));
+        let limit = (1u64 << BITS_PER_WORD) as f64;
+        for (word, theirs) in self.bits.iter_mut().zip(&words[TeamScale::WORDS..]) {
+            // A corrupt word cannot set bits beyond a word's.
+            if theirs.is_finite() && *theirs >= 0.0 && *theirs < limit {
+                *word |= *theirs as u64;
+            }
+        }
+    }
+}
+
 /// What the robots report after an episode: every robot's cost of its own task and, when
 /// the message has room, its task.
 #[derive(Debug, Clone, PartialEq)]
@@ -191,26 +193,6 @@ impl Closing {
         Self { costs, tasks }
     }
 
-    fn write_words(&self, out: &mut [f64]) {
-        let n = self.costs.len();
-        out[..n].copy_from_slice(&self.costs);
-        out[n..n + self.tasks.len()].copy_from_slice(&self.tasks);
-    }
-
-    fn merge_words(&mut self, words: &[f64]) {
-        let n = self.costs.len();
-        for (mine, theirs) in self.costs.iter_mut().zip(&words[..n]) {
-            if mine.is_nan() {
-                *mine = *theirs;
-            }
-        }
-        for (mine, theirs) in self.tasks.iter_mut().zip(&words[n..]) {
-            if mine.is_nan() {
-                *mine = *theirs;
-            }
-        }
-    }
-
     /// The team's total cost, once every robot is heard of (`+∞`: a forbidden pair).
     pub fn total(&self) -> Option<f64> {
         let complete = self.costs.iter().all(|c| !c.is_nan());
@@ -230,21 +212,25 @@ impl Closing {
     }
 }
 
-impl Flooded for Opening {
-    fn write(&self, out: &mut [f64]) {
-        self.write_words(out)
-    }
-    fn merge(&mut self, words: &[f64]) {
-        self.merge_words(words)
-    }
-}
-
 impl Flooded for Closing {
     fn write(&self, out: &mut [f64]) {
-        self.write_words(out)
+        let n = self.costs.len();
+        out[..n].copy_from_slice(&self.costs);
+        out[n..n + self.tasks.len()].copy_from_slice(&self.tasks);
     }
+
     fn merge(&mut self, words: &[f64]) {
-        self.merge_words(words)
+        let n = self.costs.len();
+        for (mine, theirs) in self.costs.iter_mut().zip(&words[..n]) {
+            if mine.is_nan() {
+                *mine = *theirs;
+            }
+        }
+        for (mine, theirs) in self.tasks.iter_mut().zip(&words[n..]) {
+            if mine.is_nan() {
+                *mine = *theirs;
+            }
+        }
     }
 }
 

@@ -5,13 +5,12 @@ use crate::exchange::round_loop::{AgentPlan, AgentStop, RoundLoop};
 use crate::exchange::{Exchange, ExchangeError};
 use crate::options::OnFailure;
 use crate::options::SolveOptions;
-use crate::process::member_error::MemberError;
 use crate::process::scenario::Scenario;
 use crate::standing::agreement::{Closing, Flooded, Opening, Presence};
 use crate::standing::answer::Answer;
 use crate::team::team_file::Team;
 use crate::workload::plan::{BadRho, prepare};
-use admm_ta_agents::agent::ConsensusAgent;
+use admm_ta_agents::agent::{ConsensusAgent, NewCostsError};
 use admm_ta_agents::certify::local_stop::{LocalCertifiedStop, LocalStopError};
 use admm_ta_agents::method::masked::{MaskedAgent, Part};
 use admm_ta_agents::problem::private::TeamScale;
@@ -20,39 +19,22 @@ use admm_ta_agents::problem::{AssignmentCase, CostMatrix, ProblemError, TaskAssi
 use admm_ta_topologies::Graph;
 use std::time::{Duration, Instant};
 
-/// Why an episode failed.
+/// Why an episode failed: the exchange, or (a bug: the part's shape is checked before)
+/// its agent could not be built.
 #[derive(Debug, thiserror::Error)]
 pub(super) enum EpisodeError {
     #[error(transparent)]
     Exchange(#[from] ExchangeError),
-    /// The agent of the episode's part could not be built (it can only be a bug: the part's
-    /// shape is checked before).
-    #[error("the episode's agent: {0}")]
-    Agent(String),
-}
-
-impl EpisodeError {
-    pub(super) fn into_member_error(self) -> MemberError {
-        MemberError::failed(self)
-    }
-}
-
-impl From<ProblemError> for EpisodeError {
-    fn from(e: ProblemError) -> Self {
-        Self::Agent(e.to_string())
-    }
-}
-
-impl From<BadRho> for EpisodeError {
-    fn from(e: BadRho) -> Self {
-        Self::Agent(e.to_string())
-    }
-}
-
-impl From<LocalStopError> for EpisodeError {
-    fn from(e: LocalStopError) -> Self {
-        Self::Agent(e.to_string())
-    }
+    #[error("the episode's problem")]
+    Problem(#[from] ProblemError),
+    #[error(transparent)]
+    Rho(#[from] BadRho),
+    #[error(transparent)]
+    Stop(#[from] LocalStopError),
+    #[error("the episode's agent")]
+    Costs(#[from] NewCostsError),
+    #[error("the team's method has no agents")]
+    NoAgents,
 }
 
 /// What one robot saw of an episode.
@@ -180,7 +162,6 @@ pub(super) struct Episodes {
     pub(super) seed: u64,
     pub(super) on_failure: OnFailure,
     pub(super) episode_timeout: Duration,
-    pub(super) round_timeout: Duration,
     pub(super) options: SolveOptions,
     pub(super) graph: Graph,
     pub(super) plan: AgentPlan,
@@ -237,7 +218,6 @@ impl Episodes {
             seed: team.file.seed,
             on_failure: team.file.on_failure.unwrap_or_default(),
             episode_timeout: Duration::from_secs_f64(team.episode_timeout()),
-            round_timeout: plan.round_timeout,
             options,
             graph,
             plan,
@@ -269,10 +249,7 @@ impl Episodes {
         // The part's shape (no costs: each robot gives its agent its own row).
         let shape = CostMatrix::new(r, k, vec![0.0; r * k])?;
         let problem = TaskAssignmentProblem::internal_from(shape, case)?;
-        let setup = self
-            .options
-            .method_setup()
-            .ok_or_else(|| EpisodeError::Agent("a method without agents".into()))?;
+        let setup = self.options.method_setup().ok_or(EpisodeError::NoAgents)?;
         let plan = prepare(&problem, &self.graph, &self.options, setup)?;
         // Its own neighbours, whatever its place among the robots that take part.
         let degree = self.graph.degree(self.id);
@@ -301,7 +278,7 @@ impl Episodes {
             opening.set_moved();
         }
         // The slowest robot's program may take the episode deadline to give its row.
-        let wait = self.episode_timeout + self.round_timeout;
+        let wait = self.episode_timeout + self.plan.round_timeout;
         {
             if self.rounds.is_none() {
                 self.message.fill(0.0);
@@ -382,9 +359,7 @@ impl Episodes {
             _ => vec![0.0; k],
         };
         let (agent, stop) = self.agent.as_mut().expect("built above");
-        agent
-            .set_costs(&costs, warm)
-            .map_err(|e| EpisodeError::Agent(e.to_string()))?;
+        agent.set_costs(&costs, warm)?;
         let rounds = self.rounds.as_mut().expect("started");
         let plan = &self.plan;
         // Its iterate again, so that the method's first step reads the neighbours' iterates.
@@ -392,7 +367,7 @@ impl Episodes {
         rounds.side_round(
             exchange,
             plan,
-            Instant::now() + self.round_timeout,
+            Instant::now() + plan.round_timeout,
             &mut |out| current.write_initial_payload(out),
             &mut |_| {},
         )?;
@@ -412,7 +387,7 @@ impl Episodes {
             plan,
             &mut closing,
             spread_rounds,
-            self.round_timeout,
+            plan.round_timeout,
             message,
         )?;
         Ok(Outcome {

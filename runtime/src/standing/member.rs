@@ -3,6 +3,7 @@
 use crate::board::Board;
 use crate::endpoint::AgentEndpoint;
 use crate::exchange::ExchangeError;
+use crate::process::agent::tell_the_team;
 use crate::process::connect::connect;
 use crate::process::member_error::MemberError;
 use crate::process::namespace::RunNamespace;
@@ -10,8 +11,8 @@ use crate::process::scenario::Scenario;
 use crate::standing::agreement::Presence;
 use crate::standing::answer::{Answer, RowError};
 use crate::standing::episode::{EpisodeError, Episodes};
-use crate::team::errors::{JoinError, PrivateTeamError, TeamFileError};
-use crate::team::member::{Membership, member_scenario};
+use crate::team::errors::{PrivateTeamError, TeamFileError};
+use crate::team::member::{Membership, member_of};
 use crate::team::team_file::Team;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -71,24 +72,9 @@ impl TeamMember {
                 PrivateTeamError::NotPrivate,
             )));
         }
-        let n = team.file.robots;
-        if id >= n {
-            return Err(MemberError::refused(JoinError::NoSuchAgent {
-                id,
-                robots: n,
-            }));
-        }
         let options = team.solve_options().map_err(MemberError::refused)?;
-        let host = team
-            .file
-            .transport
-            .bridged()
-            .then(|| team.host_of(id))
-            .flatten();
-        let (mut scenario, namespace) = member_scenario(&team, host)?;
+        let (scenario, namespace) = member_of(&team, id)?;
         let graph = scenario.graph().map_err(MemberError::refused)?;
-        crate::process::limits::check(scenario.transport, 1, graph.degree(id))
-            .map_err(MemberError::refused)?;
         let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
         let membership = if team.file.transport.host_board() {
             Some(
@@ -96,8 +82,6 @@ impl TeamMember {
                     .map_err(MemberError::refused)?,
             )
         } else {
-            let host = team.host_of(id).expect("checked: every robot is on a host");
-            scenario.transport_config = serde_json::to_value(team.zenoh_links(host)).ok();
             None
         };
         let plan = scenario.plan(id).map_err(MemberError::refused)?;
@@ -216,17 +200,13 @@ impl TeamMember {
     /// Stops the whole team because this process got termination signal `signal`.
     pub fn stop(&mut self, signal: i32) -> MemberError {
         crate::signals::record(signal);
-        if let Some(board) = self.membership.as_ref().map(Membership::board) {
-            let _ = board.request_stop(signal, Some(self.id()));
-        }
-        if let Some(endpoint) = &self.endpoint {
-            endpoint.announce_stop(signal);
-        }
-        self.failed = true;
-        MemberError::failed(ExchangeError::Stopped {
+        let stopped = ExchangeError::Stopped {
             agent: self.id(),
             signal,
-        })
+        };
+        self.blame(&stopped);
+        self.failed = true;
+        MemberError::failed(stopped)
     }
 
     fn episode_with(
@@ -252,8 +232,10 @@ impl TeamMember {
             Ok(outcome) => outcome,
             Err(e) => {
                 self.failed = true;
-                self.blame(&e);
-                return Err(e.into_member_error());
+                if let EpisodeError::Exchange(error) = &e {
+                    self.blame(error);
+                }
+                return Err(MemberError::failed(e));
             }
         };
         let episode = self.episode;
@@ -262,27 +244,17 @@ impl TeamMember {
         Ok(outcome.answer(episode, self.id(), row, began.elapsed()))
     }
 
-    /// After a failed episode: who is to blame, on the board and to the other agents.
-    fn blame(&self, error: &EpisodeError) {
-        let EpisodeError::Exchange(error) = error else {
-            return;
-        };
+    /// After a failed episode: who is to blame, on the board and to the other agents (no
+    /// launcher reports this one: a failure of its own is marked on the board; the first
+    /// mark wins).
+    fn blame(&self, error: &ExchangeError) {
         let Some(endpoint) = &self.endpoint else {
             return;
         };
-        if let ExchangeError::Stopped { signal, .. } = error {
-            if crate::signals::received().is_some() {
-                if let Some(board) = self.membership.as_ref().map(Membership::board) {
-                    let _ = board.request_stop(*signal, Some(self.id()));
-                }
-                endpoint.announce_stop(*signal);
-            }
-            crate::signals::record(*signal);
-        } else {
-            endpoint.blame_for(error);
-            if let Some(board) = self.membership.as_ref().map(Membership::board) {
-                let _ = board.mark_failed(self.id());
-            }
+        let board = self.membership.as_ref().map(Membership::board);
+        tell_the_team(&**endpoint, board, self.id(), error);
+        if let (Some(board), false) = (board, matches!(error, ExchangeError::Stopped { .. })) {
+            let _ = board.mark_failed(self.id());
         }
     }
 }

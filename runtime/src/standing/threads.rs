@@ -106,7 +106,7 @@ pub fn run_on_threads(
                 Err(e) => {
                     let text = e.to_string();
                     *failure.lock().unwrap_or_else(|p| p.into_inner()) =
-                        Some(e.into_member_error());
+                        Some(MemberError::failed(e));
                     return Err(ExchangeError::Transport {
                         agent: id,
                         what: text,

@@ -227,6 +227,33 @@ impl Membership {
     }
 }
 
+/// Agent `id` of `team`, as every member of it derives it: its scenario (on its host's
+/// namespace in a mixed team, with its host router's links on Zenoh) and namespace, its id
+/// and the system's limits checked (a refusal).
+pub(crate) fn member_of(team: &Team, id: usize) -> Result<(Scenario, RunNamespace), MemberError> {
+    let n = team.file.robots;
+    if id >= n {
+        return Err(MemberError::refused(JoinError::NoSuchAgent {
+            id,
+            robots: n,
+        }));
+    }
+    let host = team
+        .file
+        .transport
+        .bridged()
+        .then(|| team.host_of(id))
+        .flatten();
+    let (mut scenario, namespace) = member_scenario(team, host)?;
+    let degree = scenario.graph().map_or(n, |g| g.degree(id));
+    crate::process::limits::check(scenario.transport, 1, degree).map_err(MemberError::refused)?;
+    if !team.file.transport.host_board() {
+        let host = team.host_of(id).expect("checked: every robot is on a host");
+        scenario.transport_config = serde_json::to_value(team.zenoh_links(host)).ok();
+    }
+    Ok((scenario, namespace))
+}
+
 /// Runs agent `id` of the team in `team_path` to the end; errors are one line.
 /// Everything before the run itself (the team file, the id, the limits, joining the team)
 /// is refused ([`MemberError::Refused`]); what fails while it runs is a failure.
@@ -241,22 +268,7 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
     }
     let _span = tracing::info_span!("agent", run = %team.file.run, agent = id).entered();
     tracing::debug!(team = %team_path.display(), "joining the team");
-    let n = team.file.robots;
-    if id >= n {
-        return Err(MemberError::refused(JoinError::NoSuchAgent {
-            id,
-            robots: n,
-        }));
-    }
-    let host = team
-        .file
-        .transport
-        .bridged()
-        .then(|| team.host_of(id))
-        .flatten();
-    let (mut scenario, namespace) = member_scenario(&team, host)?;
-    let degree = scenario.graph().map_or(n, |g| g.degree(id));
-    crate::process::limits::check(scenario.transport, 1, degree).map_err(MemberError::refused)?;
+    let (mut scenario, namespace) = member_of(&team, id)?;
     let results = team.results_dir();
     std::fs::create_dir_all(&results).map_err(|source| {
         MemberError::refused(JoinError::Results {
@@ -270,8 +282,6 @@ pub fn run_member(team_path: &Path, id: usize) -> Result<AgentReport, MemberErro
     let _ = std::fs::remove_file(&result);
     if !team.file.transport.host_board() {
         // No shared memory: presence, failures and cleanup are Zenoh's.
-        let host = team.host_of(id).expect("checked: every robot is on a host");
-        scenario.transport_config = serde_json::to_value(team.zenoh_links(host)).ok();
         let startup =
             Duration::from_millis(scenario.startup_timeout_ms).saturating_sub(started.elapsed());
         scenario.startup_timeout_ms = startup.as_millis() as u64;
