@@ -10,10 +10,10 @@
 //! * `stop` — the round at which the decentralized certified stop ended the run, and whether
 //!   its assignment was optimal (a *wrong stop* otherwise).
 //!
-//! The primal method runs twice: the paper's variant (the rows above, as the paper
-//! defines them) and the fast variant (the default of `solve`), whose relaxed own columns
-//! stay near the polytope's centre on purpose and so never meet the paper's criterion:
-//! its `within` is measured on the robots' decisions (their readout tasks), labelled so.
+//! Every ADMM method runs in both its variants: the paper's (as the paper defines them)
+//! and the fast one (the default of `solve`). The fast primal's relaxed own columns stay
+//! near the polytope's centre on purpose and so never meet the paper's criterion: its
+//! `within` is measured on the robots' decisions (their readout tasks), labelled so.
 //!
 //! The paper does not say how its costs were drawn, and "within 0.1%" is not
 //! shift-invariant (note 9): the table is computed for uniform costs in [0, 1) and again for
@@ -315,7 +315,7 @@ fn render(table: &Table1) -> String {
         }
     );
     out += &format!(
-        "{:<14} {:<7} {:>6} | {:<26} | {:<26} | {:<26} | {:>9} {:>6}\n",
+        "{:<18} {:<7} {:>6} | {:<26} | {:<26} | {:<26} | {:>9} {:>6}\n",
         "method",
         "costs",
         "paper",
@@ -333,7 +333,7 @@ fn render(table: &Table1) -> String {
     };
     for row in &table.rows {
         out += &format!(
-            "{:<14} {:<7} {:>6.0} | {} | {} | {} | {:>9.1} {:>6}\n",
+            "{:<18} {:<7} {:>6.0} | {} | {} | {} | {:>9.1} {:>6}\n",
             format!(
                 "{}{}{}",
                 row.method.name(),

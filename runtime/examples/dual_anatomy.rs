@@ -1,12 +1,16 @@
 //! Where the dual methods' rounds go: per seed, the first round from which the robots'
 //! rounded tasks stay optimal, the neighbours' largest disagreement at that point, and the
-//! round every robot's certificate holds. `RHO_SCALE=F` multiplies the default ρ.
+//! round every robot's certificate holds. `RHO_SCALE=F` multiplies the default ρ,
+//! `VARIANT=paper` runs the paper variant, `TRACE=1` prints every 25th round why the
+//! certificate does not hold yet.
 //! `cargo run --release -p admm-ta-runtime --example dual_anatomy -- ROBOTS TASKS TOPOLOGY uniform|distance SEEDS exact|inexact [ROUNDS]`.
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::method::agent::MethodAgent;
+use admm_ta_agents::method::settings::{GivenSettings, SettingValue};
 use admm_ta_agents::method::team::{AgentInit, TeamContext, TeamParams};
 use admm_ta_agents::methods::Method;
+use admm_ta_agents::methods::dual::VARIANT;
 use admm_ta_agents::problem::cost_model::CostModel;
 use admm_ta_agents::problem::{CaseChoice, TaskAssignmentProblem};
 use admm_ta_runtime::sim::LockstepSim;
@@ -35,7 +39,11 @@ fn main() {
         let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
         let graph = spec.build(n, seed).unwrap();
         let optimum = oracle::solve(&problem).unwrap();
-        let setup = method.setup(&Default::default()).unwrap().unwrap();
+        let given = match std::env::var("VARIANT") {
+            Ok(variant) => GivenSettings::default().set(&VARIANT, SettingValue::Name(variant)),
+            Err(_) => GivenSettings::default(),
+        };
+        let setup = method.setup(&given).unwrap().unwrap();
         let rho = setup
             .default_rho(problem.costs(), graph.mean_degree())
             .unwrap()
@@ -79,6 +87,24 @@ fn main() {
                 }
             } else {
                 since = None;
+            }
+            if std::env::var("TRACE").is_ok() && round % 25 == 0 {
+                let inf = agents
+                    .iter()
+                    .filter(|a| a.certificate_slack().is_infinite())
+                    .count();
+                let big = agents
+                    .iter()
+                    .filter(|a| a.certificate_slack().is_finite() && a.certificate_slack() > tol)
+                    .count();
+                let worst = agents
+                    .iter()
+                    .map(|a| a.certificate_slack())
+                    .filter(|s| s.is_finite())
+                    .fold(0.0, f64::max);
+                println!(
+                    "  round {round}: optimal {optimal} infeasible {inf} price-slack {big} worst {worst:.2e} tol {tol:.1e} dis {disagreement:.1e}"
+                );
             }
             if cert_at.is_none() && agents.iter().all(|a| a.certificate_slack() <= tol) {
                 cert_at = Some(round);

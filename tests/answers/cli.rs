@@ -600,7 +600,7 @@ fn table1_experiment_writes_its_json() {
         assert!(table.contains(needle), "{needle} not in:\n{table}");
     }
     let rows = v["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 8);
+    assert_eq!(rows.len(), 12);
     for row in rows {
         assert_eq!(row["wrong_stops"], 0);
         assert_eq!(row["trials"].as_array().unwrap().len(), 2);
@@ -1092,7 +1092,7 @@ fn rounds_anatomy_quick_writes_its_table_json_and_charts() {
     );
     assert!(table.contains("| cbaa | geometric | chain |"), "{table}");
     let cells = json["cells"].as_array().unwrap();
-    assert_eq!(cells.len(), 7 * 2 * 5);
+    assert_eq!(cells.len(), 9 * 2 * 5);
     for cell in cells.iter().filter(|c| c["contender"]["method"] != "cbaa") {
         assert_eq!(cell["wrong_stops"], 0, "{}", cell["name"]);
     }

@@ -11,7 +11,7 @@
 //! use admm_ta_agents::methods::dual::{GammaFactor, InexactDualSettings};
 //! let given = GivenSettings::default().with(GammaFactor(0.7));
 //! let settings = InexactDualSettings::from_given(&given).unwrap();
-//! assert_eq!(settings.gamma_factor, 0.7);
+//! assert_eq!(settings.gamma_factor, Some(0.7));
 //! assert!(InexactDualSettings::from_given(&GivenSettings::default().with(GammaFactor(0.0))).is_err());
 //! ```
 

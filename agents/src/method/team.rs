@@ -96,8 +96,9 @@ pub trait TeamMethod: Sync + 'static {
     /// ([`crate::method::masked`]).
     const MASKABLE: bool = false;
 
-    /// Values of the payload exchanged every round, for `(robots, tasks)`.
-    fn payload_len(&self, robots: usize, tasks: usize) -> usize;
+    /// Values of the payload exchanged every round with these settings, for
+    /// `(robots, tasks)`.
+    fn payload_len(&self, settings: &Self::Settings, robots: usize, tasks: usize) -> usize;
 
     /// The default ρ for these costs on a graph with this mean degree (methods with a
     /// penalty; 0 for the others).
@@ -147,6 +148,7 @@ pub trait AnyTeamMethod: Sync {
     fn new_costs(&self) -> bool;
     /// Its message is the team's assignment matrix ([`TeamMethod::MASKABLE`]).
     fn maskable(&self) -> bool;
+    /// Values of the payload with the method's default settings.
     fn payload_len(&self, robots: usize, tasks: usize) -> usize;
     /// The method with the `given` settings (each must be one of its own), checked.
     fn configure(
@@ -190,7 +192,7 @@ impl<M: TeamMethod> std::fmt::Debug for Setup<M> {
 
 impl<M: TeamMethod> MethodSetup for Setup<M> {
     fn payload_len(&self, robots: usize, tasks: usize) -> usize {
-        self.method.payload_len(robots, tasks)
+        self.method.payload_len(&self.settings, robots, tasks)
     }
     fn settings_json(&self) -> serde_json::Value {
         serde_json::to_value(&self.settings).expect("settings serialise")
@@ -229,7 +231,7 @@ impl<M: TeamMethod> AnyTeamMethod for M {
         M::MASKABLE
     }
     fn payload_len(&self, robots: usize, tasks: usize) -> usize {
-        TeamMethod::payload_len(self, robots, tasks)
+        TeamMethod::payload_len(self, &M::Settings::default(), robots, tasks)
     }
     fn configure(
         &'static self,

@@ -253,7 +253,7 @@ impl TeamMethod for CbaaMethod {
     type Settings = NoSettings;
     const PENALTY: bool = false;
 
-    fn payload_len(&self, _robots: usize, tasks: usize) -> usize {
+    fn payload_len(&self, _: &NoSettings, _robots: usize, tasks: usize) -> usize {
         2 * tasks
     }
 

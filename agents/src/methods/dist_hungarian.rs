@@ -210,7 +210,7 @@ impl TeamMethod for DistHungarianMethod {
     type Settings = NoSettings;
     const PENALTY: bool = false;
 
-    fn payload_len(&self, robots: usize, tasks: usize) -> usize {
+    fn payload_len(&self, _: &NoSettings, robots: usize, tasks: usize) -> usize {
         robots * tasks
     }
 

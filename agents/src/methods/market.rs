@@ -515,7 +515,7 @@ impl TeamMethod for MarketMethod {
     type Settings = NoSettings;
     const PENALTY: bool = false;
 
-    fn payload_len(&self, robots: usize, _tasks: usize) -> usize {
+    fn payload_len(&self, _: &NoSettings, robots: usize, _tasks: usize) -> usize {
         MarketAgent::payload_len_for(robots)
     }
 

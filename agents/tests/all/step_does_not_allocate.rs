@@ -93,7 +93,7 @@ fn team_rounds_on(
             }))
         })
         .collect();
-    let len = method.payload_len(robots, tasks);
+    let len = setup.payload_len(robots, tasks);
     let mut current = vec![0.0; len * robots];
     for (i, agent) in agents.iter().enumerate() {
         agent.write_initial_payload(&mut current[i * len..(i + 1) * len]);
@@ -131,16 +131,18 @@ fn every_method_steps_without_allocating_after_warm_up() {
         Method::Cbaa,
         Method::Market,
     ] {
-        assert_eq!(
-            team_rounds(method, "paper", 12, 12, AssignmentCase::One, 40),
-            0,
-            "{method:?}"
-        );
-        assert_eq!(
-            team_rounds(method, "paper", 14, 6, AssignmentCase::Two, 40),
-            0,
-            "{method:?}"
-        );
+        for variant in ["paper", "fast"] {
+            assert_eq!(
+                team_rounds(method, variant, 12, 12, AssignmentCase::One, 40),
+                0,
+                "{method:?} ({variant})"
+            );
+            assert_eq!(
+                team_rounds(method, variant, 14, 6, AssignmentCase::Two, 40),
+                0,
+                "{method:?} ({variant})"
+            );
+        }
         // The normalised problems of forbidden pairs, of idle robots and of unserved tasks
         // (transposed: the tasks are the agents).
         for (text, choice) in [

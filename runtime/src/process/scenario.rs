@@ -301,9 +301,13 @@ impl Scenario {
     /// Values of every round message's payload.
     pub fn payload_len(&self) -> usize {
         match self.workload {
-            ScenarioWorkload::Method | ScenarioWorkload::Episodes(_) => self
-                .method
-                .map_or(0, |m| m.payload_len(self.robots, self.tasks)),
+            // The payload may depend on the settings (the dual methods' variants).
+            ScenarioWorkload::Method | ScenarioWorkload::Episodes(_) => match self.method_setup() {
+                Ok(setup) => setup.payload_len(self.robots, self.tasks),
+                Err(_) => self
+                    .method
+                    .map_or(0, |m| m.payload_len(self.robots, self.tasks)),
+            },
             ScenarioWorkload::Probe { payload_len, .. } => payload_len.max(1),
         }
     }

@@ -41,7 +41,8 @@
 //! Case 2 `x_t(τ) = 1` for `τ < −2dρα_t`, `clip(ρκ_{n+t} − 2dρα_t − τ, 0, 1)` above (a
 //! jump where the hinge switches off). `τ − ρκ_{i,i} − Σ_t x_t(τ) = 0` is increasing in `τ`
 //! and piecewise linear with at most `3m` breakpoints in `[ρκ_{i,i}, ρκ_{i,i} + m]`: a sort
-//! and a binary search find the exact root ([`solve_coupled_box`]).
+//! and a binary search find the exact root
+//! ([`crate::methods::dual::coupled_box::solve_coupled_box`]).
 //!
 //! **Inexact dual** replaces (15) by one projected gradient step from `x^k` with the
 //! proximal weight `γ_i` (the paper's closed-form clipped update, with the full gradient):
@@ -97,6 +98,7 @@
 //! unit tests.
 
 use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
+use crate::methods::dual::coupled_box::solve_coupled_box;
 use crate::problem::AssignmentCase;
 
 /// The proximal weight factor `g` of the inexact dual: `γ = g (m+1)/(2dρ)` (`g = 1` is the
@@ -461,101 +463,6 @@ pub const LEVELS: u64 = 8;
 /// Ratio of two rungs.
 pub const LEVEL_STEP: f64 = 16.0;
 
-/// Solves `τ = base + Σ_t x_t(τ)` for the coupled box problem of the exact dual x-update
-/// and writes the `x_t`. `response(t) = (jump, offset)` describes a nonincreasing
-/// `x_t(τ)`: `1` for `τ < jump`, `clip(offset − τ, 0, 1)` for `τ > jump`, anything between
-/// at `τ = jump`. The left side minus the right is increasing and piecewise linear, so the
-/// root is found exactly between two sorted breakpoints (or inside a jump, which is then
-/// filled evenly). `scratch` must hold `3 · tasks + 2` values without reallocating.
-pub fn solve_coupled_box(
-    base: f64,
-    tasks: usize,
-    response: impl Fn(usize) -> (f64, f64),
-    scratch: &mut Vec<f64>,
-    x: &mut [f64],
-) {
-    let (lo, hi) = (base, base + tasks as f64);
-    let value = |t: usize, tau: f64, right: bool| {
-        let (jump, offset) = response(t);
-        if tau < jump || (!right && tau == jump) {
-            1.0
-        } else {
-            (offset - tau).clamp(0.0, 1.0)
-        }
-    };
-    // G at τ with the left (right) limit at jumps.
-    let g =
-        |tau: f64, right: bool| tau - base - (0..tasks).map(|t| value(t, tau, right)).sum::<f64>();
-    scratch.clear();
-    scratch.push(lo);
-    scratch.push(hi);
-    for t in 0..tasks {
-        let (jump, offset) = response(t);
-        for b in [jump, offset - 1.0, offset] {
-            if b > lo && b < hi {
-                scratch.push(b);
-            }
-        }
-    }
-    scratch.sort_unstable_by(f64::total_cmp);
-    // Largest breakpoint with G(b⁻) ≤ 0 (G(lo) ≤ 0 always: Σ x ≥ 0).
-    let (mut a, mut b) = (0usize, scratch.len() - 1);
-    if g(scratch[b], false) <= 0.0 {
-        a = b;
-    } else {
-        while b - a > 1 {
-            let mid = (a + b) / 2;
-            if g(scratch[mid], false) <= 0.0 {
-                a = mid;
-            } else {
-                b = mid;
-            }
-        }
-    }
-    let left = scratch[a];
-    let right_value = g(left, true);
-    if right_value >= 0.0 || a + 1 == scratch.len() {
-        // The root is at `left`, inside the jumps there: fill them evenly.
-        let mut fixed = 0.0;
-        let (mut floor, mut room) = (0.0, 0.0);
-        for (t, slot) in x.iter_mut().enumerate().take(tasks) {
-            let (jump, offset) = response(t);
-            if jump == left {
-                let low = (offset - left).clamp(0.0, 1.0);
-                floor += low;
-                room += 1.0 - low;
-                *slot = low;
-            } else {
-                *slot = value(t, left, true);
-                fixed += *slot;
-            }
-        }
-        let share = if room > 0.0 {
-            ((left - base - fixed - floor) / room).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        for (t, slot) in x.iter_mut().enumerate().take(tasks) {
-            if response(t).0 == left {
-                *slot += share * (1.0 - *slot);
-            }
-        }
-        return;
-    }
-    // Linear between `left` and the next breakpoint: slope 1 + number of free entries.
-    let mid = 0.5 * (left + scratch[a + 1]);
-    let free = (0..tasks)
-        .filter(|&t| {
-            let (jump, offset) = response(t);
-            mid > jump && offset - mid > 0.0 && offset - mid < 1.0
-        })
-        .count();
-    let tau = left - right_value / (1.0 + free as f64);
-    for (t, slot) in x.iter_mut().enumerate().take(tasks) {
-        *slot = value(t, tau, true);
-    }
-}
-
 impl ConsensusAgent for DualAgent {
     fn payload_len(&self) -> usize {
         self.y.len()
@@ -627,54 +534,6 @@ impl AgentAlgorithm for DualAgent {
 mod tests {
     use super::*;
     use admm_ta_topologies::rng::SeededRng;
-
-    /// The root of the coupled box problem satisfies its equation, and each entry is the
-    /// response at the root (or inside its jump there).
-    #[test]
-    fn coupled_box_root_is_exact() {
-        let mut rng = SeededRng::new(11);
-        let mut scratch = Vec::with_capacity(64);
-        for trial in 0..2000 {
-            let tasks = 1 + trial % 9;
-            let with_jumps = trial % 2 == 1;
-            let responses: Vec<(f64, f64)> = (0..tasks)
-                .map(|_| {
-                    let jump = if with_jumps {
-                        4.0 * rng.uniform() - 2.0
-                    } else {
-                        f64::NEG_INFINITY
-                    };
-                    (jump, 6.0 * rng.uniform() - 3.0)
-                })
-                .collect();
-            // Some trials put the root exactly on a jump.
-            let base = if with_jumps && trial % 4 == 1 {
-                responses[0].0 - 0.5
-            } else {
-                4.0 * rng.uniform() - 3.0
-            };
-            let mut x = vec![f64::NAN; tasks];
-            solve_coupled_box(base, tasks, |t| responses[t], &mut scratch, &mut x);
-            let tau = base + x.iter().sum::<f64>();
-            for (t, &(jump, offset)) in responses.iter().enumerate() {
-                assert!((0.0..=1.0).contains(&x[t]), "trial {trial}: x = {x:?}");
-                let expected = if tau < jump - 1e-12 {
-                    (1.0, 1.0)
-                } else if tau > jump + 1e-12 {
-                    let v = (offset - tau).clamp(0.0, 1.0);
-                    (v, v)
-                } else {
-                    ((offset - tau).clamp(0.0, 1.0), 1.0)
-                };
-                assert!(
-                    x[t] >= expected.0 - 1e-9 && x[t] <= expected.1 + 1e-9,
-                    "trial {trial}, entry {t}: {} not in {expected:?} at τ = {tau}",
-                    x[t]
-                );
-            }
-            assert!(scratch.capacity() >= 3 * tasks + 2);
-        }
-    }
 
     /// (15)'s objective for robot 0 of a small team at its current κ.
     fn subproblem(agent: &DualAgent, x: &[f64]) -> f64 {

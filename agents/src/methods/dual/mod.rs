@@ -1,38 +1,44 @@
-//! Dual consensus ADMM (Algorithm 2) and its inexact variant — the agent ([`agent`]) and
-//! the two registrations ([`DUAL`], [`INEXACT_DUAL`]): payload `n + m` multipliers, the dual
-//! ρ rule and schedule, and the inexact variant's own setting (the γ factor).
+//! Dual consensus ADMM (Algorithm 2) and its inexact variant, each in two variants
+//! (`--dual-variant`): `fast` (the default, [`fast`]: each robot's "one task" row is its own
+//! constraint, `m` multipliers and a flooded price snapshot whose certificate needs no
+//! agreement, [`snapshot`]) and `paper` (Algorithm 2 as published, [`agent`]: `n + m`
+//! multipliers). The two registrations ([`DUAL`], [`INEXACT_DUAL`]) share the ρ rule and
+//! schedule; the inexact method has its own setting (the γ factor).
 
 pub mod agent;
+pub mod coupled_box;
+pub mod fast;
+pub mod snapshot;
 
 pub use agent::{DEFAULT_GAMMA_FACTOR, DualAgent, DualParams, DualUpdate};
+pub use fast::{FastDualAgent, FastDualParams};
 
 use crate::agent::AgentAlgorithm;
 use crate::method::info::{
     Certification, Fig2Graphs, Memory, MethodInfo, Numbers, OWN_STATE_STOPS, PaperFacts,
     ReportText, Role, TEAM_STATE, per_agent,
 };
-use crate::method::settings::{
-    MethodSettings, NoSettings, Setting, SettingKind, SettingSpec, SettingValue,
-};
+use crate::method::settings::{MethodSettings, Setting, SettingKind, SettingSpec, SettingValue};
 use crate::method::team::{AgentInit, TeamBuilder, TeamContext, TeamMethod, TeamParams};
 use crate::methods::rho::{DUAL_RHO_FACTOR, INEXACT_DUAL_RHO_FACTOR, RhoRule, RhoSchedule};
 use crate::problem::CostMatrix;
 use serde::{Deserialize, Serialize};
 
-/// y, p, κ and two round buffers of `n + m`; costs, x and the x-update's breakpoints.
+/// The paper variant's y, p, κ and two round buffers of `n + m`, costs, x and the
+/// x-update's breakpoints (the fast variant holds less: `m` multipliers, two snapshots).
 const DUAL_MEMORY: Memory = Memory {
     bytes: |n, m| per_agent(n, (5 * (n + m) + 5 * m + 2) as f64),
     of: TEAM_STATE,
-    because: "each robot holds n+m multipliers",
+    because: "each robot holds n+m multipliers (paper variant; fast: 3m+1 values a round)",
 };
 
 /// The dual method's registration.
 pub const DUAL: MethodInfo = MethodInfo {
     name: "dual",
-    summary: "Algorithm 2, exchanges n+m multipliers",
+    summary: "Algorithm 2, exchanges m multipliers and a price snapshot (paper variant: n+m multipliers)",
     role: Role::Admm,
     team: Some(&DualMethod),
-    variants: None,
+    variants: Some(&VARIANT),
     stops: OWN_STATE_STOPS,
     memory: DUAL_MEMORY,
     certification: Certification::WhenStopProves,
@@ -47,7 +53,7 @@ pub const DUAL: MethodInfo = MethodInfo {
             complete: false,
             random: false,
         },
-        variant: None,
+        variant: Some("paper"),
     }),
 };
 
@@ -57,7 +63,7 @@ pub const INEXACT_DUAL: MethodInfo = MethodInfo {
     summary: "proximal-gradient x-update, no inner solve",
     role: Role::Admm,
     team: Some(&InexactDualMethod),
-    variants: None,
+    variants: Some(&VARIANT),
     stops: OWN_STATE_STOPS,
     memory: DUAL_MEMORY,
     certification: Certification::WhenStopProves,
@@ -72,22 +78,89 @@ pub const INEXACT_DUAL: MethodInfo = MethodInfo {
             complete: false,
             random: false,
         },
-        variant: None,
+        variant: Some("paper"),
     }),
 };
 
-/// The inexact dual's own settings (`--gamma-factor`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct InexactDualSettings {
-    /// `g` of the proximal weight `γ = g (m+1)/(2dρ)`.
-    pub gamma_factor: f64,
+/// `--dual-variant`: which variant of the dual methods runs.
+pub const VARIANT: SettingSpec = SettingSpec {
+    key: "dual_variant",
+    flag: "--dual-variant",
+    value_name: "DUAL_VARIANT",
+    help: "Dual methods: fast (each robot's one-task row is its own constraint, m multipliers and a flooded price snapshot certify) or paper (Algorithm 2 as published, n+m multipliers; refused with the other methods) [default: fast]",
+    kind: SettingKind::Choice(|| DualVariant::ALL.iter().map(|v| v.name()).collect()),
+};
+
+/// The variants of the dual methods.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DualVariant {
+    /// Algorithm 2 as published ([`agent`]).
+    Paper,
+    /// Own robot rows and the snapshot certificate ([`fast`]).
+    #[default]
+    Fast,
 }
 
-impl Default for InexactDualSettings {
-    fn default() -> Self {
-        Self {
-            gamma_factor: DEFAULT_GAMMA_FACTOR,
+impl DualVariant {
+    /// Both variants, in the order of the command line's help.
+    pub const ALL: [DualVariant; 2] = [Self::Paper, Self::Fast];
+
+    /// The name used on the command line and in JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Paper => "paper",
+            Self::Fast => "fast",
+        }
+    }
+
+    fn payload_len(self, robots: usize, tasks: usize) -> usize {
+        match self {
+            Self::Paper => robots + tasks,
+            Self::Fast => fast::payload_len(tasks),
+        }
+    }
+}
+
+impl Setting for DualVariant {
+    const SPEC: &'static SettingSpec = &VARIANT;
+    fn value(self) -> SettingValue {
+        SettingValue::Name(self.name().to_string())
+    }
+}
+
+/// The dual method's own settings (`--dual-variant`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DualSettings {
+    pub dual_variant: DualVariant,
+}
+
+impl MethodSettings for DualSettings {
+    const SPECS: &'static [SettingSpec] = &[VARIANT];
+}
+
+/// The fast variant's `g` of `γ = g/(2dρ)`: see [`fast`] and bench/README.md.
+pub const FAST_GAMMA_FACTOR: f64 = 1.0;
+
+/// The inexact dual's own settings (`--gamma-factor`, `--dual-variant`).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct InexactDualSettings {
+    /// `g` of the proximal weight (`None`: the variant's default).
+    pub gamma_factor: Option<f64>,
+    pub dual_variant: DualVariant,
+}
+
+impl InexactDualSettings {
+    /// The x-update these settings give.
+    fn update(&self) -> DualUpdate {
+        let default = match self.dual_variant {
+            DualVariant::Paper => DEFAULT_GAMMA_FACTOR,
+            DualVariant::Fast => FAST_GAMMA_FACTOR,
+        };
+        DualUpdate::Inexact {
+            gamma_factor: self.gamma_factor.unwrap_or(default),
         }
     }
 }
@@ -97,14 +170,14 @@ pub const GAMMA_FACTOR: SettingSpec = SettingSpec {
     key: "gamma_factor",
     flag: "--gamma-factor",
     value_name: "GAMMA_FACTOR",
-    help: "Inexact dual: g of the proximal weight γ = g·(m+1)/(2·|N(i)|·ρ) (default 0.5); refused with the other methods",
+    help: "Inexact dual: g of the proximal weight γ = g/(2·|N(i)|·ρ) (fast variant, default 1) or g·(m+1)/(2·|N(i)|·ρ) (paper variant, default 0.5); refused with the other methods",
     kind: SettingKind::PositiveNumber {
         what: "the γ factor",
     },
 };
 
 impl MethodSettings for InexactDualSettings {
-    const SPECS: &'static [SettingSpec] = &[GAMMA_FACTOR];
+    const SPECS: &'static [SettingSpec] = &[GAMMA_FACTOR, VARIANT];
 }
 
 /// A value of `--gamma-factor`, for the library's typed setter.
@@ -125,26 +198,34 @@ pub struct DualMethod;
 pub struct InexactDualMethod;
 
 impl TeamMethod for DualMethod {
-    type Settings = NoSettings;
+    type Settings = DualSettings;
     const PENALTY: bool = true;
 
-    fn payload_len(&self, robots: usize, tasks: usize) -> usize {
-        robots + tasks
+    fn payload_len(&self, settings: &DualSettings, robots: usize, tasks: usize) -> usize {
+        settings.dual_variant.payload_len(robots, tasks)
     }
 
-    fn default_rho(&self, _: &NoSettings, costs: &CostMatrix, degree: f64) -> f64 {
-        RULE.rho(costs, degree)
+    fn default_rho(&self, settings: &DualSettings, costs: &CostMatrix, degree: f64) -> f64 {
+        rule(settings.dual_variant, DUAL_RHO_FACTOR).rho(costs, degree)
     }
 
-    fn schedule(&self, _: &NoSettings, initial: f64) -> Option<RhoSchedule> {
-        Some(RULE.schedule(initial))
+    fn schedule(&self, settings: &DualSettings, initial: f64) -> Option<RhoSchedule> {
+        Some(rule(settings.dual_variant, DUAL_RHO_FACTOR).schedule(initial))
     }
 
-    fn team<'a>(&'static self, _: &NoSettings, team: TeamContext<'a>) -> Box<dyn TeamBuilder + 'a> {
-        Box::new(DualTeam::new(team, DualUpdate::Exact))
+    fn team<'a>(
+        &'static self,
+        settings: &DualSettings,
+        team: TeamContext<'a>,
+    ) -> Box<dyn TeamBuilder + 'a> {
+        Box::new(DualTeam::new(
+            team,
+            DualUpdate::Exact,
+            settings.dual_variant,
+        ))
     }
 
-    fn stop_cadence(&self, _: &NoSettings) -> (u64, u32) {
+    fn stop_cadence(&self, _: &DualSettings) -> (u64, u32) {
         CADENCE
     }
 }
@@ -153,16 +234,16 @@ impl TeamMethod for InexactDualMethod {
     type Settings = InexactDualSettings;
     const PENALTY: bool = true;
 
-    fn payload_len(&self, robots: usize, tasks: usize) -> usize {
-        robots + tasks
+    fn payload_len(&self, settings: &InexactDualSettings, robots: usize, tasks: usize) -> usize {
+        settings.dual_variant.payload_len(robots, tasks)
     }
 
-    fn default_rho(&self, _: &InexactDualSettings, costs: &CostMatrix, degree: f64) -> f64 {
-        INEXACT_RULE.rho(costs, degree)
+    fn default_rho(&self, settings: &InexactDualSettings, costs: &CostMatrix, degree: f64) -> f64 {
+        rule(settings.dual_variant, INEXACT_DUAL_RHO_FACTOR).rho(costs, degree)
     }
 
-    fn schedule(&self, _: &InexactDualSettings, initial: f64) -> Option<RhoSchedule> {
-        Some(INEXACT_RULE.schedule(initial))
+    fn schedule(&self, settings: &InexactDualSettings, initial: f64) -> Option<RhoSchedule> {
+        Some(rule(settings.dual_variant, INEXACT_DUAL_RHO_FACTOR).schedule(initial))
     }
 
     fn team<'a>(
@@ -172,9 +253,8 @@ impl TeamMethod for InexactDualMethod {
     ) -> Box<dyn TeamBuilder + 'a> {
         Box::new(DualTeam::new(
             team,
-            DualUpdate::Inexact {
-                gamma_factor: settings.gamma_factor,
-            },
+            settings.update(),
+            settings.dual_variant,
         ))
     }
 
@@ -188,26 +268,37 @@ impl TeamMethod for InexactDualMethod {
 /// streak to wait for.
 const CADENCE: (u64, u32) = (1, 0);
 
-const RULE: RhoRule = RhoRule::Dual {
-    factor: DUAL_RHO_FACTOR,
-};
-const INEXACT_RULE: RhoRule = RhoRule::Dual {
-    factor: INEXACT_DUAL_RHO_FACTOR,
-};
+/// The fast variant's ρ is this many times the paper variant's (bench/README.md, "The
+/// dual methods, second pass").
+pub const FAST_RHO_SCALE: f64 = 3.0;
+
+/// The ρ rule of a variant, from the paper variant's factor.
+fn rule(variant: DualVariant, factor: f64) -> RhoRule {
+    let factor = match variant {
+        DualVariant::Paper => factor,
+        DualVariant::Fast => FAST_RHO_SCALE * factor,
+    };
+    RhoRule::Dual { factor }
+}
 
 /// Builds a dual team's agents.
 struct DualTeam<'a> {
     params: TeamParams,
     update: DualUpdate,
+    variant: DualVariant,
+    /// The robot whose prices the fast variant's snapshot floods (a centre of the graph).
+    leader: usize,
     /// The team's costs, for each robot's own forbidden pairs.
     costs: &'a CostMatrix,
 }
 
 impl<'a> DualTeam<'a> {
-    fn new(team: TeamContext<'a>, update: DualUpdate) -> Self {
+    fn new(team: TeamContext<'a>, update: DualUpdate, variant: DualVariant) -> Self {
         Self {
             params: team.params,
             update,
+            variant,
+            leader: team.graph.center().unwrap_or(0),
             costs: team.problem.costs(),
         }
     }
@@ -215,9 +306,25 @@ impl<'a> DualTeam<'a> {
 
 impl TeamBuilder for DualTeam<'_> {
     fn agent(&self, init: AgentInit) -> Box<dyn AgentAlgorithm> {
-        let allowed = (0..self.costs.tasks())
+        let allowed: Vec<bool> = (0..self.costs.tasks())
             .map(|t| self.costs.is_allowed(init.index, t))
             .collect();
+        if self.variant == DualVariant::Fast {
+            return Box::new(FastDualAgent::new(
+                init.index,
+                &init.costs,
+                allowed,
+                init.robots,
+                init.case,
+                init.degree,
+                FastDualParams {
+                    rho: self.params.rho,
+                    update: self.update,
+                    diameter: self.params.diameter,
+                    leader: init.index == self.leader,
+                },
+            ));
+        }
         Box::new(
             DualAgent::new(
                 init.index,

@@ -79,7 +79,7 @@ impl TeamMethod for PrimalMethod {
     const NEW_COSTS: bool = true;
     const MASKABLE: bool = true;
 
-    fn payload_len(&self, robots: usize, tasks: usize) -> usize {
+    fn payload_len(&self, _: &PrimalSettings, robots: usize, tasks: usize) -> usize {
         robots * tasks
     }
 

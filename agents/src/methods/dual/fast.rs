@@ -1,0 +1,491 @@
+//! The fast variant of the dual methods (the default; `--dual-variant paper` runs
+//! Algorithm 2 as published, [`crate::methods::dual::agent`]).
+//!
+//! Two changes, each measured in bench/README.md ("The dual methods, second pass"):
+//!
+//! * **A robot's "one task" row is its own constraint.** In the paper every robot keeps a
+//!   copy of all `n + m` multipliers, but the robot rows `Σ_t x_{i,t} = 1` involve robot `i`
+//!   alone; their consensus only spreads, slowly, what robot `i` knows already. Here
+//!   `x_i` lives on the allowed simplex `{x ∈ [0, 1]^m : Σ_t x_t = 1, x_t = 0 forbidden}` and
+//!   the robots agree on the `m` task multipliers only (Case 1: equality prices; Case 2:
+//!   coverage prices `λ ≥ 0`). The equations of [`crate::methods::dual::agent`] with the
+//!   robot rows removed:
+//!
+//!   ```text
+//!   p_i  += ρ Σ_{j∈N(i)} (y_i − y_j)
+//!   κ_i   = −b̃/(ρn) − p_i/ρ + Σ_{j∈N(i)} (y_i + y_j)
+//!   x_i   = argmin_{x ∈ simplex} α_iᵀx + ρ/(4d) ‖θ(x)‖²    (Case 2: the squared hinge)
+//!   y_i   = θ(x_i)/(2d)                                      (Case 2: max(·, 0))
+//!   ```
+//!
+//!   with `θ(x) = ±x/ρ + κ_i`. The exact update is a root of `Σ_t x_t(τ) = 1` with the
+//!   same per-entry responses as the paper's ([`solve_simplex_box`]); the inexact one is a
+//!   gradient step projected onto the simplex with `γ = g/(2dρ)` (the gradient's Lipschitz
+//!   constant is `1/(2dρ)` without the robot row).
+//! * **A price certificate that needs no agreement** ([`crate::methods::dual::snapshot`]):
+//!   one robot's prices and the team's claims are flooded with the multipliers, and a
+//!   robot's slack is its own reduced-cost gap at those common prices. The paper variant's
+//!   certificate needs the multipliers to agree within a margin and each robot's
+//!   consensus residual to round to its task; here the certificate fires as soon as the
+//!   rounded assignment is optimal and one robot's prices price it so.
+//!
+//! The payload is `m` multipliers and the snapshot's `1 + 2m` values: `3m + 1` (the
+//! paper's is `n + m`).
+
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
+use crate::methods::dual::agent::DualUpdate;
+use crate::methods::dual::coupled_box::solve_simplex_box;
+use crate::methods::dual::snapshot::{self, Snapshot};
+use crate::problem::AssignmentCase;
+
+/// Parameters of one fast dual agent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FastDualParams {
+    pub rho: f64,
+    pub update: DualUpdate,
+    /// Graph diameter: the snapshot's period.
+    pub diameter: usize,
+    /// Whether this robot's prices are the snapshot's (one robot of the team).
+    pub leader: bool,
+}
+
+/// Values of a fast dual message for `tasks` tasks.
+pub const fn payload_len(tasks: usize) -> usize {
+    tasks + snapshot::words(tasks)
+}
+
+/// Robot `index`'s state of the fast dual variant.
+pub struct FastDualAgent {
+    tasks: usize,
+    robots: usize,
+    degree: usize,
+    case: AssignmentCase,
+    params: FastDualParams,
+    /// Own costs, centred on the allowed ones (a shift of the robot's own costs changes
+    /// every assignment's cost alike).
+    costs: Vec<f64>,
+    allowed: Vec<bool>,
+    /// Own task multipliers of the current round (the first `m` values of the payload).
+    y: Vec<f64>,
+    /// Accumulated consensus multipliers.
+    p: Vec<f64>,
+    kappa: Vec<f64>,
+    /// Own relaxed column `x_i` on the allowed simplex.
+    x: Vec<f64>,
+    /// The inexact update's gradient step before its projection.
+    step_point: Vec<f64>,
+    /// Scratch of the simplex root.
+    breakpoints: Vec<f64>,
+    snapshot: Snapshot,
+    task: usize,
+    slack: f64,
+    steps: u64,
+}
+
+impl FastDualAgent {
+    /// Robot `index` of `robots` with its own `costs` and `allowed` tasks (at least one),
+    /// `degree = |N(i)|`.
+    pub fn new(
+        index: usize,
+        costs: &[f64],
+        allowed: Vec<bool>,
+        robots: usize,
+        case: AssignmentCase,
+        degree: usize,
+        params: FastDualParams,
+    ) -> Self {
+        let tasks = costs.len();
+        assert!(index < robots && tasks >= 1 && allowed.len() == tasks);
+        assert!(allowed.iter().any(|&a| a), "a robot needs an allowed task");
+        assert!(
+            params.rho > 0.0 && params.rho.is_finite(),
+            "ρ must be positive"
+        );
+        if let DualUpdate::Inexact { gamma_factor } = params.update {
+            assert!(
+                gamma_factor > 0.0 && gamma_factor.is_finite(),
+                "γ must be positive"
+            );
+        }
+        let count = allowed.iter().filter(|&&a| a).count() as f64;
+        let mean = costs
+            .iter()
+            .zip(&allowed)
+            .filter(|(_, a)| **a)
+            .map(|(c, _)| c)
+            .sum::<f64>()
+            / count;
+        let costs = costs
+            .iter()
+            .zip(&allowed)
+            .map(|(c, &a)| if a { c - mean } else { 0.0 })
+            .collect();
+        let first = allowed.iter().position(|&a| a).expect("an allowed task");
+        Self {
+            tasks,
+            robots,
+            degree,
+            case,
+            params,
+            costs,
+            allowed,
+            y: vec![0.0; tasks],
+            p: vec![0.0; tasks],
+            kappa: vec![0.0; tasks],
+            x: vec![0.0; tasks],
+            step_point: vec![0.0; tasks],
+            breakpoints: Vec::with_capacity(3 * tasks + 2),
+            snapshot: Snapshot::new(index, tasks, params.leader, params.diameter),
+            task: first,
+            slack: f64::INFINITY,
+            steps: 0,
+        }
+    }
+
+    /// Own relaxed column `x_i`.
+    pub fn column(&self) -> &[f64] {
+        &self.x
+    }
+
+    /// Own task multipliers of the current round.
+    pub fn multipliers(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// `2 d` with a lone robot its own neighbour.
+    fn two_d(&self) -> f64 {
+        2.0 * self.degree.max(1) as f64
+    }
+
+    /// `±1/n`: the share of a task row's right-hand side (negative for coverage rows).
+    fn rhs(&self) -> f64 {
+        let share = 1.0 / self.robots as f64;
+        if self.case == AssignmentCase::Two {
+            -share
+        } else {
+            share
+        }
+    }
+
+    /// Updates `p` and `κ` from the neighbours' multipliers; returns their largest
+    /// disagreement with this robot's.
+    fn accumulate(&mut self, inbox: &dyn Inbox) -> f64 {
+        let rho = self.params.rho;
+        let m = self.tasks;
+        let mut disagreement: f64 = 0.0;
+        self.kappa.fill(0.0);
+        for k in 0..inbox.len() {
+            let theirs = inbox.payload(k);
+            assert_eq!(
+                theirs.len(),
+                payload_len(m),
+                "neighbour payload has the wrong length"
+            );
+            for ((sum, mine), v) in self.kappa.iter_mut().zip(&self.y).zip(&theirs[..m]) {
+                *sum += v;
+                disagreement = disagreement.max((mine - v).abs());
+            }
+        }
+        let degree = if inbox.is_empty() {
+            // A lone robot (n = 1) is its own neighbour, as in the other agents.
+            self.kappa.copy_from_slice(&self.y);
+            1.0
+        } else {
+            inbox.len() as f64
+        };
+        let rhs = self.rhs();
+        for t in 0..m {
+            let neighbour_sum = self.kappa[t];
+            self.p[t] += rho * (degree * self.y[t] - neighbour_sum);
+            self.kappa[t] = -rhs / rho - self.p[t] / rho + degree * self.y[t] + neighbour_sum;
+        }
+        disagreement
+    }
+
+    fn update_x(&mut self) {
+        let rho = self.params.rho;
+        let two_d_rho = self.two_d() * rho;
+        let (costs, kappa, allowed, case) = (&self.costs, &self.kappa, &self.allowed, self.case);
+        match self.params.update {
+            DualUpdate::Exact => {
+                // The paper's responses (see `agent`), on the simplex.
+                let response = |t: usize| match case {
+                    _ if !allowed[t] => (f64::NEG_INFINITY, f64::NEG_INFINITY),
+                    AssignmentCase::Two => {
+                        (-two_d_rho * costs[t], rho * kappa[t] - two_d_rho * costs[t])
+                    }
+                    AssignmentCase::One | AssignmentCase::Idle => {
+                        (f64::NEG_INFINITY, -two_d_rho * costs[t] - rho * kappa[t])
+                    }
+                };
+                solve_simplex_box(self.tasks, response, &mut self.breakpoints, &mut self.x);
+            }
+            DualUpdate::Inexact { gamma_factor } => {
+                let gamma = gamma_factor / two_d_rho;
+                let two_d = self.two_d();
+                for (((point, &x), &cost), &kappa) in self
+                    .step_point
+                    .iter_mut()
+                    .zip(&self.x)
+                    .zip(costs)
+                    .zip(kappa)
+                {
+                    let theta = theta(case, rho, kappa, x);
+                    let gradient = match case {
+                        AssignmentCase::Two => cost - theta.max(0.0) / two_d,
+                        AssignmentCase::One | AssignmentCase::Idle => cost + theta / two_d,
+                    };
+                    *point = x - gradient / gamma;
+                }
+                let (point, allowed) = (&self.step_point, &self.allowed);
+                solve_simplex_box(
+                    self.tasks,
+                    |t| {
+                        if allowed[t] {
+                            (f64::NEG_INFINITY, point[t])
+                        } else {
+                            (f64::NEG_INFINITY, f64::NEG_INFINITY)
+                        }
+                    },
+                    &mut self.breakpoints,
+                    &mut self.x,
+                );
+            }
+        }
+    }
+
+    /// The allowed task with the largest entry of `x` (the first on ties).
+    fn round(&self) -> usize {
+        let mut best = None;
+        for t in (0..self.tasks).filter(|&t| self.allowed[t]) {
+            if best.is_none_or(|b: usize| self.x[t] > self.x[b]) {
+                best = Some(t);
+            }
+        }
+        best.expect("a robot has an allowed task")
+    }
+}
+
+/// `θ_t = ±x_t/ρ + κ_t` (`−` for Case 2's coverage rows).
+fn theta(case: AssignmentCase, rho: f64, kappa: f64, x: f64) -> f64 {
+    let row = if case == AssignmentCase::Two { -x } else { x };
+    row / rho + kappa
+}
+
+impl ConsensusAgent for FastDualAgent {
+    fn payload_len(&self) -> usize {
+        payload_len(self.tasks)
+    }
+
+    fn write_initial_payload(&self, out: &mut [f64]) {
+        out[..self.tasks].copy_from_slice(&self.y);
+        Snapshot::write_empty(&mut out[self.tasks..]);
+    }
+
+    fn step(&mut self, inbox: &dyn Inbox, out: &mut [f64]) -> StepReport {
+        debug_assert_eq!(inbox.len(), self.degree, "inbox does not match the degree");
+        let m = self.tasks;
+        let disagreement = self.accumulate(inbox);
+        for k in 0..inbox.len() {
+            self.snapshot.merge(self.steps, &inbox.payload(k)[m..]);
+        }
+        self.update_x();
+        let (two_d, rho, case) = (self.two_d(), self.params.rho, self.case);
+        for ((o, &x), &kappa) in out[..m].iter_mut().zip(&self.x).zip(&self.kappa) {
+            let value = theta(case, rho, kappa, x) / two_d;
+            *o = if case == AssignmentCase::Two {
+                value.max(0.0)
+            } else {
+                value
+            };
+        }
+        self.task = self.round();
+        // The prices of the round just gathered are what the neighbours saw of this robot.
+        self.snapshot.advance(self.steps, self.task, &self.y);
+        self.snapshot.write(&mut out[m..]);
+        self.slack = self
+            .snapshot
+            .slack(self.task, &self.costs, &self.allowed, self.case);
+        let change = out[..m]
+            .iter()
+            .zip(&self.y)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        self.y.copy_from_slice(&out[..m]);
+        self.steps += 1;
+        let gap = self
+            .x
+            .iter()
+            .enumerate()
+            .map(|(t, v)| (v - if t == self.task { 1.0 } else { 0.0 }).abs())
+            .fold(0.0, f64::max);
+        StepReport {
+            disagreement,
+            change,
+            inner_iterations: 0,
+            inner_converged: true,
+            integrality_gap: gap,
+            own_integrality_gap: gap,
+            // No view of the team's assignment: the certificate alone decides.
+            assignment_digest: 0,
+        }
+    }
+
+    fn decide(&self) -> usize {
+        self.task
+    }
+
+    fn rounded_task(&self) -> usize {
+        self.task
+    }
+
+    fn certificate_slack(&self) -> f64 {
+        self.slack
+    }
+
+    fn own_column(&self) -> &[f64] {
+        &self.x
+    }
+}
+
+impl AgentAlgorithm for FastDualAgent {
+    fn set_rho(&mut self, rho: f64) {
+        assert!(rho > 0.0 && rho.is_finite(), "ρ must be positive");
+        self.params.rho = rho;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use admm_ta_topologies::rng::SeededRng;
+
+    /// The subproblem's objective at `x` for the agent's current κ.
+    fn objective(agent: &FastDualAgent, x: &[f64]) -> f64 {
+        let rho = agent.params.rho;
+        let d = agent.degree as f64;
+        let mut value: f64 = x.iter().zip(&agent.costs).map(|(a, b)| a * b).sum();
+        let mut theta2 = 0.0;
+        for (t, &xt) in x.iter().enumerate() {
+            let theta = theta(agent.case, rho, agent.kappa[t], xt);
+            theta2 += if agent.case == AssignmentCase::Two {
+                theta.max(0.0).powi(2)
+            } else {
+                theta * theta
+            };
+        }
+        value += rho / (4.0 * d) * theta2;
+        value
+    }
+
+    /// The exact update minimises its subproblem over the allowed simplex: no random
+    /// feasible point (nor any move of mass between two entries) does better.
+    #[test]
+    fn exact_update_minimises_the_subproblem_on_the_simplex() {
+        let mut rng = SeededRng::new(7);
+        for (case, robots, tasks) in [(AssignmentCase::One, 4, 4), (AssignmentCase::Two, 6, 4)] {
+            for trial in 0..60 {
+                let params = FastDualParams {
+                    rho: 0.3 + rng.uniform(),
+                    update: DualUpdate::Exact,
+                    diameter: 1,
+                    leader: false,
+                };
+                let costs: Vec<f64> = (0..tasks).map(|_| rng.uniform()).collect();
+                let mut allowed = vec![true; tasks];
+                if trial % 3 == 0 {
+                    allowed[1] = false;
+                }
+                let mut agent =
+                    FastDualAgent::new(0, &costs, allowed.clone(), robots, case, 2, params);
+                for v in agent.y.iter_mut().chain(agent.p.iter_mut()) {
+                    *v = 2.0 * rng.uniform() - 1.0;
+                }
+                let theirs: Vec<Vec<f64>> = (0..2)
+                    .map(|_| {
+                        let mut message = vec![0.0; payload_len(tasks)];
+                        for v in &mut message[..tasks] {
+                            *v = 2.0 * rng.uniform() - 1.0;
+                        }
+                        Snapshot::write_empty(&mut message[tasks..]);
+                        message
+                    })
+                    .collect();
+                let inbox: Vec<&[f64]> = theirs.iter().map(Vec::as_slice).collect();
+                agent.accumulate(&inbox);
+                agent.update_x();
+                let x = agent.x.clone();
+                assert!((x.iter().sum::<f64>() - 1.0).abs() < 1e-9, "{x:?}");
+                assert!(x.iter().zip(&allowed).all(|(v, a)| *a || *v == 0.0));
+                let best = objective(&agent, &x);
+                for _ in 0..300 {
+                    // Move mass from one allowed entry to another.
+                    let (a, b) = (rng.below(tasks), rng.below(tasks));
+                    if a == b || !allowed[a] || !allowed[b] {
+                        continue;
+                    }
+                    let shift = (0.3 * rng.uniform()).min(x[a]);
+                    let mut probe = x.clone();
+                    probe[a] -= shift;
+                    probe[b] += shift;
+                    if probe[b] > 1.0 {
+                        continue;
+                    }
+                    let value = objective(&agent, &probe);
+                    assert!(
+                        value >= best - 1e-10,
+                        "{case:?} trial {trial}: {value} < {best} at {probe:?} vs {x:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Two robots on one edge find and certify the cheaper of the two assignments.
+    #[test]
+    fn two_robots_certify_the_optimum() {
+        for update in [DualUpdate::Exact, DualUpdate::Inexact { gamma_factor: 1.0 }] {
+            let costs = [[0.0, 1.0], [0.0, 3.0]];
+            let mut agents: Vec<FastDualAgent> = (0..2)
+                .map(|i| {
+                    let params = FastDualParams {
+                        rho: 0.5,
+                        update,
+                        diameter: 1,
+                        leader: i == 0,
+                    };
+                    FastDualAgent::new(
+                        i,
+                        &costs[i],
+                        vec![true; 2],
+                        2,
+                        AssignmentCase::One,
+                        1,
+                        params,
+                    )
+                })
+                .collect();
+            let mut messages = vec![vec![0.0; payload_len(2)]; 2];
+            for (agent, message) in agents.iter().zip(&mut messages) {
+                agent.write_initial_payload(message);
+            }
+            let mut certified = None;
+            for round in 0..2000 {
+                let gathered = messages.clone();
+                for (i, agent) in agents.iter_mut().enumerate() {
+                    agent.step(&vec![gathered[1 - i].as_slice()], &mut messages[i]);
+                }
+                if agents.iter().all(|a| a.certificate_slack() <= 1e-12) {
+                    certified = Some(round);
+                    break;
+                }
+            }
+            assert!(certified.is_some(), "{update:?}: never certified");
+            assert_eq!(
+                (agents[0].decide(), agents[1].decide()),
+                (1, 0),
+                "{update:?}"
+            );
+        }
+    }
+}
