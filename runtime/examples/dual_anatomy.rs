@@ -1,8 +1,10 @@
 //! Where the dual methods' rounds go: per seed, the first round from which the robots'
 //! rounded tasks stay optimal, the neighbours' largest disagreement at that point, and the
 //! round every robot's certificate holds. `RHO_SCALE=F` multiplies the default ρ,
-//! `VARIANT=paper` runs the paper variant, `TRACE=1` prints every 25th round why the
-//! certificate does not hold yet.
+//! `VARIANT=paper` runs the paper variant, `GAMMA=G` sets the inexact dual's γ factor,
+//! `SCHED=start,rate,min,max` adds an `--adaptive-rho`-style schedule on top (its ρ is the
+//! fast variant's `ρ₀`), `STAT=1` prints the costs' median gap between each robot's two
+//! cheapest tasks, `TRACE=1` prints every 25th round why the certificate does not hold yet.
 //! `cargo run --release -p admm-ta-runtime --example dual_anatomy -- ROBOTS TASKS TOPOLOGY uniform|distance SEEDS exact|inexact [ROUNDS]`.
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::oracle;
@@ -38,10 +40,33 @@ fn main() {
         let costs = model.costs(n, m, seed).unwrap();
         let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
         let graph = spec.build(n, seed).unwrap();
+        if std::env::var("STAT").is_ok() {
+            let c = problem.costs();
+            let mut gaps: Vec<f64> = (0..n)
+                .map(|i| {
+                    let mut row = c.row(i).to_vec();
+                    row.sort_by(f64::total_cmp);
+                    (row[1] - row[0]) / c.spread()
+                })
+                .collect();
+            gaps.sort_by(f64::total_cmp);
+            println!(
+                "seed {seed}: median gap {:.4} mean gap {:.4}",
+                gaps[n / 2],
+                gaps.iter().sum::<f64>() / n as f64
+            );
+        }
         let optimum = oracle::solve(&problem).unwrap();
         let given = match std::env::var("VARIANT") {
             Ok(variant) => GivenSettings::default().set(&VARIANT, SettingValue::Name(variant)),
             Err(_) => GivenSettings::default(),
+        };
+        let given = match std::env::var("GAMMA") {
+            Ok(g) => given.set(
+                &admm_ta_agents::methods::dual::GAMMA_FACTOR,
+                SettingValue::Number(g.parse().unwrap()),
+            ),
+            Err(_) => given,
         };
         let setup = method.setup(&given).unwrap().unwrap();
         let rho = setup
@@ -60,6 +85,16 @@ fn main() {
         });
         let agents: Vec<_> = (0..n)
             .map(|i| {
+                let schedule = std::env::var("SCHED").ok().map(|v| {
+                    let f: Vec<f64> = v.split(',').map(|x| x.parse().unwrap()).collect();
+                    admm_ta_agents::methods::rho::RhoSchedule {
+                        initial: rho,
+                        start: f[0],
+                        rate: f[1],
+                        min: f[2],
+                        max: f[3],
+                    }
+                });
                 MethodAgent::new(team.agent(AgentInit {
                     index: i,
                     costs: problem.costs().row(i).to_vec(),
@@ -67,6 +102,7 @@ fn main() {
                     case: problem.case(),
                     degree: graph.degree(i),
                 }))
+                .with_schedule(schedule)
             })
             .collect();
         let mut sim = LockstepSim::new(agents, &graph);

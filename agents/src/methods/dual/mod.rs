@@ -14,12 +14,15 @@ pub use agent::{DEFAULT_GAMMA_FACTOR, DualAgent, DualParams, DualUpdate};
 pub use fast::{FastDualAgent, FastDualParams};
 
 use crate::agent::AgentAlgorithm;
+use crate::certify::stopping::StopRule;
 use crate::method::info::{
     Certification, Fig2Graphs, Memory, MethodInfo, Numbers, OWN_STATE_STOPS, PaperFacts,
     ReportText, Role, TEAM_STATE, per_agent,
 };
 use crate::method::settings::{MethodSettings, Setting, SettingKind, SettingSpec, SettingValue};
-use crate::method::team::{AgentInit, TeamBuilder, TeamContext, TeamMethod, TeamParams};
+use crate::method::team::{
+    AgentInit, Refusal, RunOption, TeamBuilder, TeamContext, TeamMethod, TeamParams,
+};
 use crate::methods::rho::{DUAL_RHO_FACTOR, INEXACT_DUAL_RHO_FACTOR, RhoRule, RhoSchedule};
 use crate::problem::CostMatrix;
 use serde::{Deserialize, Serialize};
@@ -210,7 +213,16 @@ impl TeamMethod for DualMethod {
     }
 
     fn schedule(&self, settings: &DualSettings, initial: f64) -> Option<RhoSchedule> {
-        Some(rule(settings.dual_variant, DUAL_RHO_FACTOR).schedule(initial))
+        adaptive(settings.dual_variant, DUAL_RHO_FACTOR, initial)
+    }
+
+    fn refuse(
+        &self,
+        settings: &DualSettings,
+        adaptive_rho: bool,
+        _: StopRule,
+    ) -> Result<(), Refusal> {
+        refuse(settings.dual_variant, adaptive_rho)
     }
 
     fn team<'a>(
@@ -243,7 +255,16 @@ impl TeamMethod for InexactDualMethod {
     }
 
     fn schedule(&self, settings: &InexactDualSettings, initial: f64) -> Option<RhoSchedule> {
-        Some(rule(settings.dual_variant, INEXACT_DUAL_RHO_FACTOR).schedule(initial))
+        adaptive(settings.dual_variant, INEXACT_DUAL_RHO_FACTOR, initial)
+    }
+
+    fn refuse(
+        &self,
+        settings: &InexactDualSettings,
+        adaptive_rho: bool,
+        _: StopRule,
+    ) -> Result<(), Refusal> {
+        refuse(settings.dual_variant, adaptive_rho)
     }
 
     fn team<'a>(
@@ -268,9 +289,27 @@ impl TeamMethod for InexactDualMethod {
 /// streak to wait for.
 const CADENCE: (u64, u32) = (1, 0);
 
-/// The fast variant's ρ is this many times the paper variant's (bench/README.md, "The
-/// dual methods, second pass").
-pub const FAST_RHO_SCALE: f64 = 3.0;
+/// The fast variant's `ρ₀` is this many times the paper variant's ρ; its ρ then grows
+/// (see [`fast::RHO_GROWTH`]; bench/README.md, "The dual methods, second pass").
+pub const FAST_RHO_SCALE: f64 = 0.1;
+
+/// The `--adaptive-rho` schedule: the paper variant's only (the fast one grows its ρ itself).
+fn adaptive(variant: DualVariant, factor: f64, initial: f64) -> Option<RhoSchedule> {
+    (variant == DualVariant::Paper).then(|| rule(variant, factor).schedule(initial))
+}
+
+/// The fast variant refuses `--adaptive-rho`: its ρ follows its own schedule.
+fn refuse(variant: DualVariant, adaptive_rho: bool) -> Result<(), Refusal> {
+    if variant == DualVariant::Fast && adaptive_rho {
+        return Err(Refusal {
+            option: RunOption::AdaptiveRho,
+            needs: &VARIANT,
+            value: DualVariant::Paper.name(),
+            because: "the paper's dual variant, not the fast one (whose ρ grows by its own schedule)",
+        });
+    }
+    Ok(())
+}
 
 /// The ρ rule of a variant, from the paper variant's factor.
 fn rule(variant: DualVariant, factor: f64) -> RhoRule {
