@@ -9,6 +9,7 @@ mod any_cost_matrix;
 mod cli;
 mod corpus;
 mod cost_files;
+mod dual_variants;
 mod library;
 mod oracle_instances;
 mod scipy_lsap;
