@@ -804,8 +804,17 @@ fn figure_experiments_write_json_and_svg() {
         "{table}"
     );
     let points = v["points"].as_array().unwrap();
-    // 4 complete-graph series with 2 sizes each, ADMM's two stops; 3 on random graphs.
-    assert_eq!(points.len(), 5 * 2 + 3 * 2);
+    // 4 complete-graph series with 2 sizes each, ADMM's two stops; 3 on random graphs; and
+    // on both, the other ADMM methods and variants (fast primal, both duals' two variants).
+    assert_eq!(points.len(), 5 * 2 + 3 * 2 + 2 * 5 * 2);
+    let labels: Vec<&str> = points.iter().map(|p| p["series"].as_str().unwrap()).collect();
+    for label in [
+        "primal (fast) (decentralized stop)",
+        "dual (fast) (decentralized stop)",
+        "inexact-dual (paper) (decentralized stop)",
+    ] {
+        assert!(labels.contains(&label), "{label} not in {labels:?}");
+    }
     for p in points {
         let series = p["series"].as_str().unwrap();
         if !series.starts_with("CBAA") {

@@ -2,9 +2,10 @@
 //! method (`fig1-convergence`) and per topology (`fig1-topologies`).
 
 use crate::experiment::{Experiment, OutputFile, mean_of};
-use crate::figures::{FigureConfig, FigureError, RANDOM_GRAPH, uniform};
+use crate::figures::{FigureConfig, FigureError, RANDOM_GRAPH, as_in_paper, uniform};
 use crate::plot::{Chart, Legend, Scale, Series};
-use admm_ta_agents::methods::Method;
+use admm_ta_agents::method::info::Role;
+use admm_ta_agents::methods::{Contender, Method};
 use admm_ta_agents::problem::TaskAssignmentProblem;
 use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::report::TracePoint;
@@ -16,7 +17,10 @@ const GRAPHS: [&str; 3] = ["complete", RANDOM_GRAPH, "chain"];
 /// One traced run.
 #[derive(Debug, Clone, Serialize)]
 pub struct TracedRun {
-    pub method: Method,
+    /// The method and its variant.
+    pub contender: Contender,
+    /// `primal (paper)`, `dual (fast)`, …
+    pub label: String,
     pub topology: String,
     pub seed: u64,
     pub optimal_cost: f64,
@@ -31,7 +35,7 @@ pub struct TracedRun {
 fn traced_run(
     problem: &TaskAssignmentProblem,
     graph_spec: &str,
-    method: Method,
+    contender: Contender,
     seed: u64,
     config: &FigureConfig,
 ) -> Result<TracedRun, FigureError> {
@@ -39,11 +43,12 @@ fn traced_run(
         problem,
         graph_spec,
         seed,
-        method,
+        contender,
         SolveOptions::builder().trace(true),
     )?;
     Ok(TracedRun {
-        method,
+        contender,
+        label: contender.label(),
         topology: graph_spec.to_string(),
         seed,
         optimal_cost: check.optimal_cost,
@@ -150,7 +155,15 @@ fn gap_series(name: &str, run: &TracedRun) -> Series {
     )
 }
 
-/// Paper Fig. 1 (left): 50×50 on the complete graph.
+/// Every consensus ADMM method in each of its variants.
+fn admm_contenders() -> Vec<Contender> {
+    Contender::all()
+        .into_iter()
+        .filter(|c| c.method.info().role == Role::Admm)
+        .collect()
+}
+
+/// Paper Fig. 1 (left): 50×50 on the complete graph, every ADMM method and variant.
 pub fn fig1_convergence(
     config: &FigureConfig,
     progress: &dyn Fn(&str),
@@ -159,16 +172,20 @@ pub fn fig1_convergence(
     let mut runs = Vec::new();
     for seed in 0..config.trials {
         let problem = uniform(n, n, seed)?;
-        for method in Method::admm() {
-            progress(&format!("seed {seed} {}", method.name()));
-            runs.push(traced_run(&problem, "complete", method, seed, config)?);
+        for contender in admm_contenders() {
+            progress(&format!("seed {seed} {}", contender.label()));
+            runs.push(traced_run(&problem, "complete", contender, seed, config)?);
         }
     }
-    let summaries = Method::admm()
+    let summaries = admm_contenders()
         .into_iter()
-        .map(|m| {
-            let of: Vec<&TracedRun> = runs.iter().filter(|r| r.method == m).collect();
-            summarise(m.name(), &of, m.info().paper.and_then(|p| p.fig1))
+        .map(|c| {
+            let of: Vec<&TracedRun> = runs.iter().filter(|r| r.contender == c).collect();
+            // The paper's number belongs to the variant it ran.
+            let paper = (as_in_paper(c.method) == c)
+                .then(|| c.method.info().paper.and_then(|p| p.fig1))
+                .flatten();
+            summarise(&c.label(), &of, paper)
         })
         .collect();
     Ok(ConvergenceFigure {
@@ -191,7 +208,8 @@ pub fn fig1_topologies(
         let problem = uniform(n, m, seed)?;
         for g in GRAPHS {
             progress(&format!("seed {seed} {g}"));
-            runs.push(traced_run(&problem, g, Method::papers_own(), seed, config)?);
+            let primal = as_in_paper(Method::papers_own());
+            runs.push(traced_run(&problem, g, primal, seed, config)?);
         }
     }
     let summaries = GRAPHS
@@ -215,9 +233,9 @@ impl ConvergenceFigure {
     /// `fig1-convergence.svg` (the primal's relaxed cost against the optimum) and
     /// `fig1-convergence-methods.svg` (every method's relative gap), of seed 0.
     fn method_charts(&self) -> Vec<(String, OutputFile)> {
-        let first = |m: Method| self.runs.iter().find(|r| r.method == m && r.seed == 0);
+        let first = |c: Contender| self.runs.iter().find(|r| r.contender == c && r.seed == 0);
         let mut charts = Vec::new();
-        if let Some(primal) = first(Method::papers_own()) {
+        if let Some(primal) = first(as_in_paper(Method::papers_own())) {
             let chart = Chart::new(
                 "Fig. 1 (left): primal ADMM-TA, 50 robots × 50 tasks, complete graph (seed 0)",
                 "iteration",
@@ -236,9 +254,9 @@ impl ConvergenceFigure {
         .x_scale(Scale::Log)
         .y_scale(Scale::Log)
         .legend(Legend::LowerLeft);
-        for m in Method::admm() {
-            if let Some(run) = first(m) {
-                chart = chart.series(gap_series(m.name(), run));
+        for c in admm_contenders() {
+            if let Some(run) = first(c) {
+                chart = chart.series(gap_series(&c.label(), run));
             }
         }
         let chart = chart.reference("0.1%", 1e-3);

@@ -3,12 +3,13 @@
 //!
 //! * [`convergence::fig1_convergence`]: 50×50, complete graph — the team's relaxed cost per iteration
 //!   against the Hungarian optimum (paper Fig. 1 left: primal ADMM-TA within 50 iterations),
-//!   plus the three ADMM methods' relative gaps on log axes;
+//!   plus every ADMM method's and variant's relative gap on log axes, each labelled;
 //! * [`convergence::fig1_topologies`]: 50 robots × 30 tasks on complete, random and chain graphs (paper
 //!   Fig. 1 right: all converge, the chain slowest, "about 200 iterations");
 //! * [`scaling::fig2_scaling`]: iterations versus team size for ADMM-TA, CBAA, the market and the
 //!   distributed Hungarian method on the complete graph, and ADMM-TA versus distributed
-//!   Hungarian on random graphs (paper Fig. 2);
+//!   Hungarian on random graphs (paper Fig. 2), and beside them every other ADMM method and
+//!   variant to the decentralized stop, labelled (`dual (fast)`, …);
 //! * [`scaling::ipc_scaling`] (beyond the paper): wall time to the optimal assignment with one
 //!   process per robot over iceoryx2, and the round latency, versus team size per method.
 //!
@@ -95,8 +96,14 @@ pub(crate) fn topology(
         .map_err(|e| FigureError::Setup(format!("topology {spec}: {e}")))
 }
 
+/// A method as the paper ran it (the primal method's paper variant: the fast one's relaxed
+/// columns stay near the polytope's centre on purpose), or with its defaults.
+pub(crate) fn as_in_paper(method: Method) -> Contender {
+    Contender::as_in_paper(method).unwrap_or(Contender::of(method))
+}
+
 impl FigureConfig {
-    /// Solves `problem` by `method` on a `graph_spec` graph drawn from `seed`, checked
+    /// Solves `problem` by `contender` (a method in one of its variants) on a `graph_spec` graph drawn from `seed`, checked
     /// against the optimum, with this experiment's ρ schedule, round limit and agent binary;
     /// `options` gives the rest (stop, transport, trace).
     pub(crate) fn checked_solve(
@@ -104,17 +111,13 @@ impl FigureConfig {
         problem: &TaskAssignmentProblem,
         graph_spec: &str,
         seed: u64,
-        method: Method,
+        contender: Contender,
         options: SolveOptionsBuilder,
     ) -> Result<(SolveReport, OracleCheck), FigureError> {
         let graph = topology(graph_spec, problem.robots(), seed)?;
-        // The figures reproduce the paper's: each method as the paper ran it (the primal
-        // method's paper variant: the fast one's relaxed columns stay near the polytope's
-        // centre on purpose; see `experiment rounds-anatomy` and `compare` for it).
-        let as_in_paper = Contender::as_in_paper(method).unwrap_or(Contender::of(method));
         let options = options
-            .method(method)
-            .settings(as_in_paper.settings())
+            .method(contender.method)
+            .settings(contender.settings())
             .seed(seed)
             .check(true)
             .adaptive_rho(self.adaptive_rho)

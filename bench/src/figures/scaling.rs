@@ -3,10 +3,10 @@
 //! robot).
 
 use crate::experiment::{Experiment, OutputFile};
-use crate::figures::{FigureConfig, FigureError, RANDOM_GRAPH, uniform};
+use crate::figures::{FigureConfig, FigureError, RANDOM_GRAPH, as_in_paper, uniform};
 use crate::plot::{Chart, Scale, Series};
-use admm_ta_agents::method::info::Fig2Graphs;
-use admm_ta_agents::methods::Method;
+use admm_ta_agents::method::info::{Fig2Graphs, Role};
+use admm_ta_agents::methods::{Contender, Method};
 use admm_ta_runtime::options::{SolveOptions, StopRule};
 use admm_ta_runtime::transport::Transport;
 use serde::Serialize;
@@ -16,7 +16,8 @@ use serde::Serialize;
 pub struct ScalingPoint {
     pub robots: usize,
     pub topology: String,
-    /// `primal (within 0.1%)`, `primal (decentralized stop)`, or a baseline's name.
+    /// `ADMM-TA (within 0.1%)`, `ADMM-TA (decentralized stop)`, another ADMM method or
+    /// variant (`dual (fast)`), or a baseline's name.
     pub series: String,
     pub trials: usize,
     /// Mean iterations: to the method's own stop (the paper's 0.1% criterion for the
@@ -57,7 +58,7 @@ fn scaling_point(
     n: usize,
     graph_spec: &str,
     series: &str,
-    method: Method,
+    contender: Contender,
     stop: StopRule,
     config: &FigureConfig,
 ) -> Result<ScalingPoint, FigureError> {
@@ -75,7 +76,7 @@ fn scaling_point(
             &uniform(n, n, seed)?,
             graph_spec,
             seed,
-            method,
+            contender,
             SolveOptions::builder().stop(stop),
         )?;
         point.trials += 1;
@@ -92,13 +93,14 @@ fn scaling_point(
     Ok(point)
 }
 
-/// The runs of `fig2-scaling`, in order: `(graph, series label, method, stop, sizes)`: on
-/// the complete graph and on random graphs, every method the paper ran there — its own
-/// method to the paper's criterion (every size) and to the decentralized stop (up to
-/// `decentralized_up_to`), each baseline to its own stop.
+/// The runs of `fig2-scaling`, in order: `(graph, series label, contender, stop, sizes)`:
+/// on the complete graph and on random graphs, every method the paper ran there — its own
+/// method as it ran it to the paper's criterion (every size) and to the decentralized stop
+/// (up to `decentralized_up_to`), each baseline to its own stop — and every other ADMM
+/// method and variant to the decentralized stop (up to `decentralized_up_to`), labelled.
 fn scaling_plan(
     config: &FigureConfig,
-) -> Vec<(&'static str, String, Method, StopRule, Vec<usize>)> {
+) -> Vec<(&'static str, String, Contender, StopRule, Vec<usize>)> {
     let small: Vec<usize> = config
         .sizes
         .iter()
@@ -115,19 +117,30 @@ fn scaling_plan(
             let Some(paper) = method.info().paper.filter(|p| on(&p.fig2)) else {
                 continue;
             };
+            let contender = as_in_paper(method);
             if paper.proposed {
                 let within = format!("{} (within 0.1%)", paper.label);
-                plan.push((graph, within, method, StopRule::Oracle, all.clone()));
+                plan.push((graph, within, contender, StopRule::Oracle, all.clone()));
                 let stop = format!("{} (decentralized stop)", paper.label);
-                plan.push((graph, stop, method, StopRule::Local, small.clone()));
+                plan.push((graph, stop, contender, StopRule::Local, small.clone()));
             } else {
                 plan.push((
                     graph,
                     paper.label.to_string(),
-                    method,
+                    contender,
                     StopRule::Local,
                     all.clone(),
                 ));
+            }
+        }
+        // The other ADMM methods and variants, which the paper did not plot here.
+        for contender in Contender::all() {
+            let info = contender.method.info();
+            let plotted = info.paper.is_some_and(|p| on(&p.fig2))
+                && as_in_paper(contender.method) == contender;
+            if info.role == Role::Admm && !plotted {
+                let label = format!("{} (decentralized stop)", contender.label());
+                plan.push((graph, label, contender, StopRule::Local, small.clone()));
             }
         }
     }
@@ -145,9 +158,9 @@ pub fn fig2_scaling(
     progress: &dyn Fn(&ScalingPoint),
 ) -> Result<ScalingFigure, FigureError> {
     let mut points = Vec::new();
-    for (graph, series, method, stop, sizes) in scaling_plan(config) {
+    for (graph, series, contender, stop, sizes) in scaling_plan(config) {
         for n in sizes {
-            let point = scaling_point(n, graph, &series, method, stop, config)?;
+            let point = scaling_point(n, graph, &series, contender, stop, config)?;
             progress(&point);
             points.push(point);
         }
@@ -229,7 +242,7 @@ pub fn ipc_scaling(
                     &uniform(n, n, seed)?,
                     "complete",
                     seed,
-                    method,
+                    as_in_paper(method),
                     SolveOptions::builder().transport(Transport::Ipc),
                 )?;
                 let latency = report.round_latency_us.unwrap_or_default();
