@@ -546,10 +546,23 @@ fn every_method_solves_from_the_command_line_and_the_oracle_stop_is_the_papers_c
         "--json",
     ]));
     assert_eq!(paper["iterations"], paper["check"]["rounds_within_0_1pct"]);
-    // --adaptive-rho is the paper variant's.
+    // --adaptive-rho is the paper variant's (the fast dual grows its ρ itself).
     assert_clear_error(
         &admm_ta(&["solve", "--robots", "4", "--tasks", "4", "--adaptive-rho"]),
         "--primal-variant paper",
+    );
+    assert_clear_error(
+        &admm_ta(&[
+            "solve",
+            "--robots",
+            "4",
+            "--tasks",
+            "4",
+            "--method",
+            "dual",
+            "--adaptive-rho",
+        ]),
+        "--dual-variant paper",
     );
     // An explicit ρ is used as given; --adaptive-rho changes the run.
     let run = |extra: &[&str]| {
@@ -807,7 +820,10 @@ fn figure_experiments_write_json_and_svg() {
     // 4 complete-graph series with 2 sizes each, ADMM's two stops; 3 on random graphs; and
     // on both, the other ADMM methods and variants (fast primal, both duals' two variants).
     assert_eq!(points.len(), 5 * 2 + 3 * 2 + 2 * 5 * 2);
-    let labels: Vec<&str> = points.iter().map(|p| p["series"].as_str().unwrap()).collect();
+    let labels: Vec<&str> = points
+        .iter()
+        .map(|p| p["series"].as_str().unwrap())
+        .collect();
     for label in [
         "primal (fast) (decentralized stop)",
         "dual (fast) (decentralized stop)",
@@ -1280,7 +1296,7 @@ fn options_the_run_never_reads_are_refused_and_the_same_options_where_read_run()
     }
     for args in [
         "--method primal --rho 3",
-        "--method dual --rho 3 --adaptive-rho",
+        "--method dual --dual-variant paper --rho 3 --adaptive-rho",
         "--method market",
         "--method hungarian",
         "--primal-variant paper --stop agreement --stop-rounds 3",

@@ -139,25 +139,6 @@ impl Graph {
         Some(diameter)
     }
 
-    /// A centre of the graph: the robot whose farthest robot is nearest (the smallest
-    /// number on ties); `None` when disconnected.
-    pub fn center(&self) -> Option<usize> {
-        let n = self.robots();
-        let mut seen = vec![false; n];
-        let mut best: Option<(usize, usize)> = None;
-        for start in 0..n {
-            seen.iter_mut().for_each(|s| *s = false);
-            let (reached, eccentricity) = self.bfs_distances(start, &mut seen);
-            if reached.len() != n {
-                return None;
-            }
-            if best.is_none_or(|(_, e)| eccentricity < e) {
-                best = Some((start, eccentricity));
-            }
-        }
-        best.map(|(robot, _)| robot)
-    }
-
     /// Breadth-first search from `start`: the reached robots and the largest hop distance.
     fn bfs_distances(&self, start: usize, seen: &mut [bool]) -> (Vec<usize>, usize) {
         let mut reached = vec![start];
@@ -206,17 +187,6 @@ mod tests {
         let err = g.require_connected().unwrap_err().to_string();
         assert!(err.contains("3 components: [0, 1], [2, 3], [4]"), "{err}");
         assert_eq!(g.diameter(), None);
-        assert_eq!(g.center(), None);
-    }
-
-    #[test]
-    fn the_centre_is_a_robot_of_least_eccentricity() {
-        let chain = Graph::from_edges(5, &[(0, 1), (1, 2), (2, 3), (3, 4)], "chain").unwrap();
-        assert_eq!(chain.center(), Some(2));
-        let star = Graph::from_edges(4, &[(3, 0), (3, 1), (3, 2)], "star").unwrap();
-        assert_eq!(star.center(), Some(3));
-        let pair = Graph::from_edges(2, &[(0, 1)], "pair").unwrap();
-        assert_eq!(pair.center(), Some(0));
     }
 
     #[test]

@@ -14,7 +14,7 @@
 //!
 //! ```
 //! use admm_ta_agents::methods::Method;
-//! assert_eq!(Method::Dual.payload_len(2, 2), 7); // 2 task prices + a snapshot of 1 + 2 + 2
+//! assert_eq!(Method::Dual.payload_len(2, 2), 6); // 2 task prices + a certificate of 2 + 2
 //! assert!(Method::Hungarian.info().team.is_none()); // solved centrally, no agents
 //! assert!(Method::Dual.info().summary.starts_with("Algorithm 2"));
 //! assert_eq!("inexact-dual".parse::<Method>(), Ok(Method::InexactDual));

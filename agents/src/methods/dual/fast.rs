@@ -22,23 +22,22 @@
 //!   same per-entry responses as the paper's ([`solve_simplex_box`]); the inexact one is a
 //!   gradient step projected onto the simplex with `γ = g/(2dρ)` (the gradient's Lipschitz
 //!   constant is `1/(2dρ)` without the robot row).
-//! * **A price certificate that needs no agreement** ([`crate::methods::dual::snapshot`]):
-//!   one robot's prices and the team's claims are flooded with the multipliers, and a
-//!   robot's slack is its own reduced-cost gap at those common prices. The paper variant's
-//!   certificate needs the multipliers to agree within a margin and each robot's
-//!   consensus residual to round to its task; here the certificate fires as soon as the
-//!   rounded assignment is optimal and one robot's prices price it so.
+//! * **A certificate that needs no agreement** ([`crate::methods::dual::snapshot`]): the
+//!   team's claims are flooded in snapshots, and common prices that price them are computed
+//!   beside the multipliers by a distributed Bellman–Ford (a min-flood with each robot
+//!   relaxing its own constraints). The paper variant's certificate needs the multipliers
+//!   to agree within a margin and each robot's consensus residual to round to its task;
+//!   here the certificate fires a few rounds after the claims of an optimal assignment
+//!   settle, whatever the multipliers.
 //!
 //! * **Relaxed, with a growing ρ.** The consensus step is over-relaxed
 //!   (Eckstein–Bertsekas relaxation of the edge variables, [`RELAXATION`]; in this
-//!   decentralized form only their sum per robot is kept), ρ grows from a small `ρ₀`
+//!   decentralized form only their sum per robot is kept), and ρ grows from a small `ρ₀`
 //!   by [`RHO_GROWTH`] a round up to [`RHO_MAX_GROWTH`] `ρ₀` (every robot from the round
-//!   number alone), and the snapshot carries the mean of the leader's last
-//!   [`PRICE_WINDOW`] price vectors rather than its latest (the iterates circle their
-//!   limit; the mean is nearer).
+//!   number alone).
 //!
-//! The payload is `m` multipliers and the snapshot's `1 + 2m` values: `3m + 1` (the
-//! paper's is `n + m`).
+//! The payload is `m` multipliers and the certificate's `2m` values: `3m` (the paper's is
+//! `n + m`).
 
 use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
 use crate::methods::dual::agent::DualUpdate;
@@ -58,9 +57,6 @@ pub const RHO_GROWTH: f64 = 1.01;
 /// responses are soft; a large one sharpens the responses and pulls the copies together.
 pub const RHO_MAX_GROWTH: f64 = 300.0;
 
-/// Rounds of the leader's prices the snapshot averages.
-pub const PRICE_WINDOW: usize = 30;
-
 /// Parameters of one fast dual agent.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FastDualParams {
@@ -69,8 +65,8 @@ pub struct FastDualParams {
     pub update: DualUpdate,
     /// Graph diameter: the snapshot's period.
     pub diameter: usize,
-    /// Whether this robot's prices are the snapshot's (one robot of the team).
-    pub leader: bool,
+    /// Total cost tolerance of the certificate (the decentralized stop's).
+    pub tolerance: f64,
 }
 
 /// Values of a fast dual message for `tasks` tasks.
@@ -96,10 +92,6 @@ pub struct FastDualAgent {
     kappa: Vec<f64>,
     /// `Σ_j z_ij`, the sum of the robot's relaxed edge variables.
     edges: Vec<f64>,
-    /// The leader's last [`PRICE_WINDOW`] price vectors (empty at the other robots) and
-    /// their mean.
-    history: Vec<f64>,
-    mean_prices: Vec<f64>,
     /// The ρ of the current step.
     rho: f64,
     /// Own relaxed column `x_i` on the allowed simplex.
@@ -165,17 +157,18 @@ impl FastDualAgent {
             p: vec![0.0; tasks],
             kappa: vec![0.0; tasks],
             edges: vec![0.0; tasks],
-            history: if params.leader {
-                vec![0.0; PRICE_WINDOW * tasks]
-            } else {
-                Vec::new()
-            },
-            mean_prices: vec![0.0; tasks],
             rho: params.rho,
             x: vec![0.0; tasks],
             step_point: vec![0.0; tasks],
             breakpoints: Vec::with_capacity(3 * tasks + 2),
-            snapshot: Snapshot::new(index, tasks, params.leader, params.diameter),
+            // Every slack of a stable potential is at most ε: a tenth of what the stop allows.
+            snapshot: Snapshot::new(
+                index,
+                tasks,
+                case,
+                params.diameter,
+                params.tolerance / (10.0 * robots as f64),
+            ),
             task: first,
             slack: f64::INFINITY,
             steps: 0,
@@ -310,23 +303,6 @@ impl FastDualAgent {
         }
     }
 
-    /// The leader keeps its last prices and their mean (the snapshot's prices).
-    fn remember_prices(&mut self) {
-        if self.history.is_empty() {
-            return;
-        }
-        let m = self.tasks;
-        let slot = (self.steps as usize) % PRICE_WINDOW;
-        self.history[slot * m..(slot + 1) * m].copy_from_slice(&self.y);
-        let count = (self.steps as usize + 1).min(PRICE_WINDOW);
-        self.mean_prices.fill(0.0);
-        for past in self.history.chunks_exact(m).take(count) {
-            for (mean, price) in self.mean_prices.iter_mut().zip(past) {
-                *mean += price / count as f64;
-            }
-        }
-    }
-
     /// The allowed task with the largest entry of `x` (the first on ties).
     fn round(&self) -> usize {
         let mut best = None;
@@ -360,6 +336,7 @@ impl ConsensusAgent for FastDualAgent {
         let m = self.tasks;
         self.rho = self.schedule().rho(self.steps);
         let disagreement = self.accumulate(inbox);
+        self.snapshot.begin();
         for k in 0..inbox.len() {
             self.snapshot.merge(self.steps, &inbox.payload(k)[m..]);
         }
@@ -374,10 +351,8 @@ impl ConsensusAgent for FastDualAgent {
             };
         }
         self.task = self.round();
-        // The prices of the round just gathered are what the neighbours saw of this robot.
-        self.remember_prices();
         self.snapshot
-            .advance(self.steps, self.task, &self.mean_prices);
+            .advance(self.steps, self.task, &self.costs, &self.allowed);
         self.snapshot.write(&mut out[m..]);
         self.slack = self
             .snapshot
@@ -466,7 +441,7 @@ mod tests {
                     rho: 0.3 + rng.uniform(),
                     update: DualUpdate::Exact,
                     diameter: 1,
-                    leader: false,
+                    tolerance: 1e-9,
                 };
                 let costs: Vec<f64> = (0..tasks).map(|_| rng.uniform()).collect();
                 let mut allowed = vec![true; tasks];
@@ -529,7 +504,7 @@ mod tests {
                         rho: 0.5,
                         update,
                         diameter: 1,
-                        leader: i == 0,
+                        tolerance: 1e-9,
                     };
                     FastDualAgent::new(
                         i,

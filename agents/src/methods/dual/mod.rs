@@ -1,7 +1,7 @@
 //! Dual consensus ADMM (Algorithm 2) and its inexact variant, each in two variants
 //! (`--dual-variant`): `fast` (the default, [`fast`]: each robot's "one task" row is its own
-//! constraint, `m` multipliers and a flooded price snapshot whose certificate needs no
-//! agreement, [`snapshot`]) and `paper` (Algorithm 2 as published, [`agent`]: `n + m`
+//! constraint, `m` multipliers and a certificate that needs no agreement: flooded claims
+//! and prices computed for them, [`snapshot`]) and `paper` (Algorithm 2 as published, [`agent`]: `n + m`
 //! multipliers). The two registrations ([`DUAL`], [`INEXACT_DUAL`]) share the ρ rule and
 //! schedule; the inexact method has its own setting (the γ factor).
 
@@ -32,13 +32,13 @@ use serde::{Deserialize, Serialize};
 const DUAL_MEMORY: Memory = Memory {
     bytes: |n, m| per_agent(n, (5 * (n + m) + 5 * m + 2) as f64),
     of: TEAM_STATE,
-    because: "each robot holds n+m multipliers (paper variant; fast: 3m+1 values a round)",
+    because: "each robot holds n+m multipliers (paper variant; fast: 3m values a round)",
 };
 
 /// The dual method's registration.
 pub const DUAL: MethodInfo = MethodInfo {
     name: "dual",
-    summary: "Algorithm 2, exchanges m multipliers and a price snapshot (paper variant: n+m multipliers)",
+    summary: "Algorithm 2, exchanges m multipliers and a certificate of 2m values (paper variant: n+m multipliers)",
     role: Role::Admm,
     team: Some(&DualMethod),
     variants: Some(&VARIANT),
@@ -90,7 +90,7 @@ pub const VARIANT: SettingSpec = SettingSpec {
     key: "dual_variant",
     flag: "--dual-variant",
     value_name: "DUAL_VARIANT",
-    help: "Dual methods: fast (each robot's one-task row is its own constraint, m multipliers and a flooded price snapshot certify) or paper (Algorithm 2 as published, n+m multipliers; refused with the other methods) [default: fast]",
+    help: "Dual methods: fast (each robot's one-task row is its own constraint, m multipliers, relaxed steps and a growing ρ; flooded claims and prices computed for them certify) or paper (Algorithm 2 as published, n+m multipliers; refused with the other methods) [default: fast]",
     kind: SettingKind::Choice(|| DualVariant::ALL.iter().map(|v| v.name()).collect()),
 };
 
@@ -325,8 +325,6 @@ struct DualTeam<'a> {
     params: TeamParams,
     update: DualUpdate,
     variant: DualVariant,
-    /// The robot whose prices the fast variant's snapshot floods (a centre of the graph).
-    leader: usize,
     /// The team's costs, for each robot's own forbidden pairs.
     costs: &'a CostMatrix,
 }
@@ -337,7 +335,6 @@ impl<'a> DualTeam<'a> {
             params: team.params,
             update,
             variant,
-            leader: team.graph.center().unwrap_or(0),
             costs: team.problem.costs(),
         }
     }
@@ -360,7 +357,7 @@ impl TeamBuilder for DualTeam<'_> {
                     rho: self.params.rho,
                     update: self.update,
                     diameter: self.params.diameter,
-                    leader: init.index == self.leader,
+                    tolerance: self.params.tolerance,
                 },
             ));
         }
