@@ -3,7 +3,9 @@
 //! and uds runs use real agent processes (and real shared memory, or real sockets), each in
 //! its own namespace, and must leave nothing behind.
 
+use admm_ta_agents::method::settings::{GivenSettings, SettingValue};
 use admm_ta_agents::methods::Method;
+use admm_ta_agents::methods::dual::VARIANT;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::error::ConfigError;
 use admm_ta_runtime::options::run::RunOptions;
@@ -86,9 +88,29 @@ fn all_transports_with(
     stop: StopRule,
     max_iters: usize,
 ) {
+    all_transports_with_settings(
+        method,
+        GivenSettings::default(),
+        problem,
+        graph,
+        stop,
+        max_iters,
+    );
+}
+
+/// As [`all_transports_with`], the method with these settings (a variant).
+fn all_transports_with_settings(
+    method: Method,
+    settings: GivenSettings,
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    stop: StopRule,
+    max_iters: usize,
+) {
     let run = |transport| {
         let config = config(transport, stop, max_iters)
             .method(method)
+            .settings(settings.clone())
             .build()
             .unwrap();
         solve(problem, graph, &config).unwrap()
@@ -172,21 +194,27 @@ fn transports_agree_on_a_chain_in_case_2() {
 
 #[test]
 fn dual_methods_agree_across_transports() {
-    // The dual payload is the n + m multipliers, not the m × n matrix.
-    all_transports_with(
-        Method::Dual,
-        &problem(8, 8, 3),
-        &graph("complete", 8, 0),
-        StopRule::Local,
-        3000,
-    );
-    all_transports_with(
-        Method::InexactDual,
-        &problem(9, 5, 6),
-        &graph("random:0.5", 9, 6),
-        StopRule::Local,
-        5000,
-    );
+    // The dual payload: 3m values (fast variant) or the n + m multipliers (paper), not the
+    // m × n matrix; the fast variant's certificate floods claims and potentials.
+    for variant in ["fast", "paper"] {
+        let settings = GivenSettings::default().set(&VARIANT, SettingValue::Name(variant.into()));
+        all_transports_with_settings(
+            Method::Dual,
+            settings.clone(),
+            &problem(8, 8, 3),
+            &graph("complete", 8, 0),
+            StopRule::Local,
+            3000,
+        );
+        all_transports_with_settings(
+            Method::InexactDual,
+            settings,
+            &problem(9, 5, 6),
+            &graph("random:0.5", 9, 6),
+            StopRule::Local,
+            5000,
+        );
+    }
 }
 
 #[test]
