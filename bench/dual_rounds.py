@@ -3,6 +3,7 @@
 
     python3 bench/dual_rounds.py [--binary target/release/admm-ta] [--seeds 1-10]
         [--variants fast,paper] [--methods dual,inexact-dual] [--cases all|NAME,...] [--jobs 2]
+        [--max-iters 5000] [--rho-scale 1]
 
 Every run is `admm-ta solve … --check --json` (lockstep sim, defaults, decentralized stop).
 A cell is `median rounds (certified/runs, optimal/runs)`; a run that did not certify counts
@@ -37,11 +38,14 @@ def seeds(text):
     return [int(s) for s in text.split(",")]
 
 
-def run(binary, method, variant, case, seed, max_iters):
+def run(binary, method, variant, case, seed, max_iters, rho_scale=1.0):
     cmd = [
         binary, "solve", *CASES[case], "--seed", str(seed), "--method", method,
         "--dual-variant", variant, "--check", "--json", "--max-iters", str(max_iters),
     ]
+    if rho_scale != 1.0:
+        probe = subprocess.run(cmd[:-2] + ["--max-iters", "1"], capture_output=True, text=True)
+        cmd += ["--rho", repr(json.loads(probe.stdout)["rho"] * rho_scale)]
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=3600)
     if not out.stdout.strip():
         return {"rounds": max_iters, "certified": False, "optimal": False, "bytes": None,
@@ -64,6 +68,8 @@ def main():
     ap.add_argument("--cases", default="all")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--max-iters", type=int, default=5000)
+    ap.add_argument("--rho-scale", type=float, default=1.0,
+                    help="multiply each run's default ρ (a tuning aid)")
     args = ap.parse_args()
     cases = list(CASES) if args.cases == "all" else args.cases.split(",")
     keys = [
@@ -74,7 +80,7 @@ def main():
         for s in seeds(args.seeds)
     ]
     with concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
-        results = dict(zip(keys, pool.map(lambda k: run(args.binary, *k, args.max_iters), keys)))
+        results = dict(zip(keys, pool.map(lambda k: run(args.binary, *k, args.max_iters, args.rho_scale), keys)))
     columns = [(m, v) for m in args.methods.split(",") for v in args.variants.split(",")]
     print("| case | " + " | ".join(f"{m} ({v})" for m, v in columns) + " |")
     print("|---" * (len(columns) + 1) + "|")
