@@ -1,7 +1,7 @@
 //! The fast variant of the dual methods (the default; `--dual-variant paper` runs
 //! Algorithm 2 as published, [`crate::methods::dual::agent`]).
 //!
-//! Two changes, each measured in bench/README.md ("The dual methods, second pass"):
+//! Three changes, each measured in bench/README.md ("The dual methods, second pass"):
 //!
 //! * **A robot's "one task" row is its own constraint.** In the paper every robot keeps a
 //!   copy of all `n + m` multipliers, but the robot rows `Σ_t x_{i,t} = 1` involve robot `i`
@@ -21,7 +21,10 @@
 //!   with `θ(x) = ±x/ρ + κ_i`. The exact update is a root of `Σ_t x_t(τ) = 1` with the
 //!   same per-entry responses as the paper's ([`solve_simplex_box`]); the inexact one is a
 //!   gradient step projected onto the simplex with `γ = g/(2dρ)` (the gradient's Lipschitz
-//!   constant is `1/(2dρ)` without the robot row).
+//!   constant is `1/(2dρ)` without the robot row). In Case 1 the quadratic is separable
+//!   with exactly that curvature, so with `g = 1` (its default) the step *is* the exact
+//!   minimiser and the two methods differ only by their ρ rules; Case 2's hinge keeps them
+//!   apart.
 //! * **A certificate that needs no agreement** ([`crate::methods::dual::snapshot`]): the
 //!   team's claims are flooded in snapshots, and common prices that price them are computed
 //!   beside the multipliers by a distributed Bellman–Ford (a min-flood with each robot
@@ -29,7 +32,6 @@
 //!   to agree within a margin and each robot's consensus residual to round to its task;
 //!   here the certificate fires a few rounds after the claims of an optimal assignment
 //!   settle, whatever the multipliers.
-//!
 //! * **Relaxed, with a growing ρ.** The consensus step is over-relaxed
 //!   (Eckstein–Bertsekas relaxation of the edge variables, [`RELAXATION`]; in this
 //!   decentralized form only their sum per robot is kept), and ρ grows from a small `ρ₀`
