@@ -98,6 +98,7 @@
 //! unit tests.
 
 use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
+use crate::methods::dual::column;
 use crate::methods::dual::coupled_box::solve_coupled_box;
 use crate::problem::AssignmentCase;
 
@@ -214,20 +215,8 @@ impl DualAgent {
     /// its own problem (and out of its certificate and rounding). Its costs are centred on
     /// the allowed ones. At least one task must be allowed.
     pub fn with_allowed(mut self, allowed: Vec<bool>) -> Self {
-        assert_eq!(allowed.len(), self.tasks, "one flag per task");
-        assert!(allowed.iter().any(|&a| a), "a robot needs an allowed task");
         // Centred on the allowed costs (a shift of the robot's own costs again).
-        let mean = self
-            .costs
-            .iter()
-            .zip(&allowed)
-            .filter(|(_, a)| **a)
-            .map(|(c, _)| c)
-            .sum::<f64>()
-            / allowed.iter().filter(|&&a| a).count() as f64;
-        for (c, &a) in self.costs.iter_mut().zip(&allowed) {
-            *c = if a { *c - mean } else { 0.0 };
-        }
+        self.costs = column::centred(&self.costs, &allowed);
         self.allowed = allowed;
         self
     }
@@ -372,17 +361,6 @@ impl DualAgent {
         }
     }
 
-    /// The allowed task with the largest entry of `x` (the first on ties).
-    fn round(&self) -> usize {
-        let mut best = None;
-        for t in (0..self.tasks).filter(|&t| self.allowed[t]) {
-            if best.is_none_or(|b: usize| self.x[t] > self.x[b]) {
-                best = Some(t);
-            }
-        }
-        best.expect("a robot has an allowed task")
-    }
-
     /// Writes `y^{k+1}` from `x^{k+1}` by (13) and (14).
     fn write_multipliers(&self, out: &mut [f64]) {
         let rho = self.settings.rho;
@@ -482,29 +460,12 @@ impl ConsensusAgent for DualAgent {
             .zip(&self.y)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
-        self.task = self.round();
+        self.task = column::round(&self.x, &self.allowed);
         let level = self.level(self.steps);
         self.steps += 1;
         self.slack = self.certificate(&self.y, task_disagreement, level);
         self.y.copy_from_slice(out);
-        let gap = self
-            .x
-            .iter()
-            .enumerate()
-            .map(|(t, v)| (v - if t == self.task { 1.0 } else { 0.0 }).abs())
-            .fold(0.0, f64::max);
-        StepReport {
-            disagreement,
-            change,
-            // The x-update is closed form (exact root or one gradient step): no inner loop.
-            inner_iterations: 0,
-            inner_converged: true,
-            integrality_gap: gap,
-            own_integrality_gap: gap,
-            // No view of the team's assignment: neighbours always "agree", the
-            // certificate alone decides (see the module docs).
-            assignment_digest: 0,
-        }
+        column::report(&self.x, self.task, disagreement, change)
     }
 
     fn decide(&self) -> usize {

@@ -43,6 +43,7 @@
 
 use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
 use crate::methods::dual::agent::DualUpdate;
+use crate::methods::dual::column;
 use crate::methods::dual::coupled_box::solve_simplex_box;
 use crate::methods::dual::snapshot::{self, Snapshot};
 use crate::methods::rho::RhoSchedule;
@@ -133,19 +134,7 @@ impl FastDualAgent {
                 "γ must be positive"
             );
         }
-        let count = allowed.iter().filter(|&&a| a).count() as f64;
-        let mean = costs
-            .iter()
-            .zip(&allowed)
-            .filter(|(_, a)| **a)
-            .map(|(c, _)| c)
-            .sum::<f64>()
-            / count;
-        let costs = costs
-            .iter()
-            .zip(&allowed)
-            .map(|(c, &a)| if a { c - mean } else { 0.0 })
-            .collect();
+        let costs = column::centred(costs, &allowed);
         let first = allowed.iter().position(|&a| a).expect("an allowed task");
         Self {
             tasks,
@@ -304,17 +293,6 @@ impl FastDualAgent {
             max: RHO_MAX_GROWTH,
         }
     }
-
-    /// The allowed task with the largest entry of `x` (the first on ties).
-    fn round(&self) -> usize {
-        let mut best = None;
-        for t in (0..self.tasks).filter(|&t| self.allowed[t]) {
-            if best.is_none_or(|b: usize| self.x[t] > self.x[b]) {
-                best = Some(t);
-            }
-        }
-        best.expect("a robot has an allowed task")
-    }
 }
 
 /// `θ_t = ±x_t/ρ + κ_t` (`−` for Case 2's coverage rows).
@@ -352,7 +330,7 @@ impl ConsensusAgent for FastDualAgent {
                 value
             };
         }
-        self.task = self.round();
+        self.task = column::round(&self.x, &self.allowed);
         self.snapshot
             .advance(self.steps, self.task, &self.costs, &self.allowed);
         self.snapshot.write(&mut out[m..]);
@@ -366,22 +344,7 @@ impl ConsensusAgent for FastDualAgent {
             .fold(0.0, f64::max);
         self.y.copy_from_slice(&out[..m]);
         self.steps += 1;
-        let gap = self
-            .x
-            .iter()
-            .enumerate()
-            .map(|(t, v)| (v - if t == self.task { 1.0 } else { 0.0 }).abs())
-            .fold(0.0, f64::max);
-        StepReport {
-            disagreement,
-            change,
-            inner_iterations: 0,
-            inner_converged: true,
-            integrality_gap: gap,
-            own_integrality_gap: gap,
-            // No view of the team's assignment: the certificate alone decides.
-            assignment_digest: 0,
-        }
+        column::report(&self.x, self.task, disagreement, change)
     }
 
     fn decide(&self) -> usize {

@@ -6,6 +6,7 @@
 //! schedule; the inexact method has its own setting (the γ factor).
 
 pub mod agent;
+pub mod column;
 pub mod coupled_box;
 pub mod fast;
 pub mod snapshot;
@@ -26,6 +27,7 @@ use crate::method::team::{
 use crate::methods::rho::{DUAL_RHO_FACTOR, INEXACT_DUAL_RHO_FACTOR, RhoRule, RhoSchedule};
 use crate::problem::CostMatrix;
 use serde::{Deserialize, Serialize};
+use std::marker::PhantomData;
 
 /// The paper variant's y, p, κ and two round buffers of `n + m`, costs, x and the
 /// x-update's breakpoints (the fast variant holds less: `m` multipliers, two snapshots).
@@ -40,7 +42,7 @@ pub const DUAL: MethodInfo = MethodInfo {
     name: "dual",
     summary: "Algorithm 2, exchanges m multipliers and a certificate of 2m values (paper variant: n+m multipliers)",
     role: Role::Admm,
-    team: Some(&DualMethod),
+    team: Some(&DualMethod::<DualSettings>(PhantomData)),
     variants: Some(&VARIANT),
     stops: OWN_STATE_STOPS,
     memory: DUAL_MEMORY,
@@ -65,7 +67,7 @@ pub const INEXACT_DUAL: MethodInfo = MethodInfo {
     name: "inexact-dual",
     summary: "proximal-gradient x-update, no inner solve",
     role: Role::Admm,
-    team: Some(&InexactDualMethod),
+    team: Some(&DualMethod::<InexactDualSettings>(PhantomData)),
     variants: Some(&VARIANT),
     stops: OWN_STATE_STOPS,
     memory: DUAL_MEMORY,
@@ -157,7 +159,7 @@ pub struct InexactDualSettings {
 
 impl InexactDualSettings {
     /// The x-update these settings give.
-    fn update(&self) -> DualUpdate {
+    pub fn update(&self) -> DualUpdate {
         let default = match self.dual_variant {
             DualVariant::Paper => DEFAULT_GAMMA_FACTOR,
             DualVariant::Fast => FAST_GAMMA_FACTOR,
@@ -194,92 +196,74 @@ impl Setting for GammaFactor {
     }
 }
 
-/// Dual consensus ADMM (Algorithm 2) as a team method.
-pub struct DualMethod;
+/// What tells the two dual methods apart: their settings, their x-update and the factor
+/// of their ρ rule.
+pub trait DualKind: MethodSettings {
+    /// The paper variant's `c` of `ρ = c / (spread · d̄)`.
+    const RHO_FACTOR: f64;
+    fn variant(&self) -> DualVariant;
+    fn update(&self) -> DualUpdate;
+}
 
-/// The inexact dual as a team method.
-pub struct InexactDualMethod;
-
-impl TeamMethod for DualMethod {
-    type Settings = DualSettings;
-    const PENALTY: bool = true;
-
-    fn payload_len(&self, settings: &DualSettings, robots: usize, tasks: usize) -> usize {
-        settings.dual_variant.payload_len(robots, tasks)
+impl DualKind for DualSettings {
+    const RHO_FACTOR: f64 = DUAL_RHO_FACTOR;
+    fn variant(&self) -> DualVariant {
+        self.dual_variant
     }
-
-    fn default_rho(&self, settings: &DualSettings, costs: &CostMatrix, degree: f64) -> f64 {
-        rule(settings.dual_variant, DUAL_RHO_FACTOR).rho(costs, degree)
-    }
-
-    fn schedule(&self, settings: &DualSettings, initial: f64) -> Option<RhoSchedule> {
-        adaptive(settings.dual_variant, DUAL_RHO_FACTOR, initial)
-    }
-
-    fn refuse(
-        &self,
-        settings: &DualSettings,
-        adaptive_rho: bool,
-        _: StopRule,
-    ) -> Result<(), Refusal> {
-        refuse(settings.dual_variant, adaptive_rho)
-    }
-
-    fn team<'a>(
-        &'static self,
-        settings: &DualSettings,
-        team: TeamContext<'a>,
-    ) -> Box<dyn TeamBuilder + 'a> {
-        Box::new(DualTeam::new(
-            team,
-            DualUpdate::Exact,
-            settings.dual_variant,
-        ))
-    }
-
-    fn stop_cadence(&self, _: &DualSettings) -> (u64, u32) {
-        CADENCE
+    fn update(&self) -> DualUpdate {
+        DualUpdate::Exact
     }
 }
 
-impl TeamMethod for InexactDualMethod {
-    type Settings = InexactDualSettings;
+impl DualKind for InexactDualSettings {
+    const RHO_FACTOR: f64 = INEXACT_DUAL_RHO_FACTOR;
+    fn variant(&self) -> DualVariant {
+        self.dual_variant
+    }
+    fn update(&self) -> DualUpdate {
+        InexactDualSettings::update(self)
+    }
+}
+
+/// A dual method as a team method: Algorithm 2 with `DualSettings`, the inexact dual with
+/// `InexactDualSettings`.
+pub struct DualMethod<S>(PhantomData<fn() -> S>);
+
+impl<S: DualKind> TeamMethod for DualMethod<S> {
+    type Settings = S;
     const PENALTY: bool = true;
 
-    fn payload_len(&self, settings: &InexactDualSettings, robots: usize, tasks: usize) -> usize {
-        settings.dual_variant.payload_len(robots, tasks)
+    fn payload_len(&self, settings: &S, robots: usize, tasks: usize) -> usize {
+        settings.variant().payload_len(robots, tasks)
     }
 
-    fn default_rho(&self, settings: &InexactDualSettings, costs: &CostMatrix, degree: f64) -> f64 {
-        rule(settings.dual_variant, INEXACT_DUAL_RHO_FACTOR).rho(costs, degree)
+    fn default_rho(&self, settings: &S, costs: &CostMatrix, degree: f64) -> f64 {
+        rule(settings.variant(), S::RHO_FACTOR).rho(costs, degree)
     }
 
-    fn schedule(&self, settings: &InexactDualSettings, initial: f64) -> Option<RhoSchedule> {
-        adaptive(settings.dual_variant, INEXACT_DUAL_RHO_FACTOR, initial)
+    fn schedule(&self, settings: &S, initial: f64) -> Option<RhoSchedule> {
+        // The paper variant's `--adaptive-rho` schedule; the fast one grows its ρ itself.
+        (settings.variant() == DualVariant::Paper)
+            .then(|| rule(DualVariant::Paper, S::RHO_FACTOR).schedule(initial))
     }
 
-    fn refuse(
-        &self,
-        settings: &InexactDualSettings,
-        adaptive_rho: bool,
-        _: StopRule,
-    ) -> Result<(), Refusal> {
-        refuse(settings.dual_variant, adaptive_rho)
+    fn refuse(&self, settings: &S, adaptive_rho: bool, _: StopRule) -> Result<(), Refusal> {
+        if settings.variant() == DualVariant::Fast && adaptive_rho {
+            return Err(Refusal {
+                option: RunOption::AdaptiveRho,
+                needs: &VARIANT,
+                value: DualVariant::Paper.name(),
+                because: "the paper's dual variant, not the fast one (whose ρ grows by its own schedule)",
+            });
+        }
+        Ok(())
     }
 
-    fn team<'a>(
-        &'static self,
-        settings: &InexactDualSettings,
-        team: TeamContext<'a>,
-    ) -> Box<dyn TeamBuilder + 'a> {
-        Box::new(DualTeam::new(
-            team,
-            settings.update(),
-            settings.dual_variant,
-        ))
+    fn team<'a>(&'static self, settings: &S, team: TeamContext<'a>) -> Box<dyn TeamBuilder + 'a> {
+        Box::new(DualTeam::new(team, settings.update(), settings.variant()))
     }
 
-    fn stop_cadence(&self, _: &InexactDualSettings) -> (u64, u32) {
+    fn stop_cadence(&self, _: &S) -> (u64, u32) {
         CADENCE
     }
 }
@@ -292,24 +276,6 @@ const CADENCE: (u64, u32) = (1, 0);
 /// The fast variant's `ρ₀` is this many times the paper variant's ρ; its ρ then grows
 /// (see [`fast::RHO_GROWTH`]; bench/README.md, "The dual methods, second pass").
 pub const FAST_RHO_SCALE: f64 = 0.1;
-
-/// The `--adaptive-rho` schedule: the paper variant's only (the fast one grows its ρ itself).
-fn adaptive(variant: DualVariant, factor: f64, initial: f64) -> Option<RhoSchedule> {
-    (variant == DualVariant::Paper).then(|| rule(variant, factor).schedule(initial))
-}
-
-/// The fast variant refuses `--adaptive-rho`: its ρ follows its own schedule.
-fn refuse(variant: DualVariant, adaptive_rho: bool) -> Result<(), Refusal> {
-    if variant == DualVariant::Fast && adaptive_rho {
-        return Err(Refusal {
-            option: RunOption::AdaptiveRho,
-            needs: &VARIANT,
-            value: DualVariant::Paper.name(),
-            because: "the paper's dual variant, not the fast one (whose ρ grows by its own schedule)",
-        });
-    }
-    Ok(())
-}
 
 /// The ρ rule of a variant, from the paper variant's factor.
 fn rule(variant: DualVariant, factor: f64) -> RhoRule {
