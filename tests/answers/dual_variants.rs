@@ -120,6 +120,28 @@ fn the_fast_variant_certifies_every_kind_of_problem() {
     }
 }
 
+/// Case 2 on long graphs: the potentials restart whenever the settling claims change, and
+/// otherwise only after `(m + 2) D` rounds, long enough for the relaxations to travel (a
+/// restart every `4D` rounds cut them off for good here: optimal from round 277, never
+/// certified).
+#[test]
+fn case_two_certifies_on_long_graphs() {
+    let problem = TaskAssignmentProblem::new(
+        CostModel::Uniform.costs(14, 18, 197_915).unwrap(),
+        CaseChoice::Forced(admm_ta::agents::problem::AssignmentCase::Idle),
+    )
+    .unwrap();
+    let optimum = oracle::solve(&problem).unwrap().cost;
+    for method in [Method::Dual, Method::InexactDual] {
+        for topology in ["chain", "ring"] {
+            let report = run(&problem, method, "fast", topology);
+            let label = format!("{} on {topology}", method.name());
+            assert!(report.certified, "{label}: {} rounds", report.iterations);
+            assert!((report.cost - optimum).abs() <= 1e-9, "{label}");
+        }
+    }
+}
+
 /// Maximize: profits, the best total.
 #[test]
 fn the_fast_variant_certifies_the_largest_profit() {

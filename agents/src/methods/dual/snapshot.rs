@@ -34,11 +34,13 @@
 //!
 //! In Case 2 an extra claimer's task must end at `λ = 0`, which the greatest solution gives
 //! (an optimal dual with `λ = 0` on over-covered tasks exists, and the greatest solution is
-//! above it) but potentials lowered while `π` was still changing may not: every
-//! [`RESET_PERIODS`] snapshot periods, and at least every `2m` rounds (Bellman–Ford needs
-//! up to `m` relaxations along a path), all robots set their potentials back to 0 at the
-//! same round (and count as moved in it), so they fall again to the greatest solution of
-//! the claims of the time. Case 1 needs any solution and never resets.
+//! above it) but potentials lowered while `π` was still changing may not. So in Case 2 all
+//! robots set their potentials back to 0 at the same round (and count as moved in it) when
+//! a settling snapshot's claims differ from the last settled ones (every robot sees the
+//! same claims at the same round), and in any case every `(m + 2) P` rounds — a claimer
+//! that moved between two tasks others claim first leaves the claims unchanged, and the
+//! relaxations may need up to `m` hops of up to `D` rounds each to settle, so a shorter
+//! period could cut them off for good. Case 1 needs any solution and never resets.
 //!
 //! A robot whose potentials did not change in a round held, the round before, potentials no
 //! larger than any neighbour's, and meets its own constraints within `ε`. So if *every*
@@ -62,9 +64,6 @@ pub const fn words(tasks: usize) -> usize {
     2 * tasks
 }
 
-/// Case 2's potentials restart from 0 every this many snapshot periods.
-pub const RESET_PERIODS: u64 = 4;
-
 /// No claim yet.
 const UNCLAIMED: f64 = -1.0;
 
@@ -73,7 +72,8 @@ const UNCLAIMED: f64 = -1.0;
 pub struct Snapshot {
     index: usize,
     period: u64,
-    /// Potentials restart every this many rounds (Case 2).
+    /// Case 2: potentials restart when the settling claims change, and every this many
+    /// rounds.
     reset: Option<u64>,
     /// Relaxations smaller than this are not made (rounding never cycles; every slack of a
     /// stable potential is at most `ε`).
@@ -117,8 +117,7 @@ impl Snapshot {
         Self {
             index,
             period,
-            reset: (case == AssignmentCase::Two)
-                .then(|| period * RESET_PERIODS.max((2 * tasks as u64).div_ceil(period))),
+            reset: (case == AssignmentCase::Two).then_some(period * (tasks as u64 + 2)),
             epsilon,
             potentials: vec![0.0; tasks],
             before: vec![0.0; tasks],
@@ -163,10 +162,13 @@ impl Snapshot {
     /// potentials stood still, settles the snapshot that has flooded for `P` rounds and
     /// starts the next one. Every robot does the same at the same steps.
     pub fn advance(&mut self, step: u64, task: usize, costs: &[f64], allowed: &[bool]) {
-        if self
-            .reset
-            .is_some_and(|every| step > 0 && step.is_multiple_of(every))
-        {
+        let settles = step > 0 && step.is_multiple_of(self.period);
+        let restart = self.reset.is_some_and(|every| {
+            step > 0
+                && (step.is_multiple_of(every)
+                    || (settles && self.flooding.claims != self.settled.claims))
+        });
+        if restart {
             // The neighbours' values merged in this step are dropped: not stable.
             self.potentials.fill(0.0);
             self.stable = false;
@@ -183,7 +185,7 @@ impl Snapshot {
         if !step.is_multiple_of(self.period) {
             return;
         }
-        if step > 0 {
+        if settles {
             std::mem::swap(&mut self.settled, &mut self.flooding);
         }
         let next = &mut self.flooding;
