@@ -203,6 +203,7 @@ def solve(
         Any other option of ``admm-ta solve``, by its name with ``_`` for ``-``:
         ``seed=3``, ``rho=0.5``, ``max_iters=2000``, ``round_timeout=5``,
         ``global_barrier=True``, ``case="idle"``, ``forbidden="pairs.txt"``,
+        ``dual_variant="paper"`` (Algorithm 2 as published; the default ``fast``),
         ``timeline="trace.json"`` (every agent's rounds as Chrome trace JSON, and
         ``result.critical_path``), ... ``True`` gives a flag, ``False`` or ``None`` leaves
         it out.
