@@ -381,7 +381,7 @@ mod tests {
             ..Table1Config::default()
         };
         let table = run(&config, &|_, _| {}).unwrap();
-        assert_eq!(table.rows.len(), 4);
+        assert_eq!(table.rows.len(), 6);
         for row in &table.rows {
             assert_eq!(row.trials.len(), 2);
             assert_eq!(row.wrong_stops, 0, "{:?}", row.method);
