@@ -71,8 +71,9 @@ impl Experiment for Comparison {
     }
 }
 
-/// Whether `method` with its own of `settings` follows an `--adaptive-rho` schedule.
-fn has_schedule(method: Method, settings: &GivenSettings) -> bool {
+/// Whether `method` with its own of `settings` follows an `--adaptive-rho` schedule (the
+/// experiments' `--adaptive-rho` applies to those only: the fast variants refuse it).
+pub(crate) fn has_schedule(method: Method, settings: &GivenSettings) -> bool {
     method
         .setup(&settings.only(method.settings()))
         .ok()

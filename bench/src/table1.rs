@@ -179,7 +179,10 @@ fn run_trial(
             .stop(stop)
             .check(true)
             .max_iters(config.max_iters)
-            .adaptive_rho(config.adaptive_rho)
+            .adaptive_rho(
+                config.adaptive_rho
+                    && crate::compare::has_schedule(contender.method, &contender.settings()),
+            )
             .rho(Some(rho))
             .seed(seed)
             .build()?;

@@ -120,7 +120,10 @@ impl FigureConfig {
             .settings(contender.settings())
             .seed(seed)
             .check(true)
-            .adaptive_rho(self.adaptive_rho)
+            .adaptive_rho(
+                self.adaptive_rho
+                    && crate::compare::has_schedule(contender.method, &contender.settings()),
+            )
             .max_iters(self.max_iters)
             .agent_program(self.agent_program.clone())
             .fault_injection(false)
