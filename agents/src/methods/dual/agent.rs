@@ -124,9 +124,11 @@ pub enum DualUpdate {
 /// Parameters of one dual agent.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DualParams {
+    /// ρ (the fast variant's `ρ₀`, from which its ρ grows).
     pub rho: f64,
     pub update: DualUpdate,
-    /// Graph diameter, for the certificate's disagreement term.
+    /// Graph diameter: the paper variant's disagreement term, the fast one's snapshot
+    /// period.
     pub diameter: usize,
     /// Total cost tolerance of the certificate (the decentralized stop's).
     pub tolerance: f64,
@@ -187,10 +189,9 @@ impl DualAgent {
         // Each robot does exactly one task, so subtracting a constant from its own costs
         // changes every assignment's cost by the same amount: centring them makes the
         // iterates independent of cost shifts (as the primal's are), using only own data.
-        let mean = costs.iter().sum::<f64>() / tasks as f64;
-        let costs = costs.into_iter().map(|c| c - mean).collect();
-        let len = robots + tasks;
         let allowed = vec![true; tasks];
+        let costs = column::centred(&costs, &allowed);
+        let len = robots + tasks;
         Self {
             index,
             tasks,
@@ -455,17 +456,13 @@ impl ConsensusAgent for DualAgent {
         let (disagreement, task_disagreement) = self.accumulate(inbox);
         self.update_x();
         self.write_multipliers(out);
-        let change = out
-            .iter()
-            .zip(&self.y)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
         self.task = column::round(&self.x, &self.allowed);
         let level = self.level(self.steps);
         self.steps += 1;
         self.slack = self.certificate(&self.y, task_disagreement, level);
+        let report = column::report(&self.x, self.task, disagreement, out, &self.y);
         self.y.copy_from_slice(out);
-        column::report(&self.x, self.task, disagreement, change)
+        report
     }
 
     fn decide(&self) -> usize {

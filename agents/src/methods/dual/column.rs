@@ -36,8 +36,19 @@ pub fn round(x: &[f64], allowed: &[bool]) -> usize {
 }
 
 /// A dual agent's step report: its column `x` against its `task`, the neighbours'
-/// `disagreement` and its own multipliers' `change`.
-pub fn report(x: &[f64], task: usize, disagreement: f64, change: f64) -> StepReport {
+/// `disagreement`, and the change from its multipliers `before` to those it sends `now`.
+pub fn report(
+    x: &[f64],
+    task: usize,
+    disagreement: f64,
+    now: &[f64],
+    before: &[f64],
+) -> StepReport {
+    let change = now
+        .iter()
+        .zip(before)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
     let gap = x
         .iter()
         .enumerate()

@@ -45,7 +45,7 @@
 //! about 150 lines are its unit tests.
 
 use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
-use crate::methods::dual::agent::DualUpdate;
+use crate::methods::dual::agent::{DualParams, DualUpdate};
 use crate::methods::dual::column;
 use crate::methods::dual::coupled_box::solve_simplex_box;
 use crate::methods::dual::snapshot::{self, Snapshot};
@@ -63,18 +63,6 @@ pub const RHO_GROWTH: f64 = 1.01;
 /// responses are soft; a large one sharpens the responses and pulls the copies together.
 pub const RHO_MAX_GROWTH: f64 = 300.0;
 
-/// Parameters of one fast dual agent.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FastDualParams {
-    /// `ρ₀`, the first round's ρ (it then grows, see [`RHO_GROWTH`]).
-    pub rho: f64,
-    pub update: DualUpdate,
-    /// Graph diameter: the snapshot's period.
-    pub diameter: usize,
-    /// Total cost tolerance of the certificate (the decentralized stop's).
-    pub tolerance: f64,
-}
-
 /// Values of a fast dual message for `tasks` tasks.
 pub const fn payload_len(tasks: usize) -> usize {
     tasks + snapshot::words(tasks)
@@ -86,7 +74,7 @@ pub struct FastDualAgent {
     robots: usize,
     degree: usize,
     case: AssignmentCase,
-    params: FastDualParams,
+    params: DualParams,
     /// Own costs, centred on the allowed ones (a shift of the robot's own costs changes
     /// every assignment's cost alike).
     costs: Vec<f64>,
@@ -122,7 +110,7 @@ impl FastDualAgent {
         robots: usize,
         case: AssignmentCase,
         degree: usize,
-        params: FastDualParams,
+        params: DualParams,
     ) -> Self {
         let tasks = costs.len();
         assert!(index < robots && tasks >= 1 && allowed.len() == tasks);
@@ -340,14 +328,10 @@ impl ConsensusAgent for FastDualAgent {
         self.slack = self
             .snapshot
             .slack(self.task, &self.costs, &self.allowed, self.case);
-        let change = out[..m]
-            .iter()
-            .zip(&self.y)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let report = column::report(&self.x, self.task, disagreement, &out[..m], &self.y);
         self.y.copy_from_slice(&out[..m]);
         self.steps += 1;
-        column::report(&self.x, self.task, disagreement, change)
+        report
     }
 
     fn decide(&self) -> usize {
@@ -405,7 +389,7 @@ mod tests {
         let mut rng = SeededRng::new(7);
         for (case, robots, tasks) in [(AssignmentCase::One, 4, 4), (AssignmentCase::Two, 6, 4)] {
             for trial in 0..60 {
-                let params = FastDualParams {
+                let params = DualParams {
                     rho: 0.3 + rng.uniform(),
                     update: DualUpdate::Exact,
                     diameter: 1,
@@ -468,7 +452,7 @@ mod tests {
             let costs = [[0.0, 1.0], [0.0, 3.0]];
             let mut agents: Vec<FastDualAgent> = (0..2)
                 .map(|i| {
-                    let params = FastDualParams {
+                    let params = DualParams {
                         rho: 0.5,
                         update,
                         diameter: 1,

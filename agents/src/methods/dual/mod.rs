@@ -12,7 +12,7 @@ pub mod fast;
 pub mod snapshot;
 
 pub use agent::{DEFAULT_GAMMA_FACTOR, DualAgent, DualParams, DualUpdate};
-pub use fast::{FastDualAgent, FastDualParams};
+pub use fast::FastDualAgent;
 
 use crate::agent::AgentAlgorithm;
 use crate::certify::stopping::StopRule;
@@ -311,37 +311,27 @@ impl TeamBuilder for DualTeam<'_> {
         let allowed: Vec<bool> = (0..self.costs.tasks())
             .map(|t| self.costs.is_allowed(init.index, t))
             .collect();
-        if self.variant == DualVariant::Fast {
-            return Box::new(FastDualAgent::new(
-                init.index,
+        let params = DualParams {
+            rho: self.params.rho,
+            update: self.update,
+            diameter: self.params.diameter,
+            tolerance: self.params.tolerance,
+        };
+        let (index, robots, case, degree) = (init.index, init.robots, init.case, init.degree);
+        match self.variant {
+            DualVariant::Fast => Box::new(FastDualAgent::new(
+                index,
                 &init.costs,
                 allowed,
-                init.robots,
-                init.case,
-                init.degree,
-                FastDualParams {
-                    rho: self.params.rho,
-                    update: self.update,
-                    diameter: self.params.diameter,
-                    tolerance: self.params.tolerance,
-                },
-            ));
+                robots,
+                case,
+                degree,
+                params,
+            )),
+            DualVariant::Paper => Box::new(
+                DualAgent::new(index, init.costs, robots, case, degree, params)
+                    .with_allowed(allowed),
+            ),
         }
-        Box::new(
-            DualAgent::new(
-                init.index,
-                init.costs,
-                init.robots,
-                init.case,
-                init.degree,
-                DualParams {
-                    rho: self.params.rho,
-                    update: self.update,
-                    diameter: self.params.diameter,
-                    tolerance: self.params.tolerance,
-                },
-            )
-            .with_allowed(allowed),
-        )
     }
 }
