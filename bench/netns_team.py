@@ -85,13 +85,16 @@ def one_run(args, hosts, k):
         first = 0
         for h, (ns, _) in enumerate(hosts):
             exe = ["ip", "netns", "exec", ns, args.binary]
+            env = dict(os.environ, RUST_LOG=args.host_log) if args.host_log else None
             procs.append(("host", h, subprocess.Popen(
                 exe + ["host", "--team", team, "--name", f"h{h}"],
-                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)))
+                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)))
             for a in range(first, first + per[h]):
+                agent_env = dict(os.environ, RUST_LOG=args.agent_log) if args.agent_log else None
                 procs.append(("agent", a, subprocess.Popen(
                     exe + ["agent", "--team", team, "--id", str(a)],
-                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)))
+                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                    env=agent_env)))
             first += per[h]
         deadline = started + args.limit
         outputs = {}
@@ -121,6 +124,12 @@ def one_run(args, hosts, k):
         if args.verbose:
             for e in errors:
                 print("   ", e[:300], file=sys.stderr)
+        if args.log_dir and not (result.get("certified") and result.get("optimal")):
+            where = os.path.join(args.log_dir, run)
+            os.makedirs(where, exist_ok=True)
+            for (kind, w), (rc, text) in outputs.items():
+                with open(os.path.join(where, f"{kind}{w}.log"), "w") as f:
+                    f.write(f"exit {rc}\n{text}")
         latency = result.get("round_latency_us", {}).get("round", {})
         return {
             "run": k, "wall_s": round(wall, 2),
@@ -146,6 +155,9 @@ def main():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--limit", type=float, default=300.0, help="seconds per run")
     parser.add_argument("--verbose", action="store_true", help="every failing process's line")
+    parser.add_argument("--host-log", help="RUST_LOG filter of the host processes")
+    parser.add_argument("--agent-log", help="RUST_LOG filter of the agent processes")
+    parser.add_argument("--log-dir", help="where a failed run's process outputs are kept")
     args = parser.parse_args()
     args.binary = os.path.abspath(args.binary)
     if os.geteuid() != 0:

@@ -23,7 +23,8 @@ use crate::zenoh_net::ZenohError;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::{
-    alive_agents, announce_failure_repeatedly, announce_stop, watch_failures, watch_stops,
+    alive_agents, announce_failure_repeatedly, announce_stop, size_router_runtime, watch_failures,
+    watch_stops,
 };
 use serde::Serialize;
 use std::collections::HashSet;
@@ -94,10 +95,26 @@ const AFTER_FAILURE: Duration = Duration::from_secs(10);
 /// Runs host `name` of the team in `team_path` until the team's run is over. The team
 /// file, the host's name and a team file that differs from the running team's are refused
 /// ([`MemberError::Refused`]); what fails once the host runs is a failure.
+///
+/// It is the entry point of a host process (`admm-ta host`): call it before the process
+/// starts any other thread (it sizes Zenoh's runtime through the environment, see
+/// [`size_router_runtime`]).
 pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError> {
-    let _signals = crate::signals::install();
     let started = Instant::now();
     let team = Team::read(team_path).map_err(MemberError::refused)?;
+    if let Ok(me) = team.host(name) {
+        // The router's links: this host's Zenoh agents (a mixed team's agents use iceoryx2
+        // and its bridge is in this process) and the other hosts' routers.
+        let clients = if team.file.transport.bridged() {
+            0
+        } else {
+            me.agents.len()
+        };
+        // SAFETY: the host process calls this first, before it starts any thread (this
+        // function's documented contract); nothing else touches the environment meanwhile.
+        unsafe { size_router_runtime(clients + team.file.hosts.len().saturating_sub(1)) };
+    }
+    let _signals = crate::signals::install();
     let _span = tracing::info_span!("host", run = %team.file.run, host = name).entered();
     tracing::debug!(team = %team_path.display(), "starting the host");
     if !team.file.transport.across_hosts() {

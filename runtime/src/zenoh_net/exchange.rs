@@ -70,12 +70,6 @@ const DEPARTURE_GRACE: Duration = Duration::from_millis(300);
 const RESEND_AFTER: Duration = Duration::from_millis(50);
 const RESEND_ROUNDS: u64 = 2;
 
-/// A gather of the first rounds still missing a neighbour's message after this long declares
-/// its subscription to that neighbour again. Between routers, a subscription's declaration
-/// can be lost while the routers' links come up (seen at 100 agents on four hosts: a
-/// neighbour's every copy went nowhere for 10 s): declared again, it propagates anew and the
-/// neighbour's next copy (it re-sends too) finds its route.
-const RESUBSCRIBE_AFTER: Duration = Duration::from_secs(1);
 const RESEND_AT_MOST_EVERY: Duration = Duration::from_secs(1);
 
 /// How often start-up asks which neighbours are present.
@@ -150,7 +144,7 @@ pub struct ZenohExchange {
     links: ZenohLinks,
     publisher: Publisher<'static>,
     /// One per neighbour (in order), then the stop and failure watches.
-    subscribers: Vec<Subscriber<()>>,
+    _subscribers: Vec<Subscriber<()>>,
     _token: LivelinessToken,
     session: Session,
 }
@@ -388,7 +382,7 @@ impl ZenohExchange {
             launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
             links: links.clone(),
             publisher,
-            subscribers,
+            _subscribers: subscribers,
             _token: token,
             session,
         };
@@ -595,47 +589,6 @@ impl ZenohExchange {
             .map_err(|e| transport(self.index, format!("publishing round {round} failed: {e}")))
     }
 
-    /// Declares again the subscriptions to the neighbours whose round-`round` message is
-    /// missing (see [`RESUBSCRIBE_AFTER`]). The old one goes first: Zenoh shares one network
-    /// declaration among a session's subscribers of a key, so only a key left without any
-    /// is declared to the routers anew (a copy arriving in between is sent again).
-    fn resubscribe_missing(&mut self, round: u64) -> Result<(), ExchangeError> {
-        let words = self.outbox.len();
-        for k in 0..self.neighbours.len() {
-            if self.held_round[k] == Some(round) {
-                continue;
-            }
-            let j = self.neighbours[k];
-            let placeholder = self.subscribers.swap_remove(k);
-            drop(placeholder);
-            let fresh = subscribe_round(
-                &self.session,
-                &self.links,
-                &self.shared,
-                self.index,
-                k,
-                j,
-                words,
-            )
-            .map_err(|e| {
-                transport(
-                    self.index,
-                    format!("cannot subscribe again to agent {j}: {e}"),
-                )
-            })?;
-            // swap_remove moved the last subscriber into `k`: put things back in order.
-            self.subscribers.push(fresh);
-            let last = self.subscribers.len() - 1;
-            self.subscribers.swap(k, last);
-            tracing::debug!(
-                round,
-                neighbour = j,
-                "subscribed again to a silent neighbour"
-            );
-        }
-        Ok(())
-    }
-
     /// Sends the own messages of rounds `round − 1` and `round` again (see [`RESEND_AFTER`]).
     fn resend(&mut self, round: u64) -> Result<(), ExchangeError> {
         for r in [round.checked_sub(1), Some(round)].into_iter().flatten() {
@@ -702,17 +655,12 @@ impl Exchange for ZenohExchange {
             deadline
         };
         let mut resend_every = RESEND_AFTER;
-        let mut resubscribed = false;
         let held = self.policy.wait_until(
             self,
             deadline,
             |s| s.take_arrived(round),
             |s, deadline| {
                 if round < RESEND_ROUNDS && Instant::now() >= resend_at {
-                    if !resubscribed && started.elapsed() >= RESUBSCRIBE_AFTER {
-                        resubscribed = true;
-                        s.resubscribe_missing(round)?;
-                    }
                     s.resend(round)?;
                     resend_every = (resend_every * 2).min(RESEND_AT_MOST_EVERY);
                     resend_at = Instant::now() + resend_every;

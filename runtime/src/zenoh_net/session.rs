@@ -94,6 +94,41 @@ pub(crate) fn config(
     Ok(config)
 }
 
+/// Worker threads of Zenoh's receive runtime in a process whose router holds `links` links:
+/// one per link, and two to spare.
+///
+/// Why (issue 36): a Zenoh router forwards a received message on the receiving link's task,
+/// and a push with blocking congestion control into a full link queue blocks the worker
+/// *thread* that task runs on (it waits on a condition variable inside the task). Zenoh's
+/// receive runtime has two worker threads by default. At 100 agents on four hosts, both
+/// workers of every router ended up blocked pushing round messages towards another router
+/// whose two workers were blocked the same way: no router read any link any more, until
+/// Zenoh closed a link after `wait_before_close` (5 s; set to 60 s, the routers stayed stuck
+/// for 60 s — seen in thread dumps of the four routers, both `rx` threads of each waiting in
+/// `push_network_message` from `route_data`), and the round messages on it were lost. With a
+/// worker per link, a blocked push holds only its own link's reader: every router keeps
+/// reading the other routers, and every queue drains. (One router alone, as a launcher's on
+/// loopback, cannot wait in a circle: its clients always read.)
+pub(crate) fn router_rx_workers(links: usize) -> usize {
+    links + 2
+}
+
+/// Sizes Zenoh's receive runtime for a router holding `links` links (see
+/// [`router_rx_workers`]), unless the user configured Zenoh's runtimes (`ZENOH_RUNTIME`).
+/// Zenoh reads that variable when it starts its first runtime; later calls change nothing.
+///
+/// # Safety
+/// Changes the process's environment: nothing else may read or write it at the same time —
+/// call it before the process starts any other thread.
+pub(crate) unsafe fn size_router_runtime(links: usize) {
+    const VARIABLE: &str = "ZENOH_RUNTIME";
+    if std::env::var_os(VARIABLE).is_none() {
+        let setting = format!("(rx: (worker_threads: {}))", router_rx_workers(links));
+        // SAFETY: the caller runs no other thread (this function's contract).
+        unsafe { std::env::set_var(VARIABLE, setting) };
+    }
+}
+
 /// How long closing a session is waited for: what is queued is flushed and the others are
 /// told within it; a link to a host that was cut off is not waited for (Zenoh's own close
 /// can take 10 s and more then, and a host must not outlive its team by that much).
