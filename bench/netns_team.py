@@ -86,8 +86,9 @@ def one_run(args, hosts, k):
         for h, (ns, _) in enumerate(hosts):
             exe = ["ip", "netns", "exec", ns, args.binary]
             env = dict(os.environ, RUST_LOG=args.host_log) if args.host_log else None
+            nice = ["nice", "-n", str(args.host_nice)] if args.host_nice else []
             procs.append(("host", h, subprocess.Popen(
-                exe + ["host", "--team", team, "--name", f"h{h}"],
+                ["ip", "netns", "exec", ns] + nice + [args.binary, "host", "--team", team, "--name", f"h{h}"],
                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)))
             for a in range(first, first + per[h]):
                 agent_env = dict(os.environ, RUST_LOG=args.agent_log) if args.agent_log else None
@@ -108,6 +109,10 @@ def one_run(args, hosts, k):
                 err = (err or "") + " [killed at the limit]"
             outputs[(kind, who)] = (p.returncode, (out or "") + (err or ""))
         wall = time.monotonic() - started
+        if args.keep_results:
+            import shutil
+            shutil.copytree(os.path.join(d, "results"), os.path.join(args.keep_results, run),
+                            dirs_exist_ok=True)
         collected = subprocess.run([args.binary, "collect", "--team", team, "--check", "--json"],
                                    capture_output=True, text=True)
         try:
@@ -157,6 +162,8 @@ def main():
     parser.add_argument("--verbose", action="store_true", help="every failing process's line")
     parser.add_argument("--host-log", help="RUST_LOG filter of the host processes")
     parser.add_argument("--agent-log", help="RUST_LOG filter of the agent processes")
+    parser.add_argument("--host-nice", type=int, help="niceness of the host processes")
+    parser.add_argument("--keep-results", help="where every run's results directory is copied")
     parser.add_argument("--log-dir", help="where a failed run's process outputs are kept")
     args = parser.parse_args()
     args.binary = os.path.abspath(args.binary)
