@@ -10,7 +10,8 @@ the primal method, the agents split evenly over the hosts), starts in every name
 `admm-ta host --team T --name hK` and its agents (`admm-ta agent --team T --id I`), waits,
 and runs `admm-ta collect --check --json`. Prints one line per run (certified and optimal,
 wall time from the first process started to the last one ended, round p50/p99 from the
-agents' merged latencies, every host's exit) and a summary; removes the namespaces and
+agents' merged latencies, start-up from the first process started to the last agent
+connected, every host's exit) and a summary; removes the namespaces and
 the bridge at the end, whatever happens. Standard library only.
 """
 
@@ -81,6 +82,7 @@ def one_run(args, hosts, k):
         run = f"{TAG}r{k}"
         per = team_file(team, args, hosts, run, args.seed + k)
         started = time.monotonic()
+        started_ns = time.time_ns()
         procs = []
         first = 0
         for h, (ns, _) in enumerate(hosts):
@@ -109,6 +111,17 @@ def one_run(args, hosts, k):
                 err = (err or "") + " [killed at the limit]"
             outputs[(kind, who)] = (p.returncode, (out or "") + (err or ""))
         wall = time.monotonic() - started
+        # Start-up: from the first process started to the last agent connected (every
+        # agent's result file says when it connected, on this machine's clock).
+        connected = []
+        results_dir = os.path.join(d, "results")
+        for name in os.listdir(results_dir) if os.path.isdir(results_dir) else []:
+            try:
+                with open(os.path.join(results_dir, name)) as f:
+                    connected.append(json.load(f)["connected_unix_ns"])
+            except (OSError, ValueError, KeyError):
+                pass
+        startup = (max(connected) - started_ns) / 1e9 if connected else float("nan")
         if args.keep_results:
             import shutil
             shutil.copytree(os.path.join(d, "results"), os.path.join(args.keep_results, run),
@@ -137,7 +150,7 @@ def one_run(args, hosts, k):
                     f.write(f"exit {rc}\n{text}")
         latency = result.get("round_latency_us", {}).get("round", {})
         return {
-            "run": k, "wall_s": round(wall, 2),
+            "run": k, "wall_s": round(wall, 2), "startup_s": round(startup, 2),
             "certified": result.get("certified"), "optimal": result.get("optimal"),
             "iterations": result.get("iterations"),
             "round_p50_ms": round(latency.get("p50", float("nan")) / 1e3, 2),
@@ -179,10 +192,12 @@ def main():
             print(json.dumps(row), flush=True)
         good = [r for r in rows if r["certified"] and r["optimal"]]
         walls = sorted(r["wall_s"] for r in good)
+        startups = sorted(r["startup_s"] for r in good)
         p50s = sorted(r["round_p50_ms"] for r in good)
         print(f"{args.transport}, {args.agents} agents on {args.hosts} hosts: "
               f"{len(good)}/{len(rows)} certified optimal"
-              + (f", wall median {walls[len(walls) // 2]} s, round p50 median "
+              + (f", start-up median {startups[len(startups) // 2]} s"
+                 f", wall median {walls[len(walls) // 2]} s, round p50 median "
                  f"{p50s[len(p50s) // 2]} ms" if good else ""))
     finally:
         if bridge:

@@ -219,7 +219,7 @@ impl Bridge {
         {
             let shared = Arc::clone(&shared);
             subscribers.push(
-                watch_failures(&session, &links, move |failed| {
+                watch_failures(&session, &links, move |failed, _| {
                     let _ = shared.announced.compare_exchange(
                         NONE,
                         failed,

@@ -23,7 +23,7 @@ use crate::zenoh_net::ZenohError;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::{
-    alive_agents, announce_failure_repeatedly, announce_stop, size_router_runtime, watch_failures,
+    alive_agents, announce_lost_host, announce_stop, size_router_runtime, watch_failures,
     watch_stops,
 };
 use serde::Serialize;
@@ -61,6 +61,24 @@ struct Presence {
     /// later (after a partition, routers that have not noticed it yet advertise the lost
     /// host's tokens again for a while).
     settled: Vec<bool>,
+}
+
+impl Presence {
+    /// Host `lost` (whose agents are `agents`) left the team: its token vanished, or another
+    /// host announced it lost. Its agents are settled with it — out of reach whatever their
+    /// own tokens still say here (a router that lost a host can keep the host's agents'
+    /// tokens for many seconds, or answer queries with them); without a goodbye, it is the
+    /// team's lost host.
+    fn lose_host(&mut self, lost: &str, agents: &[usize]) {
+        let known = self.alive.len();
+        for &a in agents.iter().filter(|&&a| a < known) {
+            self.alive[a] = false;
+            self.settled[a] = true;
+        }
+        if !self.goodbyes.contains(lost) {
+            self.lost_host.get_or_insert_with(|| lost.to_string());
+        }
+    }
 }
 
 struct TeamWatch {
@@ -210,16 +228,25 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
                 MemberError::failed(ZenohError::new("cannot watch the other hosts' goodbyes", e))
             })?
     };
+    let agents_of: Arc<Vec<(String, Vec<usize>)>> = Arc::new(
+        team.file
+            .hosts
+            .iter()
+            .map(|h| (h.name.clone(), h.agents.clone()))
+            .collect(),
+    );
+    let theirs = move |h: &str| {
+        agents_of
+            .iter()
+            .find(|(name, _)| name == h)
+            .map(|(_, agents)| agents.clone())
+            .unwrap_or_default()
+    };
     let _hosts = {
         let watch = Arc::clone(&watch);
         let links = links.clone();
         let me = host.name.clone();
-        let agents_of: Vec<(String, Vec<usize>)> = team
-            .file
-            .hosts
-            .iter()
-            .map(|h| (h.name.clone(), h.agents.clone()))
-            .collect();
+        let theirs = theirs.clone();
         session
             .liveliness()
             .declare_subscriber(links.host_all())
@@ -229,25 +256,8 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
                 };
                 if sample.kind() == SampleKind::Delete && h != me {
                     tracing::debug!(host = h, "a host's token vanished");
-                    let h = h.to_string();
-                    let theirs = agents_of
-                        .iter()
-                        .find(|(name, _)| *name == h)
-                        .map(|(_, agents)| agents.clone())
-                        .unwrap_or_default();
-                    watch.update(|p| {
-                        // Its agents are settled with it: out of reach whatever their own
-                        // tokens still say here (a router that lost a host can keep the
-                        // host's agents' tokens for many seconds, or answer queries with them).
-                        let known = p.alive.len();
-                        for &a in theirs.iter().filter(|&&a| a < known) {
-                            p.alive[a] = false;
-                            p.settled[a] = true;
-                        }
-                        if !p.goodbyes.contains(&h) {
-                            p.lost_host.get_or_insert(h);
-                        }
-                    });
+                    let agents = theirs(h);
+                    watch.update(|p| p.lose_host(h, &agents));
                 }
             })
             .wait()
@@ -255,10 +265,17 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
     };
     let _failures = {
         let watch = Arc::clone(&watch);
-        watch_failures(session, &links, move |failed| {
-            tracing::debug!(failed, "a failure was announced");
+        let me = host.name.clone();
+        watch_failures(session, &links, move |failed, lost| {
+            tracing::debug!(failed, lost, "a failure was announced");
+            // A host lost by another host's account: this router may notice it much later,
+            // or never (it can keep advertising the lost host's tokens).
+            let agents = lost.filter(|h| *h != me).map(&theirs);
             watch.update(|p| {
                 p.failed.get_or_insert(failed);
+                if let (Some(h), Some(agents)) = (lost, &agents) {
+                    p.lose_host(h, agents);
+                }
             });
         })
         .map_err(MemberError::failed)?
@@ -308,7 +325,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
     let mut presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
     let mut stop: Option<(i32, Instant)> = None;
     // The agent announced failed for a lost host, and when.
-    let mut lost_announced: Option<(usize, Instant)> = None;
+    let mut lost_announced: Option<(usize, String, Instant)> = None;
     // When this host first saw the team's failure; the last census and whom it missed.
     let mut failed_at: Option<Instant> = None;
     let mut census = Census::new(n);
@@ -370,6 +387,15 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             && at.elapsed() >= round_timeout + AFTER_FAILURE
         {
             let listed: Vec<usize> = (0..n).filter(|&a| presence.alive[a]).collect();
+            if let Some(lost) = presence.lost_host.clone()
+                && !listed.is_empty()
+                && lost_owns(&team, &lost, failed)
+            {
+                return Err(MemberError::failed(HostError::HostLost {
+                    host: host.name.clone(),
+                    lost,
+                }));
+            }
             if !listed.is_empty() {
                 return Err(MemberError::failed(HostError::FailedWithAgentsListed {
                     host: host.name.clone(),
@@ -380,7 +406,9 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             }
         }
         let none_alive = presence.alive.iter().all(|&a| !a);
-        let lingered = lost_announced.is_none_or(|(_, at)| at.elapsed() >= LOST_HOST_LINGER);
+        let lingered = lost_announced
+            .as_ref()
+            .is_none_or(|(_, _, at)| at.elapsed() >= LOST_HOST_LINGER);
         if none_alive && (all_seen || presence.failed.is_some()) && lingered {
             break;
         }
@@ -397,16 +425,16 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
                 .and_then(|h| h.agents.iter().min().copied());
             if let Some(first) = first {
                 presence.failed = Some(first);
-                lost_announced = Some((first, Instant::now()));
+                lost_announced = Some((first, lost, Instant::now()));
             }
         }
-        if let Some((first, _)) = lost_announced
+        if let Some((first, lost, _)) = &lost_announced
             && !lingered
         {
             // Again and again for a while: an announcement reaches only the agents already
             // subscribed, and some may still be starting.
             drop(presence);
-            announce_failure_repeatedly(session, &links, first);
+            announce_lost_host(session, &links, *first, lost);
             presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
         }
         let now = Instant::now();
@@ -440,12 +468,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
     drop(presence);
     let (forwarded_out, forwarded_in) = bridge.map_or((0, 0), |b| b.finish());
     if let Some(lost) = lost_host
-        && failed.is_none_or(|f| {
-            team.file
-                .hosts
-                .iter()
-                .any(|h| h.name == lost && h.agents.contains(&f))
-        })
+        && failed.is_none_or(|f| lost_owns(&team, &lost, f))
     {
         return Err(MemberError::failed(HostError::HostLost {
             host: host.name,
@@ -464,6 +487,14 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         forwarded_out,
         forwarded_in,
     })
+}
+
+/// Whether agent `agent` runs on host `host` of `team`.
+fn lost_owns(team: &Team, host: &str, agent: usize) -> bool {
+    team.file
+        .hosts
+        .iter()
+        .any(|h| h.name == host && h.agents.contains(&agent))
 }
 
 /// Nice steps a host runs ahead of its agents, where the system allows it.

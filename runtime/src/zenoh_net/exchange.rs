@@ -282,7 +282,7 @@ impl ZenohExchange {
         {
             let shared = Arc::clone(&shared);
             subscribers.push(
-                watch_failures(&session, links, move |failed| {
+                watch_failures(&session, links, move |failed, _| {
                     shared.deliver(|inbound| {
                         inbound.failed.get_or_insert(failed);
                     });

@@ -123,7 +123,7 @@ mod built {
             let first = Arc::new(AtomicUsize::new(usize::MAX));
             let subscriber = {
                 let first = Arc::clone(&first);
-                watch_failures(router.session(), &links, move |a| {
+                watch_failures(router.session(), &links, move |a, _| {
                     let _ =
                         first.compare_exchange(usize::MAX, a, Ordering::AcqRel, Ordering::Acquire);
                 })

@@ -217,31 +217,41 @@ pub(crate) fn announce_failure(
     links: &crate::zenoh_net::links::ZenohLinks,
     failed: usize,
 ) {
-    put_failure(session, links, failed, zenoh::qos::CongestionControl::Block);
-}
-
-/// [`announce_failure`] without ever blocking: dropped where a link's queue is full (for
-/// announcements repeated many times, such as a host's for a lost host — a blocking put to a
-/// link that was just cut can hold the caller for Zenoh's `wait_before_close`).
-pub(crate) fn announce_failure_repeatedly(
-    session: &Session,
-    links: &crate::zenoh_net::links::ZenohLinks,
-    failed: usize,
-) {
-    put_failure(session, links, failed, zenoh::qos::CongestionControl::Drop);
-}
-
-fn put_failure(
-    session: &Session,
-    links: &crate::zenoh_net::links::ZenohLinks,
-    failed: usize,
-    congestion: zenoh::qos::CongestionControl,
-) {
     let _ = session
         .put(links.failure_key(), failed.to_string())
-        .congestion_control(congestion)
+        .congestion_control(zenoh::qos::CongestionControl::Block)
         .wait();
 }
+
+/// Announces agent `failed` as failed because its host `lost` left the team without a
+/// goodbye (as `N lost HOST`: agents read the agent, hosts also the host). Never blocks:
+/// dropped where a link's queue is full (the announcement is repeated many times, and a
+/// blocking put to a link that was just cut can hold the caller for Zenoh's
+/// `wait_before_close`).
+pub(crate) fn announce_lost_host(
+    session: &Session,
+    links: &crate::zenoh_net::links::ZenohLinks,
+    failed: usize,
+    lost: &str,
+) {
+    let _ = session
+        .put(links.failure_key(), format!("{failed} lost {lost}"))
+        .congestion_control(zenoh::qos::CongestionControl::Drop)
+        .wait();
+}
+
+/// What a failure announcement says: the agent, and the lost host it belonged to if the
+/// announcement is a host's for a lost host (`None` for a stop request or a malformed text).
+fn parse_failure(text: &str) -> Option<(usize, Option<&str>)> {
+    let mut words = text.split_whitespace();
+    let failed = words.next()?.parse().ok()?;
+    match (words.next(), words.next(), words.next()) {
+        (None, _, _) => Some((failed, None)),
+        (Some("lost"), Some(host), None) => Some((failed, Some(host))),
+        _ => None,
+    }
+}
+
 
 /// Asks every agent and host of the run of `links` to stop: termination signal `signal`
 /// (on the failure key, as `stop N`: [`watch_failures`] ignores it, [`watch_stops`] sees it).
@@ -278,22 +288,36 @@ pub(crate) fn watch_stops(
         .map_err(|e| ZenohError::new("cannot watch the run's stop requests", e))
 }
 
-/// Calls `on_failure` with every agent announced as failed on the run of `links`.
+/// Calls `on_failure` with every agent announced as failed on the run of `links`, and the
+/// host it belonged to when a host announced it for a host lost.
 pub(crate) fn watch_failures(
     session: &Session,
     links: &crate::zenoh_net::links::ZenohLinks,
-    on_failure: impl Fn(usize) + Send + Sync + 'static,
+    on_failure: impl Fn(usize, Option<&str>) + Send + Sync + 'static,
 ) -> Result<zenoh::pubsub::Subscriber<()>, ZenohError> {
     session
         .declare_subscriber(links.failure_key())
         .callback(move |sample| {
-            let announced = String::from_utf8_lossy(&sample.payload().to_bytes())
-                .trim()
-                .parse::<usize>();
-            if let Ok(failed) = announced {
-                on_failure(failed);
+            let text = String::from_utf8_lossy(&sample.payload().to_bytes()).into_owned();
+            if let Some((failed, lost)) = parse_failure(&text) {
+                on_failure(failed, lost);
             }
         })
         .wait()
         .map_err(|e| ZenohError::new("cannot watch the run's failure announcements", e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_failure;
+
+    #[test]
+    fn failure_announcements() {
+        assert_eq!(parse_failure("12"), Some((12, None)));
+        assert_eq!(parse_failure(" 12\n"), Some((12, None)));
+        assert_eq!(parse_failure("12 lost h3"), Some((12, Some("h3"))));
+        for other in ["stop 15", "", "x", "12 lost", "12 gone h3", "12 lost h3 extra"] {
+            assert_eq!(parse_failure(other), None, "{other:?}");
+        }
+    }
 }
