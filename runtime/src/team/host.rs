@@ -18,6 +18,8 @@ use crate::process::member_error::MemberError;
 use crate::team::census::Census;
 use crate::team::errors::HostError;
 use crate::team::host_digest::check_team_digest;
+use crate::team::presence::{Presence, TeamWatch};
+use crate::team::priority::raise_priority;
 use crate::team::team_file::Team;
 use crate::zenoh_net::ZenohError;
 use crate::zenoh_net::links::ZenohLinks;
@@ -43,56 +45,6 @@ pub struct HostReport {
     /// Round messages the bridge forwarded to and from the other hosts (mixed teams).
     pub forwarded_out: u64,
     pub forwarded_in: u64,
-}
-
-/// The team's presence as this host sees it.
-#[derive(Default)]
-struct Presence {
-    seen: Vec<bool>,
-    alive: Vec<bool>,
-    failed: Option<usize>,
-    /// A stop request (termination signal) announced by an agent or another host.
-    stopped: Option<i32>,
-    /// Hosts that said goodbye (they left after the run, or stopped on purpose).
-    goodbyes: HashSet<String>,
-    /// The first host whose token vanished without a goodbye: killed, crashed or cut off.
-    lost_host: Option<String>,
-    /// Agents of a host whose token vanished: gone for this host, whatever their tokens say
-    /// later (after a partition, routers that have not noticed it yet advertise the lost
-    /// host's tokens again for a while).
-    settled: Vec<bool>,
-}
-
-impl Presence {
-    /// Host `lost` (whose agents are `agents`) left the team: its token vanished, or another
-    /// host announced it lost. Its agents are settled with it — out of reach whatever their
-    /// own tokens still say here (a router that lost a host can keep the host's agents'
-    /// tokens for many seconds, or answer queries with them); without a goodbye, it is the
-    /// team's lost host.
-    fn lose_host(&mut self, lost: &str, agents: &[usize]) {
-        let known = self.alive.len();
-        for &a in agents.iter().filter(|&&a| a < known) {
-            self.alive[a] = false;
-            self.settled[a] = true;
-        }
-        if !self.goodbyes.contains(lost) {
-            self.lost_host.get_or_insert_with(|| lost.to_string());
-        }
-    }
-}
-
-struct TeamWatch {
-    presence: Mutex<Presence>,
-    changed: Condvar,
-}
-
-impl TeamWatch {
-    fn update(&self, change: impl FnOnce(&mut Presence)) {
-        let mut p = self.presence.lock().unwrap_or_else(|e| e.into_inner());
-        change(&mut p);
-        drop(p);
-        self.changed.notify_all();
-    }
 }
 
 /// How long a host that lost another host keeps announcing it (every loop pass, 20 ms), so
@@ -495,35 +447,6 @@ fn lost_owns(team: &Team, host: &str, agent: usize) -> bool {
         .hosts
         .iter()
         .any(|h| h.name == host && h.agents.contains(&agent))
-}
-
-/// Nice steps a host runs ahead of its agents, where the system allows it.
-const PRIORITY_BOOST: i32 = 10;
-
-/// Raises the calling thread's scheduling priority by [`PRIORITY_BOOST`] nice steps (root,
-/// `CAP_SYS_NICE` or `RLIMIT_NICE` allow it; threads started afterwards inherit it) and
-/// returns the niceness it runs at.
-///
-/// Why: every message between hosts goes through the host's router (and, in a mixed team,
-/// its bridge). With 50 busy agents per host on 2 cores the host's threads got the same share
-/// of the processor as any one agent and fell behind: mixed teams of 200 agents on four hosts
-/// had round p99s of 5.5–9.6 s against a 10 s round deadline, and one run in ten failed on
-/// it; ten nice steps ahead, p99 1.8–2.8 s and wall time 15–17 s instead of 21–29 s.
-fn raise_priority() -> std::io::Result<i32> {
-    // SAFETY: plain system calls on the calling thread; errno is cleared first because -1 is
-    // also a valid niceness.
-    unsafe {
-        *libc::__errno_location() = 0;
-        let now = libc::getpriority(libc::PRIO_PROCESS, 0);
-        if now == -1 && *libc::__errno_location() != 0 {
-            return Err(std::io::Error::last_os_error());
-        }
-        let wanted = (now - PRIORITY_BOOST).max(-20);
-        if libc::setpriority(libc::PRIO_PROCESS, 0, wanted) != 0 {
-            return Err(std::io::Error::last_os_error());
-        }
-        Ok(wanted)
-    }
 }
 
 /// Says this host's goodbye (a liveliness token, declared and withdrawn) when dropped.

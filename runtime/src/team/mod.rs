@@ -9,7 +9,9 @@
 //! * [`team_timeline`]: the trace `collect` writes, hosts' clocks aligned;
 //! * `host` and `bridge` (feature `zenoh`): one machine of a multi-host team — its Zenoh
 //!   router, and the bridge that carries a mixed team's messages between a host's iceoryx2
-//!   services and the other hosts (the one place that uses two transports at once).
+//!   services and the other hosts (the one place that uses two transports at once); with
+//!   `presence` (what a host knows of its team), `priority` (a host runs ahead of its
+//!   agents), `census` and `host_digest`.
 
 pub mod errors;
 mod hosts;
@@ -25,3 +27,7 @@ mod census;
 pub mod host;
 #[cfg(feature = "zenoh")]
 mod host_digest;
+#[cfg(feature = "zenoh")]
+mod presence;
+#[cfg(feature = "zenoh")]
+mod priority;

@@ -252,7 +252,6 @@ fn parse_failure(text: &str) -> Option<(usize, Option<&str>)> {
     }
 }
 
-
 /// Asks every agent and host of the run of `links` to stop: termination signal `signal`
 /// (on the failure key, as `stop N`: [`watch_failures`] ignores it, [`watch_stops`] sees it).
 pub(crate) fn announce_stop(
@@ -316,7 +315,14 @@ mod tests {
         assert_eq!(parse_failure("12"), Some((12, None)));
         assert_eq!(parse_failure(" 12\n"), Some((12, None)));
         assert_eq!(parse_failure("12 lost h3"), Some((12, Some("h3"))));
-        for other in ["stop 15", "", "x", "12 lost", "12 gone h3", "12 lost h3 extra"] {
+        for other in [
+            "stop 15",
+            "",
+            "x",
+            "12 lost",
+            "12 gone h3",
+            "12 lost h3 extra",
+        ] {
             assert_eq!(parse_failure(other), None, "{other:?}");
         }
     }

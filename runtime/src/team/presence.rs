@@ -1,0 +1,55 @@
+//! What a host knows of its team's presence: who came, who is still there, who failed,
+//! which host was lost — filled by Zenoh's callbacks, read by the host's loop.
+
+use std::collections::HashSet;
+use std::sync::{Condvar, Mutex};
+
+/// The team's presence as this host sees it.
+#[derive(Default)]
+pub(super) struct Presence {
+    pub(super) seen: Vec<bool>,
+    pub(super) alive: Vec<bool>,
+    pub(super) failed: Option<usize>,
+    /// A stop request (termination signal) announced by an agent or another host.
+    pub(super) stopped: Option<i32>,
+    /// Hosts that said goodbye (they left after the run, or stopped on purpose).
+    pub(super) goodbyes: HashSet<String>,
+    /// The first host whose token vanished without a goodbye: killed, crashed or cut off.
+    pub(super) lost_host: Option<String>,
+    /// Agents of a host whose token vanished: gone for this host, whatever their tokens say
+    /// later (after a partition, routers that have not noticed it yet advertise the lost
+    /// host's tokens again for a while).
+    pub(super) settled: Vec<bool>,
+}
+
+impl Presence {
+    /// Host `lost` (whose agents are `agents`) left the team: its token vanished, or another
+    /// host announced it lost. Its agents are settled with it — out of reach whatever their
+    /// own tokens still say here (a router that lost a host can keep the host's agents'
+    /// tokens for many seconds, or answer queries with them); without a goodbye, it is the
+    /// team's lost host.
+    pub(super) fn lose_host(&mut self, lost: &str, agents: &[usize]) {
+        let known = self.alive.len();
+        for &a in agents.iter().filter(|&&a| a < known) {
+            self.alive[a] = false;
+            self.settled[a] = true;
+        }
+        if !self.goodbyes.contains(lost) {
+            self.lost_host.get_or_insert_with(|| lost.to_string());
+        }
+    }
+}
+
+pub(super) struct TeamWatch {
+    pub(super) presence: Mutex<Presence>,
+    pub(super) changed: Condvar,
+}
+
+impl TeamWatch {
+    pub(super) fn update(&self, change: impl FnOnce(&mut Presence)) {
+        let mut p = self.presence.lock().unwrap_or_else(|e| e.into_inner());
+        change(&mut p);
+        drop(p);
+        self.changed.notify_all();
+    }
+}
