@@ -302,6 +302,10 @@ pub enum HostError {
         "host {host}: host {lost} left the team during the run without a goodbye (killed, crashed or cut off): its agents were out of reach, the team stopped"
     )]
     HostLost { host: String, lost: String },
+    #[error(
+        "host {host}: every other host of the team ({lost:?}) left during the run without a goodbye at once: this host was most likely cut off from them (network), the team stopped"
+    )]
+    CutOff { host: String, lost: Vec<String> },
     #[error("host {host}: the team's run failed: agent {failed} failed (see its output)")]
     AgentFailed { host: String, failed: usize },
     #[error(

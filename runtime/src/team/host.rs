@@ -19,14 +19,13 @@ use crate::team::census::Census;
 use crate::team::errors::HostError;
 use crate::team::host_digest::check_team_digest;
 use crate::team::presence::{Presence, TeamWatch};
-use crate::team::priority::raise_priority;
+use crate::team::priority::{Prepared, prepare_host_process};
 use crate::team::team_file::Team;
 use crate::zenoh_net::ZenohError;
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
 use crate::zenoh_net::session::{
-    alive_agents, announce_lost_host, announce_stop, size_router_runtime, watch_failures,
-    watch_stops,
+    alive_agents, announce_lost_host, announce_stop, watch_failures, watch_stops,
 };
 use serde::Serialize;
 use std::collections::HashSet;
@@ -66,33 +65,36 @@ const AFTER_FAILURE: Duration = Duration::from_secs(10);
 /// file, the host's name and a team file that differs from the running team's are refused
 /// ([`MemberError::Refused`]); what fails once the host runs is a failure.
 ///
-/// It is the entry point of a host process (`admm-ta host`): call it before the process
-/// starts any other thread (it sizes Zenoh's runtime through the environment, see
-/// [`size_router_runtime`]).
+/// Called first thing in a process (`admm-ta host`), it sizes Zenoh's receive runtime for
+/// the router and raises the process's priority; in a process already running other
+/// threads it leaves both alone and says so.
 pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError> {
     let started = Instant::now();
     let team = Team::read(team_path).map_err(MemberError::refused)?;
-    if let Ok(me) = team.host(name) {
-        // The router's links: this host's Zenoh agents (a mixed team's agents use iceoryx2
-        // and its bridge is in this process) and the other hosts' routers.
+    // The router's links: this host's Zenoh agents (a mixed team's agents use iceoryx2 and
+    // its bridge is in this process) and the other hosts' routers. Before any thread: the
+    // threads started later (Zenoh's, the bridge's) inherit what it sets.
+    let router_links = team.host(name).map_or(0, |me| {
         let clients = if team.file.transport.bridged() {
             0
         } else {
             me.agents.len()
         };
-        // SAFETY: the host process calls this first, before it starts any thread (this
-        // function's documented contract); nothing else touches the environment meanwhile.
-        unsafe { size_router_runtime(clients + team.file.hosts.len().saturating_sub(1)) };
-    }
-    // Before any thread: the threads started later (Zenoh's, the bridge's) inherit it.
-    let priority = raise_priority();
+        clients + team.file.hosts.len().saturating_sub(1)
+    });
+    let prepared = prepare_host_process(router_links);
     let _signals = crate::signals::install();
     let _span = tracing::info_span!("host", run = %team.file.run, host = name).entered();
-    match priority {
-        Ok(nice) => tracing::debug!(nice, "the host runs ahead of its agents"),
-        Err(e) => tracing::debug!(
+    match prepared {
+        Prepared::Ahead(nice) => tracing::debug!(nice, "the host runs ahead of its agents"),
+        Prepared::NotRaised(e) => tracing::debug!(
             error = %e,
             "cannot raise the host's priority: busy agents may slow its relaying"
+        ),
+        Prepared::Shared => tracing::warn!(
+            "the host runs in a process with other threads: its priority is not raised and \
+             its router's receive runtime not sized (set ZENOH_RUNTIME='(rx: (worker_threads: N))', \
+             N = its links + 2, before Zenoh starts)"
         ),
     }
     tracing::debug!(team = %team_path.display(), "starting the host");
@@ -118,6 +120,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             stopped: None,
             goodbyes: HashSet::new(),
             lost_host: None,
+            lost_hosts: Vec::new(),
             settled: vec![false; n],
         }),
         changed: Condvar::new(),
@@ -282,6 +285,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
     let mut failed_at: Option<Instant> = None;
     let mut census = Census::new(n);
     let round_timeout = Duration::from_secs_f64(team.file.round_timeout);
+    let others = team.file.hosts.len().saturating_sub(1);
     loop {
         let signal = crate::signals::received().or(presence.stopped);
         if let Some(signal) = signal
@@ -339,14 +343,11 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             && at.elapsed() >= round_timeout + AFTER_FAILURE
         {
             let listed: Vec<usize> = (0..n).filter(|&a| presence.alive[a]).collect();
-            if let Some(lost) = presence.lost_host.clone()
-                && !listed.is_empty()
-                && lost_owns(&team, &lost, failed)
+            if !listed.is_empty()
+                && let Some(lost) = lost_verdict(&presence, &team, &host.name, Some(failed))
             {
-                return Err(MemberError::failed(HostError::HostLost {
-                    host: host.name.clone(),
-                    lost,
-                }));
+                tracing::warn!(?listed, "agents still listed after the loss of a host");
+                return Err(MemberError::failed(lost));
             }
             if !listed.is_empty() {
                 return Err(MemberError::failed(HostError::FailedWithAgentsListed {
@@ -385,6 +386,9 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         {
             // Again and again for a while: an announcement reaches only the agents already
             // subscribed, and some may still be starting.
+            // Cut off from every other host, this host names nobody to the others (should
+            // the network heal, they would take a healthy host for lost).
+            let lost = (!presence.cut_off(others)).then_some(lost.as_str());
             drop(presence);
             announce_lost_host(session, &links, *first, lost);
             presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
@@ -411,21 +415,16 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             .unwrap_or_else(|e| e.into_inner())
             .0;
     }
-    let lost_host = presence.lost_host.clone();
     // A failure marked on this host's board (mixed) may not have been announced yet.
     let failed = presence
         .failed
         .or_else(|| bridge.as_ref().and_then(|b| b.failed()));
+    let lost = lost_verdict(&presence, &team, &host.name, failed);
     let agents_seen = presence.seen.iter().filter(|&&s| s).count();
     drop(presence);
     let (forwarded_out, forwarded_in) = bridge.map_or((0, 0), |b| b.finish());
-    if let Some(lost) = lost_host
-        && failed.is_none_or(|f| lost_owns(&team, &lost, f))
-    {
-        return Err(MemberError::failed(HostError::HostLost {
-            host: host.name,
-            lost,
-        }));
+    if let Some(lost) = lost {
+        return Err(MemberError::failed(lost));
     }
     if let Some(failed) = failed {
         return Err(MemberError::failed(HostError::AgentFailed {
@@ -439,6 +438,32 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         forwarded_out,
         forwarded_in,
     })
+}
+
+/// The verdict of a run that lost a host, when the failure (if any) is one of the lost
+/// hosts' agents: cut off when every other host was lost, else the first lost host named.
+fn lost_verdict(
+    presence: &Presence,
+    team: &Team,
+    me: &str,
+    failed: Option<usize>,
+) -> Option<HostError> {
+    let lost = presence.lost_host.as_ref()?;
+    let others = team.file.hosts.len().saturating_sub(1);
+    if presence.cut_off(others) {
+        return failed
+            .is_none_or(|f| presence.lost_hosts.iter().any(|h| lost_owns(team, h, f)))
+            .then(|| HostError::CutOff {
+                host: me.to_string(),
+                lost: presence.lost_hosts.clone(),
+            });
+    }
+    failed
+        .is_none_or(|f| lost_owns(team, lost, f))
+        .then(|| HostError::HostLost {
+            host: me.to_string(),
+            lost: lost.clone(),
+        })
 }
 
 /// Whether agent `agent` runs on host `host` of `team`.

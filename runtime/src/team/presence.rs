@@ -16,6 +16,8 @@ pub(super) struct Presence {
     pub(super) goodbyes: HashSet<String>,
     /// The first host whose token vanished without a goodbye: killed, crashed or cut off.
     pub(super) lost_host: Option<String>,
+    /// Every host lost so (without a goodbye), in the order seen.
+    pub(super) lost_hosts: Vec<String>,
     /// Agents of a host whose token vanished: gone for this host, whatever their tokens say
     /// later (after a partition, routers that have not noticed it yet advertise the lost
     /// host's tokens again for a while).
@@ -36,7 +38,16 @@ impl Presence {
         }
         if !self.goodbyes.contains(lost) {
             self.lost_host.get_or_insert_with(|| lost.to_string());
+            if !self.lost_hosts.iter().any(|h| h == lost) {
+                self.lost_hosts.push(lost.to_string());
+            }
         }
+    }
+
+    /// Whether every one of the `others` other hosts (two or more) was lost: then this host
+    /// is the one most likely cut off, and naming any of them would blame a healthy host.
+    pub(super) fn cut_off(&self, others: usize) -> bool {
+        others >= 2 && self.lost_hosts.len() >= others
     }
 }
 

@@ -122,6 +122,13 @@ pub(crate) fn router_rx_workers(links: usize) -> usize {
 /// call it before the process starts any other thread.
 pub(crate) unsafe fn size_router_runtime(links: usize) {
     const VARIABLE: &str = "ZENOH_RUNTIME";
+    if let Some(given) = std::env::var(VARIABLE).ok().filter(|v| !v.contains("rx")) {
+        tracing::warn!(
+            given,
+            wanted = router_rx_workers(links),
+            "ZENOH_RUNTIME is set without `rx`: the router keeps Zenoh's two receive workers, and a fleet's routers can block each other"
+        );
+    }
     if std::env::var_os(VARIABLE).is_none() {
         let setting = format!("(rx: (worker_threads: {}))", router_rx_workers(links));
         // SAFETY: the caller runs no other thread (this function's contract).
@@ -224,18 +231,22 @@ pub(crate) fn announce_failure(
 }
 
 /// Announces agent `failed` as failed because its host `lost` left the team without a
-/// goodbye (as `N lost HOST`: agents read the agent, hosts also the host). Never blocks:
-/// dropped where a link's queue is full (the announcement is repeated many times, and a
-/// blocking put to a link that was just cut can hold the caller for Zenoh's
-/// `wait_before_close`).
+/// goodbye (as `N lost HOST`: agents read the agent, hosts also the host; `None`: as a
+/// plain `N`). Never blocks: dropped where a link's queue is full (the announcement is
+/// repeated many times, and a blocking put to a link that was just cut can hold the caller
+/// for Zenoh's `wait_before_close`).
 pub(crate) fn announce_lost_host(
     session: &Session,
     links: &crate::zenoh_net::links::ZenohLinks,
     failed: usize,
-    lost: &str,
+    lost: Option<&str>,
 ) {
+    let text = match lost {
+        Some(host) => format!("{failed} lost {host}"),
+        None => failed.to_string(),
+    };
     let _ = session
-        .put(links.failure_key(), format!("{failed} lost {lost}"))
+        .put(links.failure_key(), text)
         .congestion_control(zenoh::qos::CongestionControl::Drop)
         .wait();
 }
