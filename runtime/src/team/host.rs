@@ -119,7 +119,6 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             failed: None,
             stopped: None,
             goodbyes: HashSet::new(),
-            lost_host: None,
             lost_hosts: Vec::new(),
             settled: vec![false; n],
         }),
@@ -280,7 +279,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
     let mut presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
     let mut stop: Option<(i32, Instant)> = None;
     // The agent announced failed for a lost host, and when.
-    let mut lost_announced: Option<(usize, String, Instant)> = None;
+    let mut lost_announced: Option<(usize, Instant)> = None;
     // When this host first saw the team's failure; the last census and whom it missed.
     let mut failed_at: Option<Instant> = None;
     let mut census = Census::new(n);
@@ -359,38 +358,38 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
             }
         }
         let none_alive = presence.alive.iter().all(|&a| !a);
-        let lingered = lost_announced
-            .as_ref()
-            .is_none_or(|(_, _, at)| at.elapsed() >= LOST_HOST_LINGER);
+        let lingered = lost_announced.is_none_or(|(_, at)| at.elapsed() >= LOST_HOST_LINGER);
         if none_alive && (all_seen || presence.failed.is_some()) && lingered {
             break;
         }
         if presence.failed.is_none()
-            && let Some(lost) = presence.lost_host.clone()
+            && let Some(lost) = presence.lost_host()
         {
             // Its agents are out of reach: the team stops now, as for a failed agent,
             // rather than after every waiting agent's round deadline.
             let first = team
-                .file
-                .hosts
-                .iter()
-                .find(|h| h.name == lost)
+                .host(lost)
+                .ok()
                 .and_then(|h| h.agents.iter().min().copied());
             if let Some(first) = first {
                 presence.failed = Some(first);
-                lost_announced = Some((first, lost, Instant::now()));
+                lost_announced = Some((first, Instant::now()));
             }
         }
-        if let Some((first, lost, _)) = &lost_announced
+        if let Some((first, _)) = lost_announced
             && !lingered
         {
             // Again and again for a while: an announcement reaches only the agents already
-            // subscribed, and some may still be starting.
-            // Cut off from every other host, this host names nobody to the others (should
-            // the network heal, they would take a healthy host for lost).
-            let lost = (!presence.cut_off(others)).then_some(lost.as_str());
+            // subscribed, and some may still be starting. Cut off from every other host,
+            // this host names nobody to the others (should the network heal, they would
+            // take a healthy host for lost).
+            let lost = if presence.cut_off(others) {
+                None
+            } else {
+                presence.lost_host().map(str::to_string)
+            };
             drop(presence);
-            announce_lost_host(session, &links, *first, lost);
+            announce_lost_host(session, &links, first, lost.as_deref());
             presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
         }
         let now = Instant::now();
@@ -448,7 +447,7 @@ fn lost_verdict(
     me: &str,
     failed: Option<usize>,
 ) -> Option<HostError> {
-    let lost = presence.lost_host.as_ref()?;
+    let lost = presence.lost_host()?;
     let others = team.file.hosts.len().saturating_sub(1);
     if presence.cut_off(others) {
         return failed
@@ -462,16 +461,13 @@ fn lost_verdict(
         .is_none_or(|f| lost_owns(team, lost, f))
         .then(|| HostError::HostLost {
             host: me.to_string(),
-            lost: lost.clone(),
+            lost: lost.to_string(),
         })
 }
 
 /// Whether agent `agent` runs on host `host` of `team`.
 fn lost_owns(team: &Team, host: &str, agent: usize) -> bool {
-    team.file
-        .hosts
-        .iter()
-        .any(|h| h.name == host && h.agents.contains(&agent))
+    team.host(host).is_ok_and(|h| h.agents.contains(&agent))
 }
 
 /// Says this host's goodbye (a liveliness token, declared and withdrawn) when dropped.

@@ -14,9 +14,8 @@ pub(super) struct Presence {
     pub(super) stopped: Option<i32>,
     /// Hosts that said goodbye (they left after the run, or stopped on purpose).
     pub(super) goodbyes: HashSet<String>,
-    /// The first host whose token vanished without a goodbye: killed, crashed or cut off.
-    pub(super) lost_host: Option<String>,
-    /// Every host lost so (without a goodbye), in the order seen.
+    /// The hosts whose token vanished without a goodbye (killed, crashed or cut off), or
+    /// that another host announced so, in the order seen.
     pub(super) lost_hosts: Vec<String>,
     /// Agents of a host whose token vanished: gone for this host, whatever their tokens say
     /// later (after a partition, routers that have not noticed it yet advertise the lost
@@ -36,12 +35,14 @@ impl Presence {
             self.alive[a] = false;
             self.settled[a] = true;
         }
-        if !self.goodbyes.contains(lost) {
-            self.lost_host.get_or_insert_with(|| lost.to_string());
-            if !self.lost_hosts.iter().any(|h| h == lost) {
-                self.lost_hosts.push(lost.to_string());
-            }
+        if !self.goodbyes.contains(lost) && !self.lost_hosts.iter().any(|h| h == lost) {
+            self.lost_hosts.push(lost.to_string());
         }
+    }
+
+    /// The team's lost host: the first one lost.
+    pub(super) fn lost_host(&self) -> Option<&str> {
+        self.lost_hosts.first().map(String::as_str)
     }
 
     /// Whether every one of the `others` other hosts (two or more) was lost: then this host

@@ -5,7 +5,7 @@
 use crate::zenoh_net::session::size_router_runtime;
 
 /// Nice steps a host runs ahead of its agents, where the system allows it.
-pub(super) const PRIORITY_BOOST: i32 = 10;
+const PRIORITY_BOOST: i32 = 10;
 
 /// What [`prepare_host_process`] did.
 #[derive(Debug)]

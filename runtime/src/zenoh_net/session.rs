@@ -109,7 +109,7 @@ pub(crate) fn config(
 /// worker per link, a blocked push holds only its own link's reader: every router keeps
 /// reading the other routers, and every queue drains. (One router alone, as a launcher's on
 /// loopback, cannot wait in a circle: its clients always read.)
-pub(crate) fn router_rx_workers(links: usize) -> usize {
+fn router_rx_workers(links: usize) -> usize {
     links + 2
 }
 
@@ -122,17 +122,18 @@ pub(crate) fn router_rx_workers(links: usize) -> usize {
 /// call it before the process starts any other thread.
 pub(crate) unsafe fn size_router_runtime(links: usize) {
     const VARIABLE: &str = "ZENOH_RUNTIME";
-    if let Some(given) = std::env::var(VARIABLE).ok().filter(|v| !v.contains("rx")) {
-        tracing::warn!(
-            given,
+    match std::env::var_os(VARIABLE) {
+        None => {
+            let setting = format!("(rx: (worker_threads: {}))", router_rx_workers(links));
+            // SAFETY: the caller runs no other thread (this function's contract).
+            unsafe { std::env::set_var(VARIABLE, setting) };
+        }
+        Some(given) if !given.to_string_lossy().contains("rx") => tracing::warn!(
+            given = %given.to_string_lossy(),
             wanted = router_rx_workers(links),
             "ZENOH_RUNTIME is set without `rx`: the router keeps Zenoh's two receive workers, and a fleet's routers can block each other"
-        );
-    }
-    if std::env::var_os(VARIABLE).is_none() {
-        let setting = format!("(rx: (worker_threads: {}))", router_rx_workers(links));
-        // SAFETY: the caller runs no other thread (this function's contract).
-        unsafe { std::env::set_var(VARIABLE, setting) };
+        ),
+        Some(_) => {}
     }
 }
 
@@ -224,10 +225,12 @@ pub(crate) fn announce_failure(
     links: &crate::zenoh_net::links::ZenohLinks,
     failed: usize,
 ) {
-    let _ = session
-        .put(links.failure_key(), failed.to_string())
-        .congestion_control(zenoh::qos::CongestionControl::Block)
-        .wait();
+    put_failure(
+        session,
+        links,
+        failed.to_string(),
+        zenoh::qos::CongestionControl::Block,
+    );
 }
 
 /// Announces agent `failed` as failed because its host `lost` left the team without a
@@ -245,9 +248,18 @@ pub(crate) fn announce_lost_host(
         Some(host) => format!("{failed} lost {host}"),
         None => failed.to_string(),
     };
+    put_failure(session, links, text, zenoh::qos::CongestionControl::Drop);
+}
+
+fn put_failure(
+    session: &Session,
+    links: &crate::zenoh_net::links::ZenohLinks,
+    text: String,
+    congestion: zenoh::qos::CongestionControl,
+) {
     let _ = session
         .put(links.failure_key(), text)
-        .congestion_control(zenoh::qos::CongestionControl::Drop)
+        .congestion_control(congestion)
         .wait();
 }
 
