@@ -66,6 +66,7 @@ def main():
     ap.add_argument("--variants", default="fast,paper")
     ap.add_argument("--methods", default="dual,inexact-dual")
     ap.add_argument("--cases", default="all")
+    ap.add_argument("--per-seed", action="store_true", help="also list every seed's rounds")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--max-iters", type=int, default=5000)
     ap.add_argument("--rho-scale", type=float, default=1.0,
@@ -93,7 +94,8 @@ def main():
             opt = sum(r["optimal"] for r in rs)
             byts = [r["bytes"] for r in rs if r["bytes"] is not None]
             kib = f", {statistics.median(byts) / 1024:.0f} KiB" if byts else ""
-            cells.append(f"{median:g} ({cert}/{len(rs)} cert., {opt} opt.{kib})")
+            each = f" [{' '.join(str(r['rounds']) for r in rs)}]" if args.per_seed else ""
+            cells.append(f"{median:g} ({cert}/{len(rs)} cert., {opt} opt.{kib}){each}")
         print(f"| {c} | " + " | ".join(cells) + " |")
     wrong = [k for k, r in results.items() if r["certified"] and not r["optimal"]]
     print(f"\ncertified but not optimal: {wrong or 'none'}")

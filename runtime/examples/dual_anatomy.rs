@@ -4,7 +4,11 @@
 //! `VARIANT=paper` runs the paper variant, `GAMMA=G` sets the inexact dual's γ factor,
 //! `SCHED=start,rate,min,max` adds an `--adaptive-rho`-style schedule on top (its ρ is the
 //! fast variant's `ρ₀`), `STAT=1` prints the costs' median gap between each robot's two
-//! cheapest tasks, `TRACE=1` prints every 25th round why the certificate does not hold yet.
+//! cheapest tasks, `TRACE=1` prints every 25th (`EVERY=K`: every K-th) round why the
+//! certificate does not hold yet, how many robots hold a task other than the optimum's
+//! (`wrong`) and how many a column whose largest entry is below 0.99 (`fractional`), and
+//! `FRAC=R` lists, from round R on at each traced round, every fractional robot's three
+//! largest entries, its optimal task and its decision.
 //! `cargo run --release -p admm-ta-runtime --example dual_anatomy -- ROBOTS TASKS TOPOLOGY uniform|distance SEEDS exact|inexact [ROUNDS]`.
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::oracle;
@@ -124,7 +128,9 @@ fn main() {
             } else {
                 since = None;
             }
-            if std::env::var("TRACE").is_ok() && round % 25 == 0 {
+            if std::env::var("TRACE").is_ok()
+                && round % std::env::var("EVERY").map_or(25, |v| v.parse().unwrap()) == 0
+            {
                 let inf = agents
                     .iter()
                     .filter(|a| a.certificate_slack().is_infinite())
@@ -138,8 +144,37 @@ fn main() {
                     .map(|a| a.certificate_slack())
                     .filter(|s| s.is_finite())
                     .fold(0.0, f64::max);
+                let wrong = decisions
+                    .iter()
+                    .zip(&optimum.assignment)
+                    .filter(|(a, b)| a != b)
+                    .count();
+                let fractional = agents
+                    .iter()
+                    .filter(|a| a.own_column().iter().fold(0.0, |m: f64, &v| m.max(v)) < 0.99)
+                    .count();
+                if std::env::var("FRAC").is_ok_and(|v| v.parse::<usize>().unwrap() <= round) {
+                    for (i, a) in agents.iter().enumerate() {
+                        let col = a.own_column();
+                        let mut idx: Vec<usize> = (0..col.len()).collect();
+                        idx.sort_by(|&x, &y| col[y].total_cmp(&col[x]));
+                        if col[idx[0]] < 0.99 {
+                            println!(
+                                "    robot {i}: {}:{:.3} {}:{:.3} {}:{:.3} optimal {} decided {}",
+                                idx[0],
+                                col[idx[0]],
+                                idx[1],
+                                col[idx[1]],
+                                idx[2],
+                                col[idx[2]],
+                                optimum.assignment[i],
+                                decisions[i]
+                            );
+                        }
+                    }
+                }
                 println!(
-                    "  round {round}: optimal {optimal} infeasible {inf} price-slack {big} worst {worst:.2e} tol {tol:.1e} dis {disagreement:.1e}"
+                    "  round {round}: wrong {wrong} fractional {fractional} optimal {optimal} infeasible {inf} price-slack {big} worst {worst:.2e} tol {tol:.1e} dis {disagreement:.1e}"
                 );
             }
             if cert_at.is_none() && agents.iter().all(|a| a.certificate_slack() <= tol) {

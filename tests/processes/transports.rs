@@ -194,8 +194,10 @@ fn transports_agree_on_a_chain_in_case_2() {
 
 #[test]
 fn dual_methods_agree_across_transports() {
-    // The dual payload: 3m values (fast variant) or the n + m multipliers (paper), not the
-    // m × n matrix; the fast variant's certificate floods claims and potentials.
+    // The dual payload: 2m values and the packed claims (fast variant) or the n + m
+    // multipliers (paper), not the m × n matrix; the fast variant's certificate floods
+    // claims (integers packed into values, which every transport must carry exactly) and
+    // potentials.
     for variant in ["fast", "paper"] {
         let settings = GivenSettings::default().set(&VARIANT, SettingValue::Name(variant.into()));
         all_transports_with_settings(

@@ -17,7 +17,7 @@
 //! let team = setup.team(TeamContext { problem: &problem, graph: &graph, params });
 //! let init = AgentInit { index: 0, costs: vec![0.2, 0.7], robots: 2, case: AssignmentCase::One, degree: 1 };
 //! let agent = MethodAgent::new(team.agent(init));
-//! assert_eq!(agent.payload_len(), 6); // 2 task prices + the certificate (2 + 2)
+//! assert_eq!(agent.payload_len(), 5); // 2 task prices + the certificate (2 potentials + 2 packed claims)
 //! ```
 
 use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};

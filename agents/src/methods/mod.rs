@@ -14,7 +14,7 @@
 //!
 //! ```
 //! use admm_ta_agents::methods::Method;
-//! assert_eq!(Method::Dual.payload_len(2, 2), 6); // 2 task prices + a certificate of 2 + 2
+//! assert_eq!(Method::Dual.payload_len(2, 2), 5); // 2 task prices + 2 potentials + 2 packed claims
 //! assert!(Method::Hungarian.info().team.is_none()); // solved centrally, no agents
 //! assert!(Method::Dual.info().summary.starts_with("Algorithm 2"));
 //! assert_eq!("inexact-dual".parse::<Method>(), Ok(Method::InexactDual));

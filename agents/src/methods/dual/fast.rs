@@ -38,8 +38,9 @@
 //!   by [`RHO_GROWTH`] a round up to [`RHO_MAX_GROWTH`] `ρ₀` (every robot from the round
 //!   number alone).
 //!
-//! The payload is `m` multipliers and the certificate's `2m` values: `3m` (the paper's is
-//! `n + m`).
+//! The payload is `m` multipliers and the certificate's `m` potentials and `m` claims,
+//! several claims packed into one value ([`snapshot::claims_per_word`]: 7 for 100
+//! robots): `2m + ⌈m/k⌉`, 215 values at 100 × 100 (the paper's is `n + m`).
 //!
 //! Size: one agent — its equations, both x-updates and the step share its private state;
 //! about 150 lines are its unit tests.
@@ -63,9 +64,9 @@ pub const RHO_GROWTH: f64 = 1.01;
 /// responses are soft; a large one sharpens the responses and pulls the copies together.
 pub const RHO_MAX_GROWTH: f64 = 300.0;
 
-/// Values of a fast dual message for `tasks` tasks.
-pub const fn payload_len(tasks: usize) -> usize {
-    tasks + snapshot::words(tasks)
+/// Values of a fast dual message for `tasks` tasks and `robots` robots.
+pub const fn payload_len(tasks: usize, robots: usize) -> usize {
+    tasks + snapshot::words(tasks, robots)
 }
 
 /// Robot `index`'s state of the fast dual variant.
@@ -146,6 +147,7 @@ impl FastDualAgent {
             // Every slack of a stable potential is at most ε: a tenth of what the stop allows.
             snapshot: Snapshot::new(
                 index,
+                robots,
                 tasks,
                 case,
                 params.diameter,
@@ -193,7 +195,7 @@ impl FastDualAgent {
             let theirs = inbox.payload(k);
             assert_eq!(
                 theirs.len(),
-                payload_len(m),
+                payload_len(m, self.robots),
                 "neighbour payload has the wrong length"
             );
             for ((sum, mine), v) in self.kappa.iter_mut().zip(&self.y).zip(&theirs[..m]) {
@@ -294,7 +296,7 @@ fn theta(case: AssignmentCase, rho: f64, kappa: f64, x: f64) -> f64 {
 
 impl ConsensusAgent for FastDualAgent {
     fn payload_len(&self) -> usize {
-        payload_len(self.tasks)
+        payload_len(self.tasks, self.robots)
     }
 
     fn write_initial_payload(&self, out: &mut [f64]) {
@@ -407,7 +409,7 @@ mod tests {
                 }
                 let theirs: Vec<Vec<f64>> = (0..2)
                     .map(|_| {
-                        let mut message = vec![0.0; payload_len(tasks)];
+                        let mut message = vec![0.0; payload_len(tasks, robots)];
                         for v in &mut message[..tasks] {
                             *v = 2.0 * rng.uniform() - 1.0;
                         }
@@ -469,7 +471,7 @@ mod tests {
                     )
                 })
                 .collect();
-            let mut messages = vec![vec![0.0; payload_len(2)]; 2];
+            let mut messages = vec![vec![0.0; payload_len(2, 2)]; 2];
             for (agent, message) in agents.iter().zip(&mut messages) {
                 agent.write_initial_payload(message);
             }

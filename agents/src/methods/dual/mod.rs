@@ -34,13 +34,13 @@ use std::marker::PhantomData;
 const DUAL_MEMORY: Memory = Memory {
     bytes: |n, m| per_agent(n, (5 * (n + m) + 5 * m + 2) as f64),
     of: TEAM_STATE,
-    because: "each robot holds n+m multipliers (paper variant; fast: 3m values a round)",
+    because: "each robot holds n+m multipliers (paper variant; fast: 2m values and m packed claims a round)",
 };
 
 /// The dual method's registration.
 pub const DUAL: MethodInfo = MethodInfo {
     name: "dual",
-    summary: "Algorithm 2, exchanges m multipliers and a certificate of 2m values (paper variant: n+m multipliers)",
+    summary: "Algorithm 2, exchanges m multipliers and a certificate of m potentials and m packed claims (paper variant: n+m multipliers)",
     role: Role::Admm,
     team: Some(&DualMethod::<DualSettings>(PhantomData)),
     variants: Some(&VARIANT),
@@ -122,7 +122,7 @@ impl DualVariant {
     fn payload_len(self, robots: usize, tasks: usize) -> usize {
         match self {
             Self::Paper => robots + tasks,
-            Self::Fast => fast::payload_len(tasks),
+            Self::Fast => fast::payload_len(tasks, robots),
         }
     }
 }

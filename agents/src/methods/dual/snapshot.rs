@@ -54,23 +54,42 @@
 //! optimal `π`, and the proof follows within a few rounds of the claims settling.
 //!
 //! # Layout of the payload section
-//! `[ȳ_0 … ȳ_{m−1}, claim_0 … claim_{m−1}]` (a claim is the smallest claiming robot's
-//! number, or −1 when nobody claimed the task yet).
+//! `[ȳ_0 … ȳ_{m−1}, packed claims]`. A claim is a code: 0 when nobody claimed the task yet,
+//! `r + 1` for robot `r`. Codes take `b` bits, enough for `n` (`b` = 7 for 100 robots), and
+//! [`claims_per_word`] of them share one value as the integer `Σ_j code_j 2^{jb} < 2^53`
+//! (exact in an `f64`, finite, the same on every transport): `⌈m/k⌉` values instead of `m`
+//! (15 instead of 100 for 100 robots and tasks).
 
 use crate::problem::AssignmentCase;
 
-/// Values of the certificate's payload section for `tasks` tasks.
-pub const fn words(tasks: usize) -> usize {
-    2 * tasks
+/// Values of the certificate's payload section for `tasks` tasks and `robots` robots.
+pub const fn words(tasks: usize, robots: usize) -> usize {
+    tasks + tasks.div_ceil(claims_per_word(robots))
 }
 
-/// No claim yet.
-const UNCLAIMED: f64 = -1.0;
+/// Bits of one claim code (`0..=robots`).
+const fn code_bits(robots: usize) -> u32 {
+    let bits = usize::BITS - robots.leading_zeros();
+    if bits == 0 { 1 } else { bits }
+}
+
+/// Claims packed into one payload value for a team of `robots`: as many codes as fit in
+/// the 53 bits an `f64` holds exactly.
+pub const fn claims_per_word(robots: usize) -> usize {
+    let per = (f64::MANTISSA_DIGITS / code_bits(robots)) as usize;
+    if per == 0 { 1 } else { per }
+}
+
+/// No claim yet (claims of robot `r` are `r + 1`).
+const UNCLAIMED: u64 = 0;
 
 /// One robot's side of the certificate.
 #[derive(Debug, Clone)]
 pub struct Snapshot {
     index: usize,
+    /// Bits of a claim code and codes per payload value.
+    bits: u32,
+    per_word: usize,
     period: u64,
     /// Case 2: potentials restart when the settling claims change, and every this many
     /// rounds.
@@ -88,7 +107,8 @@ pub struct Snapshot {
 /// The claims of one snapshot.
 #[derive(Debug, Clone)]
 struct Claims {
-    claims: Vec<f64>,
+    /// Per task the smallest claimer's code (robot + 1), or [`UNCLAIMED`].
+    claims: Vec<u64>,
     /// The robot's own task when the snapshot started.
     task: Option<usize>,
 }
@@ -103,19 +123,27 @@ impl Claims {
 }
 
 impl Snapshot {
-    /// Robot `index`'s side, on a graph of diameter `diameter`, relaxing by more than
-    /// `epsilon` only.
+    /// Robot `index` of `robots`' side, on a graph of diameter `diameter`, relaxing by more
+    /// than `epsilon` only.
     pub fn new(
         index: usize,
+        robots: usize,
         tasks: usize,
         case: AssignmentCase,
         diameter: usize,
         epsilon: f64,
     ) -> Self {
         assert!(epsilon > 0.0 && epsilon.is_finite(), "ε must be positive");
+        assert!(index < robots, "robot {index} of {robots}");
+        assert!(
+            code_bits(robots) <= f64::MANTISSA_DIGITS,
+            "claim codes of {robots} robots do not fit an f64"
+        );
         let period = diameter.max(1) as u64;
         Self {
             index,
+            bits: code_bits(robots),
+            per_word: claims_per_word(robots),
             period,
             reset: (case == AssignmentCase::Two).then_some(period * (tasks as u64 + 2)),
             epsilon,
@@ -127,11 +155,14 @@ impl Snapshot {
         }
     }
 
-    /// The section of a message sent before any step.
+    /// The section of a message sent before any step: potentials 0, nothing claimed.
     pub fn write_empty(out: &mut [f64]) {
-        let tasks = out.len() / 2;
-        out[..tasks].fill(0.0);
-        out[tasks..].fill(UNCLAIMED);
+        out.fill(0.0);
+    }
+
+    /// The robot's own claim code.
+    fn own_code(&self) -> u64 {
+        self.index as u64 + 1
     }
 
     /// Starts a step: remembers the potentials the neighbours saw.
@@ -143,16 +174,24 @@ impl Snapshot {
     /// ignored at step 0: those are the initial messages, sent before the first snapshot).
     pub fn merge(&mut self, step: u64, theirs: &[f64]) {
         let tasks = self.potentials.len();
-        debug_assert_eq!(theirs.len(), words(tasks));
+        debug_assert_eq!(theirs.len(), tasks + tasks.div_ceil(self.per_word));
         for (mine, &v) in self.potentials.iter_mut().zip(&theirs[..tasks]) {
             *mine = mine.min(v);
         }
         if step == 0 {
             return;
         }
-        for (mine, &claim) in self.flooding.claims.iter_mut().zip(&theirs[tasks..]) {
-            if claim >= 0.0 && (*mine < 0.0 || claim < *mine) {
-                *mine = claim;
+        let mask = (1u64 << self.bits) - 1;
+        let words = theirs[tasks..].iter();
+        for (chunk, &word) in self.flooding.claims.chunks_mut(self.per_word).zip(words) {
+            // A non-integer or negative value (never written by a robot) decodes as codes
+            // of garbage bits, not a panic: `as` saturates.
+            let word = word as u64;
+            for (j, mine) in chunk.iter_mut().enumerate() {
+                let claim = (word >> (j as u32 * self.bits)) & mask;
+                if claim != UNCLAIMED && (*mine == UNCLAIMED || claim < *mine) {
+                    *mine = claim;
+                }
             }
         }
     }
@@ -188,9 +227,10 @@ impl Snapshot {
         if settles {
             std::mem::swap(&mut self.settled, &mut self.flooding);
         }
+        let code = self.own_code();
         let next = &mut self.flooding;
         next.claims.fill(UNCLAIMED);
-        next.claims[task] = self.index as f64;
+        next.claims[task] = code;
         next.task = Some(task);
     }
 
@@ -198,17 +238,25 @@ impl Snapshot {
     pub fn write(&self, out: &mut [f64]) {
         let tasks = self.potentials.len();
         out[..tasks].copy_from_slice(&self.potentials);
-        out[tasks..].copy_from_slice(&self.flooding.claims);
+        let chunks = self.flooding.claims.chunks(self.per_word);
+        for (word, chunk) in out[tasks..].iter_mut().zip(chunks) {
+            let packed = chunk
+                .iter()
+                .enumerate()
+                .fold(0u64, |w, (j, &code)| w | code << (j as u32 * self.bits));
+            // < 2^53: exact.
+            *word = packed as f64;
+        }
     }
 
     /// The robot's certificate slack (module docs) for its current `task`, with its own
     /// (centred) `costs` and `allowed` tasks; ∞ when it proves nothing.
     pub fn slack(&self, task: usize, costs: &[f64], allowed: &[bool], case: AssignmentCase) -> f64 {
         let part = &self.settled;
-        if !self.stable || part.task != Some(task) || part.claims.iter().any(|&c| c < 0.0) {
+        if !self.stable || part.task != Some(task) || part.claims.contains(&UNCLAIMED) {
             return f64::INFINITY;
         }
-        let extra = part.claims[task] != self.index as f64;
+        let extra = part.claims[task] != self.own_code();
         let coverage = case == AssignmentCase::Two;
         if extra && !coverage {
             return f64::INFINITY;
@@ -244,9 +292,9 @@ mod tests {
         let m = costs[0].len();
         let allowed = vec![true; m];
         let mut robots: Vec<Snapshot> = (0..n)
-            .map(|i| Snapshot::new(i, m, case, n - 1, 1e-12))
+            .map(|i| Snapshot::new(i, n, m, case, n - 1, 1e-12))
             .collect();
-        let mut sections = vec![vec![0.0; words(m)]; n];
+        let mut sections = vec![vec![0.0; words(m, n)]; n];
         for s in &mut sections {
             Snapshot::write_empty(s);
         }
@@ -309,5 +357,42 @@ mod tests {
         let square = vec![vec![0.0, 1.0], vec![0.0, 1.0]];
         let one = run_chain(&square, &[0, 0], AssignmentCase::One, 20);
         assert!(one.last().unwrap().iter().all(|s| s.is_infinite()));
+    }
+
+    /// Claims survive the packing for any team size: a robot that writes a claim table
+    /// and one that merges it hold the same codes (and `words` counts the packed values).
+    #[test]
+    fn claims_round_trip_through_packed_values() {
+        assert_eq!(claims_per_word(1), 53);
+        assert_eq!(claims_per_word(100), 7);
+        assert_eq!(words(100, 100), 100 + 15);
+        for (robots, tasks) in [
+            (1, 1),
+            (2, 5),
+            (3, 3),
+            (100, 100),
+            (127, 40),
+            (128, 40),
+            (1 << 20, 9),
+        ] {
+            let mut writer = Snapshot::new(robots - 1, robots, tasks, AssignmentCase::Two, 1, 1e-9);
+            // A claim table with every shape of code: none, the smallest and the largest robot.
+            for (t, claim) in writer.flooding.claims.iter_mut().enumerate() {
+                *claim = match t % 3 {
+                    0 => UNCLAIMED,
+                    1 => 1,
+                    _ => robots as u64,
+                };
+            }
+            let mut section = vec![0.0; words(tasks, robots)];
+            writer.write(&mut section);
+            assert!(section.iter().all(|v| v.is_finite() && v.fract() == 0.0));
+            let mut reader = Snapshot::new(0, robots, tasks, AssignmentCase::Two, 1, 1e-9);
+            reader.merge(1, &section);
+            assert_eq!(
+                reader.flooding.claims, writer.flooding.claims,
+                "{robots} robots"
+            );
+        }
     }
 }
