@@ -41,7 +41,8 @@ pub fn default_rho(costs: &CostMatrix, mean_degree: f64) -> f64 {
 /// Larger c makes the multipliers agree (and the certificate fire) sooner but the
 /// assignment settle later; we take the middle.
 pub const DUAL_RHO_FACTOR: f64 = 5.0;
-/// The inexact dual's `c` (it needs a larger ρ than the exact one to stay stable).
+/// The inexact dual's `c` in the paper variant (it needs a larger ρ than the exact one to
+/// stay stable; the fast variant uses [`DUAL_RHO_FACTOR`] for both).
 pub const INEXACT_DUAL_RHO_FACTOR: f64 = 10.0;
 
 /// How a method with a penalty picks its default ρ and its `--adaptive-rho` schedule.

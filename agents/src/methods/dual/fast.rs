@@ -23,8 +23,9 @@
 //!   gradient step projected onto the simplex with `γ = g/(2dρ)` (the gradient's Lipschitz
 //!   constant is `1/(2dρ)` without the robot row). In Case 1 the quadratic is separable
 //!   with exactly that curvature, so with `g = 1` (its default) the step *is* the exact
-//!   minimiser and the two methods differ only by their ρ rules; Case 2's hinge keeps them
-//!   apart.
+//!   minimiser: with one ρ rule for both (`ρ₀` from the costs' structure,
+//!   [`crate::methods::dual::structure_factor`]) the two methods run the same iterates in
+//!   Case 1; Case 2's hinge keeps them apart.
 //! * **A certificate that needs no agreement** ([`crate::methods::dual::snapshot`]): the
 //!   team's claims are flooded in snapshots, and common prices that price them are computed
 //!   beside the multipliers by a distributed Bellman–Ford (a min-flood with each robot
@@ -36,7 +37,8 @@
 //!   (Eckstein–Bertsekas relaxation of the edge variables, [`RELAXATION`]; in this
 //!   decentralized form only their sum per robot is kept), and ρ grows from a small `ρ₀`
 //!   by [`RHO_GROWTH`] a round up to [`RHO_MAX_GROWTH`] `ρ₀` (every robot from the round
-//!   number alone).
+//!   number alone). `ρ₀` is a tenth of the paper's rule times a factor from the costs'
+//!   structure: 3 for independent costs, ½ for distance-like ones.
 //!
 //! The payload is `m` multipliers and the certificate's `m` potentials and `m` claims,
 //! several claims packed into one value ([`snapshot::claims_per_word`]: 7 for 100
