@@ -129,7 +129,8 @@ fn main() {
                 since = None;
             }
             if std::env::var("TRACE").is_ok()
-                && round % std::env::var("EVERY").map_or(25, |v| v.parse().unwrap()) == 0
+                && round % std::env::var("EVERY").map_or(25, |v| v.parse::<usize>().unwrap().max(1))
+                    == 0
             {
                 let inf = agents
                     .iter()
@@ -159,14 +160,14 @@ fn main() {
                         let mut idx: Vec<usize> = (0..col.len()).collect();
                         idx.sort_by(|&x, &y| col[y].total_cmp(&col[x]));
                         if col[idx[0]] < 0.99 {
+                            let largest: Vec<String> = idx
+                                .iter()
+                                .take(3)
+                                .map(|&t| format!("{t}:{:.3}", col[t]))
+                                .collect();
                             println!(
-                                "    robot {i}: {}:{:.3} {}:{:.3} {}:{:.3} optimal {} decided {}",
-                                idx[0],
-                                col[idx[0]],
-                                idx[1],
-                                col[idx[1]],
-                                idx[2],
-                                col[idx[2]],
+                                "    robot {i}: {} optimal {} decided {}",
+                                largest.join(" "),
                                 optimum.assignment[i],
                                 decisions[i]
                             );

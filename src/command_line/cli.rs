@@ -475,8 +475,10 @@ pub struct SolveArgs {
     pub settings: MethodFlags,
     /// ADMM penalty ρ: auto (scale-free rule from the cost spread and the graph's mean
     /// degree d̄: primal fast 100·spread/(2·d̄), primal paper
-    /// 0.5·spread·√((n−1)/d̄)/(2·d̄·n), dual 5/(spread·d̄), inexact dual 10/(spread·d̄)) or a
-    /// positive number.
+    /// 0.5·spread·√((n−1)/d̄)/(2·d̄·n), dual and inexact dual (fast variant) 0.5·s/(spread·d̄)
+    /// with s from ½ (distance-like costs) to 3 (independent costs) by the costs' structure,
+    /// growing to 300× over the run; paper variant dual 5/(spread·d̄), inexact dual
+    /// 10/(spread·d̄)) or a positive number.
     #[arg(long, default_value = "auto", allow_negative_numbers = true)]
     pub rho: String,
     /// Vary ρ by the method's schedule, computed by every agent from the round number

@@ -37,8 +37,9 @@
 //!   (Eckstein–Bertsekas relaxation of the edge variables, [`RELAXATION`]; in this
 //!   decentralized form only their sum per robot is kept), and ρ grows from a small `ρ₀`
 //!   by [`RHO_GROWTH`] a round up to [`RHO_MAX_GROWTH`] `ρ₀` (every robot from the round
-//!   number alone). `ρ₀` is a tenth of the paper's rule times a factor from the costs'
-//!   structure: 3 for independent costs, ½ for distance-like ones.
+//!   number alone). `ρ₀` is, for both methods, a tenth of the paper variant's dual rule
+//!   (`c = 5`) times a factor from the costs' structure: 3 for independent costs, ½ for
+//!   distance-like ones ([`crate::methods::dual::structure_factor`]).
 //!
 //! The payload is `m` multipliers and the certificate's `m` potentials and `m` claims,
 //! several claims packed into one value ([`snapshot::claims_per_word`]: 7 for 100
@@ -47,7 +48,7 @@
 //! Size: one agent — its equations, both x-updates and the step share its private state;
 //! about 150 lines are its unit tests.
 
-use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};
+use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, PayloadError, PayloadPart, StepReport};
 use crate::methods::dual::agent::{DualParams, DualUpdate};
 use crate::methods::dual::column;
 use crate::methods::dual::coupled_box::solve_simplex_box;
@@ -66,9 +67,9 @@ pub const RHO_GROWTH: f64 = 1.01;
 /// responses are soft; a large one sharpens the responses and pulls the copies together.
 pub const RHO_MAX_GROWTH: f64 = 300.0;
 
-/// Values of a fast dual message for `tasks` tasks and `robots` robots.
-pub const fn payload_len(tasks: usize, robots: usize) -> usize {
-    tasks + snapshot::words(tasks, robots)
+/// Values of a fast dual message for `robots` robots and `tasks` tasks.
+pub const fn payload_len(robots: usize, tasks: usize) -> usize {
+    tasks + snapshot::words(robots, tasks)
 }
 
 /// Robot `index`'s state of the fast dual variant.
@@ -197,7 +198,7 @@ impl FastDualAgent {
             let theirs = inbox.payload(k);
             assert_eq!(
                 theirs.len(),
-                payload_len(m, self.robots),
+                payload_len(self.robots, m),
                 "neighbour payload has the wrong length"
             );
             for ((sum, mine), v) in self.kappa.iter_mut().zip(&self.y).zip(&theirs[..m]) {
@@ -298,7 +299,29 @@ fn theta(case: AssignmentCase, rho: f64, kappa: f64, x: f64) -> f64 {
 
 impl ConsensusAgent for FastDualAgent {
     fn payload_len(&self) -> usize {
-        payload_len(self.tasks, self.robots)
+        payload_len(self.robots, self.tasks)
+    }
+
+    /// Finite multipliers and potentials; claims packed as this team's codes only.
+    fn check_payload(&self, payload: &[f64]) -> Result<(), PayloadError> {
+        crate::agent::check_length(payload, self.payload_len())?;
+        let m = self.tasks;
+        if let Some(t) = payload[..m].iter().position(|v| !v.is_finite()) {
+            return Err(PayloadError::NotFinite {
+                index: t,
+                value: payload[t],
+            });
+        }
+        self.snapshot
+            .check(self.robots, &payload[m..])
+            .map_err(|k| PayloadError::BadValue {
+                part: if k < m {
+                    PayloadPart::at("potential of task", k)
+                } else {
+                    PayloadPart::at("packed claims", k - m)
+                },
+                value: payload[m + k],
+            })
     }
 
     fn write_initial_payload(&self, out: &mut [f64]) {
@@ -411,7 +434,7 @@ mod tests {
                 }
                 let theirs: Vec<Vec<f64>> = (0..2)
                     .map(|_| {
-                        let mut message = vec![0.0; payload_len(tasks, robots)];
+                        let mut message = vec![0.0; payload_len(robots, tasks)];
                         for v in &mut message[..tasks] {
                             *v = 2.0 * rng.uniform() - 1.0;
                         }

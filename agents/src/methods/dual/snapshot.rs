@@ -62,8 +62,8 @@
 
 use crate::problem::AssignmentCase;
 
-/// Values of the certificate's payload section for `tasks` tasks and `robots` robots.
-pub const fn words(tasks: usize, robots: usize) -> usize {
+/// Values of the certificate's payload section for `robots` robots and `tasks` tasks.
+pub const fn words(robots: usize, tasks: usize) -> usize {
     tasks + tasks.div_ceil(claims_per_word(robots))
 }
 
@@ -168,6 +168,30 @@ impl Snapshot {
     /// Starts a step: remembers the potentials the neighbours saw.
     pub fn begin(&mut self) {
         self.before.copy_from_slice(&self.potentials);
+    }
+
+    /// Checks a neighbour's section: finite potentials, and packed claims that are integers
+    /// holding codes of this team (`0..=robots`) only. Returns the offending value's index
+    /// within the section.
+    pub fn check(&self, robots: usize, theirs: &[f64]) -> Result<(), usize> {
+        let tasks = self.potentials.len();
+        if let Some(t) = theirs[..tasks].iter().position(|v| !v.is_finite()) {
+            return Err(t);
+        }
+        let mask = (1u64 << self.bits) - 1;
+        let limit = 2f64.powi((self.per_word as u32 * self.bits) as i32);
+        for (w, &word) in theirs[tasks..].iter().enumerate() {
+            let codes = tasks.saturating_sub(w * self.per_word).min(self.per_word);
+            let whole = word >= 0.0 && word.fract() == 0.0 && word < limit;
+            let bits = word as u64;
+            let in_team = (0..codes)
+                .all(|j| (bits >> (j as u32 * self.bits)) & mask <= robots as u64)
+                && bits >> (codes as u32 * self.bits).min(63) == 0;
+            if !(whole && in_team) {
+                return Err(tasks + w);
+            }
+        }
+        Ok(())
     }
 
     /// Merges a neighbour's section of the round gathered at step `step` (its claims are
@@ -294,7 +318,7 @@ mod tests {
         let mut robots: Vec<Snapshot> = (0..n)
             .map(|i| Snapshot::new(i, n, m, case, n - 1, 1e-12))
             .collect();
-        let mut sections = vec![vec![0.0; words(m, n)]; n];
+        let mut sections = vec![vec![0.0; words(n, m)]; n];
         for s in &mut sections {
             Snapshot::write_empty(s);
         }
@@ -366,6 +390,7 @@ mod tests {
         assert_eq!(claims_per_word(1), 53);
         assert_eq!(claims_per_word(100), 7);
         assert_eq!(words(100, 100), 100 + 15);
+        assert_eq!(words(2, 10), 10 + 1);
         for (robots, tasks) in [
             (1, 1),
             (2, 5),
@@ -384,7 +409,7 @@ mod tests {
                     _ => robots as u64,
                 };
             }
-            let mut section = vec![0.0; words(tasks, robots)];
+            let mut section = vec![0.0; words(robots, tasks)];
             writer.write(&mut section);
             assert!(section.iter().all(|v| v.is_finite() && v.fract() == 0.0));
             let mut reader = Snapshot::new(0, robots, tasks, AssignmentCase::Two, 1, 1e-9);
@@ -394,5 +419,31 @@ mod tests {
                 "{robots} robots"
             );
         }
+    }
+
+    /// A received section is accepted as written and refused, at the right value, when a
+    /// potential is not finite or a packed value is not an integer of this team's codes.
+    #[test]
+    fn bad_sections_are_refused_at_their_value() {
+        let (robots, tasks) = (5, 20);
+        let mut writer = Snapshot::new(4, robots, tasks, AssignmentCase::Two, 1, 1e-9);
+        writer.flooding.claims[19] = 5;
+        let mut section = vec![0.0; words(robots, tasks)];
+        writer.write(&mut section);
+        assert_eq!(writer.check(robots, &section), Ok(()));
+        // 3-bit codes, 17 to a value: two values, the second holding 3 codes.
+        assert_eq!(section.len(), tasks + 2);
+        let bad = |k: usize, v: f64| {
+            let mut s = section.clone();
+            s[k] = v;
+            writer.check(robots, &s)
+        };
+        assert_eq!(bad(3, f64::NAN), Err(3));
+        assert_eq!(bad(tasks, 0.5), Err(tasks));
+        assert_eq!(bad(tasks, -8.0), Err(tasks));
+        assert_eq!(bad(tasks, 6.0), Err(tasks)); // code 6 > 5 robots
+        assert_eq!(bad(tasks + 1, (1u64 << 9) as f64), Err(tasks + 1)); // a 4th code
+        assert_eq!(bad(tasks + 1, f64::INFINITY), Err(tasks + 1));
+        assert_eq!(bad(tasks + 1, 5.0), Ok(()));
     }
 }
