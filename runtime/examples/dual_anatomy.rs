@@ -111,6 +111,12 @@ fn main() {
             .collect();
         let mut sim = LockstepSim::new(agents, &graph);
         let tol = params.tolerance / n as f64;
+        let trace = std::env::var("TRACE").is_ok();
+        let every: usize =
+            std::env::var("EVERY").map_or(25, |v| v.parse::<usize>().unwrap().max(1));
+        let list_from: Option<usize> = std::env::var("FRAC").ok().map(|v| v.parse().unwrap());
+        // The largest entry of a robot's column: below 0.99 it is fractional.
+        let largest = |col: &[f64]| col.iter().fold(0.0, |m: f64, &v| m.max(v));
         let (mut since, mut cert_at) = (None, None);
         let mut at_settle = (0.0, 0.0);
         for round in 1..=max_rounds {
@@ -128,10 +134,7 @@ fn main() {
             } else {
                 since = None;
             }
-            if std::env::var("TRACE").is_ok()
-                && round % std::env::var("EVERY").map_or(25, |v| v.parse::<usize>().unwrap().max(1))
-                    == 0
-            {
+            if trace && round % every == 0 {
                 let inf = agents
                     .iter()
                     .filter(|a| a.certificate_slack().is_infinite())
@@ -152,14 +155,14 @@ fn main() {
                     .count();
                 let fractional = agents
                     .iter()
-                    .filter(|a| a.own_column().iter().fold(0.0, |m: f64, &v| m.max(v)) < 0.99)
+                    .filter(|a| largest(a.own_column()) < 0.99)
                     .count();
-                if std::env::var("FRAC").is_ok_and(|v| v.parse::<usize>().unwrap() <= round) {
+                if list_from.is_some_and(|from| from <= round) {
                     for (i, a) in agents.iter().enumerate() {
                         let col = a.own_column();
-                        let mut idx: Vec<usize> = (0..col.len()).collect();
-                        idx.sort_by(|&x, &y| col[y].total_cmp(&col[x]));
-                        if col[idx[0]] < 0.99 {
+                        if largest(col) < 0.99 {
+                            let mut idx: Vec<usize> = (0..col.len()).collect();
+                            idx.sort_by(|&x, &y| col[y].total_cmp(&col[x]));
                             let largest: Vec<String> = idx
                                 .iter()
                                 .take(3)

@@ -269,12 +269,12 @@ impl CostMatrix {
     }
 
     /// The values of the allowed pairs.
-    pub fn allowed_values(&self) -> impl Iterator<Item = f64> + '_ {
+    pub fn allowed_values(&self) -> impl Iterator<Item = f64> + Clone + '_ {
         self.allowed_values_indexed().map(|(_, v)| v)
     }
 
     /// The allowed pairs' row-major indices and values.
-    pub fn allowed_values_indexed(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+    pub fn allowed_values_indexed(&self) -> impl Iterator<Item = (usize, f64)> + Clone + '_ {
         self.values
             .iter()
             .enumerate()
@@ -286,22 +286,23 @@ impl CostMatrix {
     /// which equals `max − min` for uniform costs but is not driven by a single outlier.
     /// Falls back to 1 for constant costs.
     pub fn spread(&self) -> f64 {
-        let (count, sum) = self
-            .allowed_values()
-            .fold((0usize, 0.0), |(c, s), v| (c + 1, s + v));
-        let count = count.max(1) as f64;
-        let mean = sum / count;
-        let var = self
-            .allowed_values()
-            .map(|v| (v - mean) * (v - mean))
-            .sum::<f64>()
-            / count;
-        let spread = (12.0 * var).sqrt();
-        if spread > 0.0 && spread.is_finite() {
-            spread
-        } else {
-            1.0
-        }
+        spread_of(self.allowed_values())
+    }
+}
+
+/// [`CostMatrix::spread`] of any costs: `√12 · std`, 1 for constant (or no) costs.
+pub fn spread_of(values: impl Iterator<Item = f64> + Clone) -> f64 {
+    let (count, sum) = values
+        .clone()
+        .fold((0usize, 0.0), |(c, s), v| (c + 1, s + v));
+    let count = count.max(1) as f64;
+    let mean = sum / count;
+    let var = values.map(|v| (v - mean) * (v - mean)).sum::<f64>() / count;
+    let spread = (12.0 * var).sqrt();
+    if spread > 0.0 && spread.is_finite() {
+        spread
+    } else {
+        1.0
     }
 }
 

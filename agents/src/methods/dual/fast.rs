@@ -313,7 +313,7 @@ impl ConsensusAgent for FastDualAgent {
             });
         }
         self.snapshot
-            .check(self.robots, &payload[m..])
+            .check(&payload[m..])
             .map_err(|k| PayloadError::BadValue {
                 part: if k < m {
                     PayloadPart::at("potential of task", k)

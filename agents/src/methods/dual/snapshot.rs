@@ -83,13 +83,57 @@ pub const fn claims_per_word(robots: usize) -> usize {
 /// No claim yet (claims of robot `r` are `r + 1`).
 const UNCLAIMED: u64 = 0;
 
+/// How a team's claim codes are packed into payload values.
+#[derive(Debug, Clone, Copy)]
+struct Packing {
+    robots: usize,
+    bits: u32,
+    per_word: usize,
+}
+
+impl Packing {
+    fn new(robots: usize) -> Self {
+        assert!(
+            code_bits(robots) <= f64::MANTISSA_DIGITS,
+            "claim codes of {robots} robots do not fit an f64"
+        );
+        Self {
+            robots,
+            bits: code_bits(robots),
+            per_word: claims_per_word(robots),
+        }
+    }
+
+    /// Code `j` of a packed value (read as an integer; `as` saturates, never panics).
+    fn code(self, word: u64, j: usize) -> u64 {
+        (word >> (j as u32 * self.bits)) & ((1u64 << self.bits) - 1)
+    }
+
+    /// The packed value of up to `per_word` codes: an integer below 2^53, exact.
+    fn pack(self, codes: &[u64]) -> f64 {
+        let word = codes
+            .iter()
+            .enumerate()
+            .fold(0u64, |w, (j, &code)| w | code << (j as u32 * self.bits));
+        word as f64
+    }
+
+    /// Whether `word` is what [`Packing::pack`] writes for `codes` codes of this team.
+    fn holds(self, word: f64, codes: usize) -> bool {
+        let used = codes as u32 * self.bits;
+        let bits = word as u64;
+        word >= 0.0
+            && word.fract() == 0.0
+            && word < 2f64.powi(used as i32)
+            && (0..codes).all(|j| self.code(bits, j) <= self.robots as u64)
+    }
+}
+
 /// One robot's side of the certificate.
 #[derive(Debug, Clone)]
 pub struct Snapshot {
     index: usize,
-    /// Bits of a claim code and codes per payload value.
-    bits: u32,
-    per_word: usize,
+    packing: Packing,
     period: u64,
     /// Case 2: potentials restart when the settling claims change, and every this many
     /// rounds.
@@ -135,15 +179,10 @@ impl Snapshot {
     ) -> Self {
         assert!(epsilon > 0.0 && epsilon.is_finite(), "ε must be positive");
         assert!(index < robots, "robot {index} of {robots}");
-        assert!(
-            code_bits(robots) <= f64::MANTISSA_DIGITS,
-            "claim codes of {robots} robots do not fit an f64"
-        );
         let period = diameter.max(1) as u64;
         Self {
             index,
-            bits: code_bits(robots),
-            per_word: claims_per_word(robots),
+            packing: Packing::new(robots),
             period,
             reset: (case == AssignmentCase::Two).then_some(period * (tasks as u64 + 2)),
             epsilon,
@@ -173,21 +212,15 @@ impl Snapshot {
     /// Checks a neighbour's section: finite potentials, and packed claims that are integers
     /// holding codes of this team (`0..=robots`) only. Returns the offending value's index
     /// within the section.
-    pub fn check(&self, robots: usize, theirs: &[f64]) -> Result<(), usize> {
+    pub fn check(&self, theirs: &[f64]) -> Result<(), usize> {
         let tasks = self.potentials.len();
         if let Some(t) = theirs[..tasks].iter().position(|v| !v.is_finite()) {
             return Err(t);
         }
-        let mask = (1u64 << self.bits) - 1;
-        let limit = 2f64.powi((self.per_word as u32 * self.bits) as i32);
+        let per_word = self.packing.per_word;
         for (w, &word) in theirs[tasks..].iter().enumerate() {
-            let codes = tasks.saturating_sub(w * self.per_word).min(self.per_word);
-            let whole = word >= 0.0 && word.fract() == 0.0 && word < limit;
-            let bits = word as u64;
-            let in_team = (0..codes)
-                .all(|j| (bits >> (j as u32 * self.bits)) & mask <= robots as u64)
-                && bits >> (codes as u32 * self.bits).min(63) == 0;
-            if !(whole && in_team) {
+            let codes = tasks.saturating_sub(w * per_word).min(per_word);
+            if !self.packing.holds(word, codes) {
                 return Err(tasks + w);
             }
         }
@@ -198,21 +231,19 @@ impl Snapshot {
     /// ignored at step 0: those are the initial messages, sent before the first snapshot).
     pub fn merge(&mut self, step: u64, theirs: &[f64]) {
         let tasks = self.potentials.len();
-        debug_assert_eq!(theirs.len(), tasks + tasks.div_ceil(self.per_word));
+        debug_assert_eq!(theirs.len(), words(self.packing.robots, tasks));
         for (mine, &v) in self.potentials.iter_mut().zip(&theirs[..tasks]) {
             *mine = mine.min(v);
         }
         if step == 0 {
             return;
         }
-        let mask = (1u64 << self.bits) - 1;
+        let packing = self.packing;
         let words = theirs[tasks..].iter();
-        for (chunk, &word) in self.flooding.claims.chunks_mut(self.per_word).zip(words) {
-            // A non-integer or negative value (never written by a robot) decodes as codes
-            // of garbage bits, not a panic: `as` saturates.
+        for (chunk, &word) in self.flooding.claims.chunks_mut(packing.per_word).zip(words) {
             let word = word as u64;
             for (j, mine) in chunk.iter_mut().enumerate() {
-                let claim = (word >> (j as u32 * self.bits)) & mask;
+                let claim = packing.code(word, j);
                 if claim != UNCLAIMED && (*mine == UNCLAIMED || claim < *mine) {
                     *mine = claim;
                 }
@@ -262,14 +293,9 @@ impl Snapshot {
     pub fn write(&self, out: &mut [f64]) {
         let tasks = self.potentials.len();
         out[..tasks].copy_from_slice(&self.potentials);
-        let chunks = self.flooding.claims.chunks(self.per_word);
+        let chunks = self.flooding.claims.chunks(self.packing.per_word);
         for (word, chunk) in out[tasks..].iter_mut().zip(chunks) {
-            let packed = chunk
-                .iter()
-                .enumerate()
-                .fold(0u64, |w, (j, &code)| w | code << (j as u32 * self.bits));
-            // < 2^53: exact.
-            *word = packed as f64;
+            *word = self.packing.pack(chunk);
         }
     }
 
@@ -430,13 +456,13 @@ mod tests {
         writer.flooding.claims[19] = 5;
         let mut section = vec![0.0; words(robots, tasks)];
         writer.write(&mut section);
-        assert_eq!(writer.check(robots, &section), Ok(()));
+        assert_eq!(writer.check(&section), Ok(()));
         // 3-bit codes, 17 to a value: two values, the second holding 3 codes.
         assert_eq!(section.len(), tasks + 2);
         let bad = |k: usize, v: f64| {
             let mut s = section.clone();
             s[k] = v;
-            writer.check(robots, &s)
+            writer.check(&s)
         };
         assert_eq!(bad(3, f64::NAN), Err(3));
         assert_eq!(bad(tasks, 0.5), Err(tasks));
