@@ -10,27 +10,20 @@
 //! `FRAC=R` lists, from round R on at each traced round, every fractional robot's three
 //! largest entries, its optimal task and its decision.
 //! `cargo run --release -p admm-ta-runtime --example dual_anatomy -- ROBOTS TASKS TOPOLOGY uniform|distance SEEDS exact|inexact [ROUNDS]`.
+mod common;
+
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::oracle;
-use admm_ta_agents::method::agent::MethodAgent;
 use admm_ta_agents::method::settings::{GivenSettings, SettingValue};
-use admm_ta_agents::method::team::{AgentInit, TeamContext, TeamParams};
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::methods::dual::VARIANT;
-use admm_ta_agents::problem::cost_model::CostModel;
-use admm_ta_agents::problem::{CaseChoice, TaskAssignmentProblem};
 use admm_ta_runtime::sim::LockstepSim;
-use admm_ta_topologies::TopologySpec;
+use common::Problems;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let n: usize = args[1].parse().unwrap();
-    let m: usize = args[2].parse().unwrap();
-    let spec: TopologySpec = args[3].parse().unwrap();
-    let model = match args[4].as_str() {
-        "uniform" => CostModel::Uniform,
-        _ => CostModel::Geometric,
-    };
+    let problems = Problems::from_args(&args);
+    let n = problems.robots;
     let seeds: u64 = args[5].parse().unwrap();
     let method = if args[6] == "exact" {
         Method::Dual
@@ -41,9 +34,7 @@ fn main() {
     let mut certified = Vec::new();
     let mut settled = Vec::new();
     for seed in 1..=seeds {
-        let costs = model.costs(n, m, seed).unwrap();
-        let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
-        let graph = spec.build(n, seed).unwrap();
+        let (problem, graph) = problems.instance(seed);
         if std::env::var("STAT").is_ok() {
             let c = problem.costs();
             let mut gaps: Vec<f64> = (0..n)
@@ -77,37 +68,20 @@ fn main() {
             .default_rho(problem.costs(), graph.mean_degree())
             .unwrap()
             * std::env::var("RHO_SCALE").map_or(1.0, |v| v.parse().unwrap());
-        let params = TeamParams {
-            rho,
-            diameter: graph.diameter().unwrap(),
-            tolerance: 1e-9 * problem.costs().spread() * n as f64,
-        };
-        let team = setup.team(TeamContext {
-            problem: &problem,
-            graph: &graph,
-            params,
+        let params = common::params(&problem, &graph, rho);
+        let schedule = std::env::var("SCHED").ok().map(|v| {
+            let f: Vec<f64> = v.split(',').map(|x| x.parse().unwrap()).collect();
+            admm_ta_agents::methods::rho::RhoSchedule {
+                initial: rho,
+                start: f[0],
+                rate: f[1],
+                min: f[2],
+                max: f[3],
+            }
         });
-        let agents: Vec<_> = (0..n)
-            .map(|i| {
-                let schedule = std::env::var("SCHED").ok().map(|v| {
-                    let f: Vec<f64> = v.split(',').map(|x| x.parse().unwrap()).collect();
-                    admm_ta_agents::methods::rho::RhoSchedule {
-                        initial: rho,
-                        start: f[0],
-                        rate: f[1],
-                        min: f[2],
-                        max: f[3],
-                    }
-                });
-                MethodAgent::new(team.agent(AgentInit {
-                    index: i,
-                    costs: problem.costs().row(i).to_vec(),
-                    robots: n,
-                    case: problem.case(),
-                    degree: graph.degree(i),
-                }))
-                .with_schedule(schedule)
-            })
+        let agents: Vec<_> = common::agents(setup.as_ref(), &problem, &graph, params)
+            .into_iter()
+            .map(|agent| agent.with_schedule(schedule))
             .collect();
         let mut sim = LockstepSim::new(agents, &graph);
         let tol = params.tolerance / n as f64;

@@ -22,16 +22,16 @@
 //! `RHO_SCALE=F` multiplies the default ρ, `HORIZON=R` records `R` rounds past the stop
 //! (default `3D + 50`).
 //! `cargo run --release -p admm-ta-runtime --example dual_certificate_floor -- ROBOTS TASKS TOPOLOGY uniform|distance FIRST-LAST`.
+mod common;
+
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::oracle;
-use admm_ta_agents::method::agent::MethodAgent;
 use admm_ta_agents::method::settings::GivenSettings;
-use admm_ta_agents::method::team::{AgentInit, TeamContext, TeamParams};
 use admm_ta_agents::methods::Method;
-use admm_ta_agents::problem::cost_model::CostModel;
-use admm_ta_agents::problem::{AssignmentCase, CaseChoice, TaskAssignmentProblem};
+use admm_ta_agents::problem::{AssignmentCase, TaskAssignmentProblem};
 use admm_ta_runtime::sim::LockstepSim;
-use admm_ta_topologies::{Graph, TopologySpec};
+use admm_ta_topologies::Graph;
+use common::Problems;
 
 /// One run: per round (index 0 = before the first) every robot's task, column and
 /// multipliers.
@@ -371,13 +371,8 @@ fn decide(inst: &Instance, rec: &Recording, rule: Rule) -> Vec<Vec<usize>> {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let n: usize = args[1].parse().unwrap();
-    let m: usize = args[2].parse().unwrap();
-    let spec: TopologySpec = args[3].parse().unwrap();
-    let model = match args[4].as_str() {
-        "uniform" => CostModel::Uniform,
-        _ => CostModel::Geometric,
-    };
+    let problems = Problems::from_args(&args);
+    let (n, m) = (problems.robots, problems.tasks);
     let (first, last) = args[5].split_once('-').unwrap_or((&args[5], &args[5]));
     let seeds = first.parse::<u64>().unwrap()..=last.parse::<u64>().unwrap();
     let rho_scale: f64 = std::env::var("RHO_SCALE").map_or(1.0, |v| v.parse().unwrap());
@@ -387,9 +382,7 @@ fn main() {
     let mut table: Vec<Vec<f64>> = Vec::new();
     println!("seed {}", names.join(" "));
     for seed in seeds {
-        let costs = model.costs(n, m, seed).unwrap();
-        let problem = TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap();
-        let graph = spec.build(n, seed).unwrap();
+        let (problem, graph) = problems.instance(seed);
         let diameter = graph.diameter().unwrap();
         let setup = Method::Dual
             .setup(&GivenSettings::default())
@@ -399,11 +392,7 @@ fn main() {
             .default_rho(problem.costs(), graph.mean_degree())
             .unwrap()
             * rho_scale;
-        let params = TeamParams {
-            rho,
-            diameter,
-            tolerance: 1e-9 * problem.costs().spread() * n as f64,
-        };
+        let params = common::params(&problem, &graph, rho);
         let costs = problem.costs();
         let inst = Instance {
             problem: &problem,
@@ -418,22 +407,7 @@ fn main() {
             tol: params.tolerance / n as f64,
             eps: params.tolerance / (10.0 * n as f64),
         };
-        let team = setup.team(TeamContext {
-            problem: &problem,
-            graph: &graph,
-            params,
-        });
-        let agents: Vec<_> = (0..n)
-            .map(|i| {
-                MethodAgent::new(team.agent(AgentInit {
-                    index: i,
-                    costs: costs.row(i).to_vec(),
-                    robots: n,
-                    case: inst.case,
-                    degree: graph.degree(i),
-                }))
-            })
-            .collect();
+        let agents = common::agents(setup.as_ref(), &problem, &graph, params);
         let horizon = std::env::var("HORIZON").map_or(3 * diameter + 50, |v| v.parse().unwrap());
         let rec = run(LockstepSim::new(agents, &graph), &inst, horizon);
         let stop = |ok: &[bool], from_snapshot: bool| {
