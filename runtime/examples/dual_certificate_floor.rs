@@ -49,9 +49,6 @@ struct Instance<'a> {
     graph: &'a Graph,
     optimum: f64,
     diameter: usize,
-    case: AssignmentCase,
-    rows: Vec<Vec<f64>>,
-    allowed: Vec<Vec<bool>>,
     /// Per-robot slack the stop allows, and the relaxation threshold.
     tol: f64,
     eps: f64,
@@ -59,19 +56,29 @@ struct Instance<'a> {
 
 impl Instance<'_> {
     fn robots(&self) -> usize {
-        self.rows.len()
+        self.problem.costs().robots()
     }
     fn tasks(&self) -> usize {
-        self.rows[0].len()
+        self.problem.costs().tasks()
+    }
+    fn case(&self) -> AssignmentCase {
+        self.problem.case()
+    }
+    /// Robot `i`'s costs.
+    fn row(&self, i: usize) -> &[f64] {
+        self.problem.costs().row(i)
+    }
+    fn allowed(&self, i: usize, t: usize) -> bool {
+        self.problem.costs().is_allowed(i, t)
     }
     fn optimal(&self, decisions: &[usize]) -> bool {
         self.problem.is_feasible(decisions)
             && self.problem.cost_of(decisions).unwrap() <= self.optimum + 1e-9
     }
     fn cheapest(&self, i: usize) -> f64 {
-        let row = &self.rows[i];
+        let row = self.row(i);
         (0..row.len())
-            .filter(|&t| self.allowed[i][t])
+            .filter(|&t| self.allowed(i, t))
             .map(|t| row[t])
             .fold(f64::INFINITY, f64::min)
     }
@@ -83,12 +90,16 @@ impl Instance<'_> {
             first[t] = first[t].min(i);
             count[t] += 1;
         }
-        let once = self.case != AssignmentCase::Two;
+        let once = self.case() != AssignmentCase::Two;
         (count.iter().all(|&c| c > 0) && !(once && count.iter().any(|&c| c > 1))).then_some(first)
     }
 }
 
-/// Runs the team until every certificate held, and `horizon` rounds more.
+/// The solver's default round limit.
+const MAX_ROUNDS: usize = 5000;
+
+/// Runs the team until every certificate held, and `horizon` rounds more (at most
+/// [`MAX_ROUNDS`]).
 fn run<A: ConsensusAgent + Send>(
     mut sim: LockstepSim<A>,
     inst: &Instance,
@@ -101,7 +112,7 @@ fn run<A: ConsensusAgent + Send>(
         prices: vec![vec![vec![0.0; m]; n]],
         now: None,
     };
-    for round in 1..=5000 {
+    for round in 1..=MAX_ROUNDS {
         sim.step_round();
         let agents = sim.agents();
         rec.tasks.push(agents.iter().map(|a| a.decide()).collect());
@@ -176,7 +187,7 @@ fn relax(p: &mut [f64], task: usize, bound: f64, eps: f64) {
 /// restarted by a wave from every task change (Case 2)?
 fn wave_potentials(inst: &Instance, rec: &Recording) -> Vec<bool> {
     let (n, m) = (inst.robots(), inst.tasks());
-    let restarts = inst.case == AssignmentCase::Two;
+    let restarts = inst.case() == AssignmentCase::Two;
     let mut pot = vec![vec![0.0; m]; n];
     let mut epoch = vec![0usize; n];
     let mut ok = vec![false];
@@ -201,9 +212,9 @@ fn wave_potentials(inst: &Instance, rec: &Recording) -> Vec<bool> {
                 prev[i].clone()
             };
             let (mut p, all) = merged(inst, own, &prev, i, |j| prev_epoch[j] == e);
-            let row = &inst.rows[i];
+            let row = inst.row(i);
             let best = (0..m)
-                .filter(|&t| inst.allowed[i][t] && t != task)
+                .filter(|&t| inst.allowed(i, t) && t != task)
                 .map(|t| p[t] + row[t] - row[task])
                 .fold(f64::INFINITY, f64::min);
             relax(&mut p, task, best, inst.eps);
@@ -229,7 +240,7 @@ enum Roles {
 /// as a square problem plus a free slot (potential `m`), never restarted?
 fn free_slot_potentials(inst: &Instance, rec: &Recording, roles: Roles) -> Vec<bool> {
     let (n, m, d) = (inst.robots(), inst.tasks(), inst.diameter.max(1));
-    if inst.case != AssignmentCase::Two {
+    if inst.case() != AssignmentCase::Two {
         return wave_potentials(inst, rec);
     }
     let mut pot = vec![vec![0.0; m + 1]; n];
@@ -239,9 +250,9 @@ fn free_slot_potentials(inst: &Instance, rec: &Recording, roles: Roles) -> Vec<b
         let mut stable = true;
         for i in 0..n {
             let (mut p, _) = merged(inst, prev[i].clone(), &prev, i, |_| true);
-            let (row, task, cheapest) = (&inst.rows[i], rec.tasks[r][i], inst.cheapest(i));
+            let (row, task, cheapest) = (inst.row(i), rec.tasks[r][i], inst.cheapest(i));
             let other = (0..m)
-                .filter(|&t| inst.allowed[i][t] && t != task)
+                .filter(|&t| inst.allowed(i, t) && t != task)
                 .map(|t| p[t] + row[t])
                 .fold(f64::INFINITY, f64::min);
             let bound = other.min(p[m] + cheapest) - row[task];
@@ -275,9 +286,9 @@ fn prices_claims(inst: &Instance, pi: &[usize], y: &[f64], free: Option<usize>) 
         return false;
     };
     let fine = (0..inst.robots()).all(|i| {
-        let (row, t) = (&inst.rows[i], pi[i]);
+        let (row, t) = (inst.row(i), pi[i]);
         let mut best = (0..inst.tasks())
-            .filter(|&s| inst.allowed[i][s])
+            .filter(|&s| inst.allowed(i, s))
             .map(|s| row[s] + y[s])
             .fold(f64::INFINITY, f64::min);
         let extra = first[t] != i;
@@ -290,7 +301,8 @@ fn prices_claims(inst: &Instance, pi: &[usize], y: &[f64], free: Option<usize>) 
                     row[t] + y[t] - best
                 }
             }
-            None if extra => row[t] + y[t] - best - y[t],
+            // An extra claimer also pays its task's `λ = −y`.
+            None if extra => row[t] - best,
             None => row[t] + y[t] - best,
         };
         own <= inst.tol
@@ -318,7 +330,7 @@ fn decide(inst: &Instance, rec: &Recording, rule: Rule) -> Vec<Vec<usize>> {
     let (n, m) = (inst.robots(), inst.tasks());
     let argmax = |i: usize, x: &[f64]| {
         (0..m)
-            .filter(|&t| inst.allowed[i][t])
+            .filter(|&t| inst.allowed(i, t))
             .max_by(|&a, &b| x[a].total_cmp(&x[b]))
             .unwrap()
     };
@@ -347,14 +359,14 @@ fn decide(inst: &Instance, rec: &Recording, rule: Rule) -> Vec<Vec<usize>> {
                             if x.iter().fold(0.0f64, |a, &b| a.max(b)) < threshold =>
                         {
                             let y = &rec.prices[r][i];
-                            let sign = if inst.case == AssignmentCase::Two {
+                            let sign = if inst.case() == AssignmentCase::Two {
                                 -1.0
                             } else {
                                 1.0
                             };
-                            let reduced = |t: usize| inst.rows[i][t] + sign * y[t];
+                            let reduced = |t: usize| inst.row(i)[t] + sign * y[t];
                             let mut top: Vec<usize> =
-                                (0..m).filter(|&t| inst.allowed[i][t]).collect();
+                                (0..m).filter(|&t| inst.allowed(i, t)).collect();
                             top.sort_by(|&a, &b| x[b].total_cmp(&x[a]));
                             top.truncate(2);
                             top.into_iter()
@@ -372,7 +384,7 @@ fn decide(inst: &Instance, rec: &Recording, rule: Rule) -> Vec<Vec<usize>> {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let problems = Problems::from_args(&args);
-    let (n, m) = (problems.robots, problems.tasks);
+    let n = problems.robots;
     let (first, last) = args[5].split_once('-').unwrap_or((&args[5], &args[5]));
     let seeds = first.parse::<u64>().unwrap()..=last.parse::<u64>().unwrap();
     let rho_scale: f64 = std::env::var("RHO_SCALE").map_or(1.0, |v| v.parse().unwrap());
@@ -393,17 +405,11 @@ fn main() {
             .unwrap()
             * rho_scale;
         let params = common::params(&problem, &graph, rho);
-        let costs = problem.costs();
         let inst = Instance {
             problem: &problem,
             graph: &graph,
             optimum: oracle::solve(&problem).unwrap().cost,
             diameter,
-            case: problem.case(),
-            rows: (0..n).map(|i| costs.row(i).to_vec()).collect(),
-            allowed: (0..n)
-                .map(|i| (0..m).map(|t| costs.is_allowed(i, t)).collect())
-                .collect(),
             tol: params.tolerance / n as f64,
             eps: params.tolerance / (10.0 * n as f64),
         };

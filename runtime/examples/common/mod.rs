@@ -9,7 +9,7 @@ use admm_ta_topologies::{Graph, TopologySpec};
 /// `ROBOTS TASKS TOPOLOGY uniform|distance`: the first four arguments.
 pub struct Problems {
     pub robots: usize,
-    pub tasks: usize,
+    tasks: usize,
     topology: TopologySpec,
     model: CostModel,
 }
