@@ -27,7 +27,7 @@ from . import _core
 from ._core import linear_sum_assignment
 from ._errors import NotCertifiedError, NotOptimalError, SolveError
 from ._solve import SolveResult, solve
-from ._team import TeamMember
+from ._team import LeaveRefused, TeamMember
 
 __all__ = [
     "linear_sum_assignment",
@@ -37,6 +37,7 @@ __all__ = [
     "NotCertifiedError",
     "NotOptimalError",
     "TeamMember",
+    "LeaveRefused",
     "__version__",
 ]
 

@@ -1,7 +1,7 @@
 """Type stubs of the Rust extension module ``admm_ta._core`` (see ``python/src/lib.rs``)."""
 
 from os import PathLike
-from typing import Any, Optional, Sequence, Tuple, Union, final
+from typing import Any, List, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -12,6 +12,7 @@ __all__ = [
     "main",
     "set_agent_command",
     "TeamMember",
+    "LeaveRefused",
     "__version__",
 ]
 __version__: str
@@ -26,6 +27,8 @@ def solve(
 ) -> Tuple[int, Optional[str], str]: ...
 def main(argv: Sequence[str]) -> int: ...
 def set_agent_command(program: Union[str, PathLike[str]], args: Sequence[str]) -> None: ...
+
+class LeaveRefused(RuntimeError): ...
 
 @final
 class TeamMember:
@@ -42,3 +45,7 @@ class TeamMember:
     def tasks(self) -> int: ...
     @property
     def maximize(self) -> bool: ...
+    @property
+    def episode(self) -> int: ...
+    @property
+    def roster(self) -> List[int]: ...

@@ -7,6 +7,7 @@ import json
 import math
 
 from . import _core
+from ._core import LeaveRefused
 
 TYPE_CHECKING = False
 
@@ -41,12 +42,15 @@ class TeamMember:
     after episode and gets its task back. No process of the team ever sees another robot's
     costs.
 
-    ``TeamMember(team, robot)`` joins the team of the team file ``team`` as robot ``robot``,
-    waiting for its neighbours (until the file's ``startup_timeout``). Each call runs one
-    episode with every other robot of the team and returns this robot's answer, a ``dict``:
-    ``episode``, ``task`` (``None``: nothing solved, see ``unsolved``), ``certified``,
-    ``rounds``, ``cost``, ``total_cost``, ``assignment``, ``feasible``, and ``missing``,
-    ``unavailable``, ``left`` when robots took no part. A row that cannot be used raises
+    ``TeamMember(team, robot)`` joins the team of the team file ``team`` as robot ``robot``:
+    it starts the team with the others (waiting for them until the file's
+    ``startup_timeout``), or, the team running without it (a free slot, or its robot left
+    or crashed earlier), asks to join and is admitted at the next episode boundary. Each call
+    runs one episode with every other robot of the team and returns this robot's answer, a
+    ``dict``: ``episode``, ``task`` (``None``: nothing solved, see ``unsolved``),
+    ``certified``, ``rounds``, ``cost``, ``total_cost``, ``assignment``, ``feasible``, and
+    when it applies ``missing``, ``unavailable``, ``left``, ``leave_refused``, ``lost``,
+    ``joined`` and ``crashed`` (the robots concerned). A row that cannot be used raises
     ``ValueError`` (the team never sees it); a team that failed raises ``RuntimeError``;
     Ctrl-C stops the whole team and raises ``KeyboardInterrupt``. Used as a context manager
     it leaves the team on exit.
@@ -68,13 +72,23 @@ class TeamMember:
 
     @property
     def robots(self) -> int:
-        """The team's robots."""
+        """The team's robots (its slots: who takes part changes)."""
         return self._member.robots
 
     @property
     def tasks(self) -> int:
         """The most costs a row may have (the team's declared tasks)."""
         return self._member.tasks
+
+    @property
+    def episode(self) -> int:
+        """The episode this robot answers next."""
+        return self._member.episode
+
+    @property
+    def roster(self) -> List[int]:
+        """The robots that take part now."""
+        return self._member.roster
 
     def assign(self, costs: Iterable[Optional[float]]) -> Dict[str, Any]:
         """One episode with this robot's costs, one per task of the episode (``None``, or
@@ -94,8 +108,10 @@ class TeamMember:
         return answer
 
     def leave(self) -> None:
-        """Leaves the team: it ends with the next episode's agreement (this call returns
-        once the others have heard)."""
+        """Leaves the team: this robot relays in one more episode, in which the others
+        learn it (their answers name it in ``left``), and the team goes on without it. When
+        the others would fall apart without it, raises :class:`LeaveRefused` and the robot
+        stays: ask again later (each call is an episode in which it relays)."""
         self._member.leave()
 
     def __enter__(self) -> TeamMember:
@@ -103,9 +119,15 @@ class TeamMember:
 
     def __exit__(self, *exc: object) -> None:
         # A failed team or Ctrl-C already stopped every robot; after anything else (an
-        # exception in the robot's own code) the robot leaves, so that the others end
-        # their team at once rather than at the episode deadline.
+        # exception in the robot's own code) the robot leaves, so that the others go on
+        # without it at once rather than after a failed episode. A refused leave is asked
+        # again, relaying meanwhile, until the others can do without this robot.
         if exc[0] is None or not (
             isinstance(exc[1], (KeyboardInterrupt, RuntimeError, SystemExit))
         ):
-            self.leave()
+            while True:
+                try:
+                    self.leave()
+                    return
+                except LeaveRefused:
+                    continue

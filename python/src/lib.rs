@@ -338,10 +338,19 @@ fn in_team<T>(py: Python<'_>, f: impl FnOnce() -> T) -> PyResult<T> {
     Ok(value.0)
 }
 
-/// A member's error as Python's: a refusal (a bad team file, a bad row) is a `ValueError`,
-/// a failure of the team a `RuntimeError`.
+pyo3::create_exception!(
+    _core,
+    LeaveRefused,
+    PyRuntimeError,
+    "A robot's leave refused: without it the rest of its team would fall apart. It stays in the team (it relayed in the episode of its leave) and may ask again."
+);
+
+/// A member's error as Python's: a refused leave is a `LeaveRefused`, another refusal (a
+/// bad team file, a bad row) a `ValueError`, a failure of the team a `RuntimeError`.
 fn member_error(error: MemberError) -> PyErr {
-    if error.is_refusal() {
+    if error.cause().is::<admm_ta::runtime::standing::LeaveRefused>() {
+        LeaveRefused::new_err(error.text())
+    } else if error.is_refusal() {
         PyValueError::new_err(error.text())
     } else {
         PyRuntimeError::new_err(error.text())
@@ -352,14 +361,12 @@ fn member_error(error: MemberError) -> PyErr {
 /// `costs = "private"`): see `admm_ta.TeamMember`.
 #[pyclass(unsendable, module = "admm_ta._core")]
 struct TeamMember {
-    member: Option<StandingMember>,
+    member: StandingMember,
 }
 
 impl TeamMember {
     fn member(&mut self) -> PyResult<&mut StandingMember> {
-        self.member
-            .as_mut()
-            .ok_or_else(|| PyValueError::new_err("this robot has left its team"))
+        Ok(&mut self.member)
     }
 }
 
@@ -368,9 +375,7 @@ impl TeamMember {
     #[new]
     fn new(py: Python<'_>, team: PathBuf, robot: usize) -> PyResult<Self> {
         let member = in_team(py, || StandingMember::join(&team, robot))?.map_err(member_error)?;
-        Ok(Self {
-            member: Some(member),
-        })
+        Ok(Self { member })
     }
 
     /// The episode's answer (JSON) for this robot's row (`None`: a forbidden task).
@@ -394,12 +399,23 @@ impl TeamMember {
         Ok(serde_json::to_string(&answer).expect("an answer serialises"))
     }
 
-    /// Leaves the team (the team ends with the next episode's agreement).
+    /// Leaves the team at the next episode boundary (the team goes on without it); a
+    /// refused leave raises `LeaveRefused` and the robot stays.
     fn leave(&mut self, py: Python<'_>) -> PyResult<()> {
-        match self.member.take() {
-            Some(member) => in_team(py, || member.leave())?.map_err(member_error),
-            None => Ok(()),
-        }
+        let member = self.member()?;
+        in_team(py, || member.leave())?.map_err(member_error)
+    }
+
+    /// The episode this robot answers next.
+    #[getter]
+    fn episode(&mut self) -> PyResult<u64> {
+        Ok(self.member()?.episode())
+    }
+
+    /// The robots that take part now.
+    #[getter]
+    fn roster(&mut self) -> PyResult<Vec<usize>> {
+        Ok(self.member()?.roster())
     }
 
     #[getter]
@@ -433,6 +449,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(main, m)?)?;
     m.add_function(wrap_pyfunction!(set_agent_command, m)?)?;
     m.add_class::<TeamMember>()?;
+    m.add("LeaveRefused", m.py().get_type::<LeaveRefused>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -471,6 +471,19 @@ impl Board {
         }))
     }
 
+    /// Sets slot `agent`'s state word (the start-up rendezvous's: 0 nothing, 1 registered,
+    /// 2 connected). A standing team's board keeps there where its robot is: 0 free, 1 it
+    /// asks to join (or is starting), 2 it takes part ([`crate::standing`]).
+    pub fn set_slot_state(&self, agent: usize, state: u64) {
+        self.word(LINE * (agent + 1) + 32)
+            .store(state, Ordering::Release);
+    }
+
+    /// Slot `agent`'s state word ([`Board::set_slot_state`]).
+    pub fn slot_state(&self, agent: usize) -> u64 {
+        self.word(LINE * (agent + 1) + 32).load(Ordering::Acquire)
+    }
+
     /// Agent `agent` has its publisher connected to every subscriber and its subscribers
     /// in place: the start-up rendezvous ([`Board::connected`]).
     pub fn set_connected(&self, agent: usize) {

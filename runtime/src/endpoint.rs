@@ -101,6 +101,8 @@ pub struct ConnectRequest {
     /// The agents on this host, in a team whose hosts are bridged (`None`: every agent is
     /// here).
     pub local_agents: Option<Vec<usize>>,
+    /// The robots that take part (a standing team's roster); `None`: every agent.
+    pub roster: Option<Vec<usize>>,
     /// What the transport put into the scenario for its agents ([`RunSupport::scenario_config`]
     /// or a team's host), as its own type serialises it.
     pub config: Option<serde_json::Value>,
@@ -114,6 +116,15 @@ impl ConnectRequest {
     /// The team's size.
     pub fn agents(&self) -> usize {
         self.degrees.len()
+    }
+
+    /// The agents whose connection this agent waits for at start-up: those of the roster
+    /// (every agent without one) on its host (every host's, when they are not bridged).
+    pub fn team(&self) -> Vec<usize> {
+        (0..self.agents())
+            .filter(|a| self.roster.as_ref().is_none_or(|r| r.contains(a)))
+            .filter(|a| self.local_agents.as_ref().is_none_or(|l| l.contains(a)))
+            .collect()
     }
 
     /// Whether a neighbour lives on another host (reached through the host's bridge).
@@ -214,6 +225,13 @@ pub trait AgentEndpoint {
 
     /// Points the launcher and the other agents at the agent that caused `error`.
     fn blame_for(&self, error: &ExchangeError);
+
+    /// Between runs (a standing team's robot waiting for its next row): a failure or a stop
+    /// request the run's agents announced, for transports whose agents do not read a board
+    /// (those that do read it there).
+    fn check(&self) -> Result<(), ExchangeError> {
+        Ok(())
+    }
 }
 
 /// A transport whose agents are OS processes.

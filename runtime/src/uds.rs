@@ -134,7 +134,7 @@ impl UdsExchange {
                         std::thread::sleep(Duration::from_millis(1));
                     }
                     Err(e) => {
-                        let team: Vec<usize> = (0..agents).collect();
+                        let team = endpoint.team();
                         let missing = board.never_connected(&team);
                         return Err(err(format!(
                             "neighbour {j} did not listen on {} before the start-up deadline ({e}); missing: agent(s) {missing:?}",
@@ -194,7 +194,7 @@ impl UdsExchange {
                         .map(|(&j, _)| j)
                         .collect();
                     let _ = std::fs::remove_file(&own);
-                    let team: Vec<usize> = (0..agents).collect();
+                    let team = endpoint.team();
                     let never = board.never_connected(&team);
                     return Err(err(format!(
                         "neighbour(s) {missing:?} did not connect before the start-up deadline ({e}); missing: agent(s) {never:?}"
@@ -205,7 +205,7 @@ impl UdsExchange {
         let _ = std::fs::remove_file(&own);
         // Nobody's round deadline starts before the whole team is connected.
         board.set_connected(i);
-        let team: Vec<usize> = (0..agents).collect();
+        let team = endpoint.team();
         board
             .await_connected(&team, deadline)
             .map_err(|waited| match waited {

@@ -139,6 +139,104 @@ impl Graph {
         Some(diameter)
     }
 
+    /// The graph induced on `members` (robots of this graph): the same robots `0..n`, with
+    /// only the edges between two members (every other robot is isolated). A team whose
+    /// robots come and go keeps its robots' numbers: this is the graph of those that take
+    /// part.
+    pub fn induced(&self, members: &[usize]) -> Self {
+        let mut inside = vec![false; self.robots()];
+        for &m in members {
+            if let Some(slot) = inside.get_mut(m) {
+                *slot = true;
+            }
+        }
+        let neighbours = self
+            .neighbours
+            .iter()
+            .enumerate()
+            .map(|(a, list)| {
+                if inside[a] {
+                    list.iter().copied().filter(|&b| inside[b]).collect()
+                } else {
+                    Vec::new()
+                }
+            })
+            .collect();
+        Self {
+            neighbours,
+            name: self.name.clone(),
+        }
+    }
+
+    /// The connected components of the graph induced on `members`, each sorted, ordered by
+    /// their smallest robot (robots outside `members` belong to none).
+    pub fn components_among(&self, members: &[usize]) -> Vec<Vec<usize>> {
+        let induced = self.induced(members);
+        let mut seen = vec![true; self.robots()];
+        for &m in members.iter().filter(|&&m| m < self.robots()) {
+            seen[m] = false;
+        }
+        let mut components = Vec::new();
+        for start in 0..self.robots() {
+            if seen[start] {
+                continue;
+            }
+            let mut component = induced.bfs_distances(start, &mut seen).0;
+            component.sort_unstable();
+            components.push(component);
+        }
+        components
+    }
+
+    /// Longest shortest path between two of `members` in the graph they induce; `None` when
+    /// they are not connected (or there are none). One member: 0.
+    pub fn diameter_among(&self, members: &[usize]) -> Option<usize> {
+        let induced = self.induced(members);
+        let members: Vec<usize> = members
+            .iter()
+            .copied()
+            .filter(|&m| m < self.robots())
+            .collect();
+        let mut diameter = 0;
+        let mut seen = vec![false; self.robots()];
+        for &start in &members {
+            seen.iter_mut().for_each(|s| *s = false);
+            let (reached, eccentricity) = induced.bfs_distances(start, &mut seen);
+            if reached.len() != members.len() {
+                return None;
+            }
+            diameter = diameter.max(eccentricity);
+        }
+        (!members.is_empty()).then_some(diameter)
+    }
+
+    /// The graph induced on `members`, renumbered `0..members.len()` in their order (for
+    /// what depends only on its shape: the mean degree, the diameter).
+    pub fn compacted(&self, members: &[usize]) -> Self {
+        let mut place = vec![usize::MAX; self.robots()];
+        for (k, &m) in members.iter().enumerate() {
+            if let Some(p) = place.get_mut(m) {
+                *p = k;
+            }
+        }
+        let neighbours = members
+            .iter()
+            .map(|&a| {
+                let mut list: Vec<usize> = self
+                    .neighbours(a)
+                    .iter()
+                    .filter_map(|&b| (place[b] != usize::MAX).then_some(place[b]))
+                    .collect();
+                list.sort_unstable();
+                list
+            })
+            .collect();
+        Self {
+            neighbours,
+            name: self.name.clone(),
+        }
+    }
+
     /// Breadth-first search from `start`: the reached robots and the largest hop distance.
     fn bfs_distances(&self, start: usize, seen: &mut [bool]) -> (Vec<usize>, usize) {
         let mut reached = vec![start];
@@ -198,5 +296,29 @@ mod tests {
         let single = Graph::from_edges(1, &[], "single").unwrap();
         assert!(single.is_connected());
         assert_eq!(single.diameter(), Some(0));
+    }
+
+    #[test]
+    fn induced_subgraphs_keep_the_robots_numbers() {
+        let ring = crate::generate::ring(8).unwrap();
+        let without_5: Vec<usize> = (0..8).filter(|&r| r != 5).collect();
+        let chain = ring.induced(&without_5);
+        assert_eq!(chain.robots(), 8);
+        assert_eq!(chain.neighbours(4), &[3]);
+        assert_eq!(chain.neighbours(6), &[7]);
+        assert!(chain.neighbours(5).is_empty());
+        assert_eq!(ring.diameter_among(&(0..8).collect::<Vec<_>>()), Some(4));
+        assert_eq!(ring.diameter_among(&without_5), Some(6));
+        assert_eq!(ring.components_among(&without_5), vec![without_5.clone()]);
+        assert_eq!(ring.diameter_among(&[0, 1, 3]), None);
+        assert_eq!(ring.components_among(&[0, 1, 3]), vec![vec![0, 1], vec![3]]);
+        assert_eq!(ring.diameter_among(&[6]), Some(0));
+        assert_eq!(ring.diameter_among(&[]), None);
+        let compact = ring.compacted(&without_5);
+        assert_eq!(compact.robots(), 7);
+        assert_eq!(compact.diameter(), Some(6));
+        assert_eq!(compact.neighbours(5), &[6]);
+        let star = crate::generate::star(5).unwrap();
+        assert!(star.components_among(&[1, 2, 3, 4]).len() == 4);
     }
 }

@@ -70,6 +70,7 @@ pub(crate) fn connect(
         global_barrier: scenario.global_barrier,
         supervised,
         local_agents: scenario.local_agents.clone(),
+        roster: scenario.roster.clone(),
         config: scenario.transport_config.clone(),
         team_digest: digest.to_hex(),
         fault: any_fault.filter(|_| scenario.transport.capabilities().fault_injection),

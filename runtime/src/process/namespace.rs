@@ -9,6 +9,9 @@ use std::path::{Path, PathBuf};
 /// Where POSIX shared memory lives on Linux.
 const SHM_DIR: &str = "/dev/shm";
 
+/// The subdirectory of a namespace's parts ([`RunNamespace::within`]).
+const PARTS_DIR: &str = "parts";
+
 /// A run's identity and the places it may write to.
 #[derive(Debug, Clone)]
 pub struct RunNamespace {
@@ -113,6 +116,52 @@ impl RunNamespace {
         })
     }
 
+    /// The namespace of part `name` of this team's life (a standing team's roster: each
+    /// has its own board, transport files and shared memory), inside the team's: removed
+    /// with it. `name`: letters and digits.
+    pub fn within(&self, name: &str) -> Result<Self, PrivateDirError> {
+        let parts = self.dir.join(PARTS_DIR);
+        private_dir::ensure_private_dir(&parts)?;
+        let dir = parts.join(name);
+        private_dir::ensure_private_dir(&dir)?;
+        Ok(Self {
+            id: format!("{}-{name}", self.id),
+            prefix: self.part_prefix(name),
+            dir,
+            own_base: None,
+        })
+    }
+
+    /// The shared-memory prefix of part `name`: short (a hash of the team's prefix and the
+    /// part's name), as the Unix sockets of a transport's events must fit in 108 bytes.
+    fn part_prefix(&self, name: &str) -> String {
+        let hash = format!("{}/{name}", self.prefix)
+            .bytes()
+            .fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+                (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+            });
+        format!("adtap{hash:016x}_")
+    }
+
+    /// The directory of the parts made by [`RunNamespace::within`].
+    pub fn parts_dir(&self) -> PathBuf {
+        self.dir.join(PARTS_DIR)
+    }
+
+    /// Removes every part ([`RunNamespace::within`]) with its shared memory. Only call
+    /// once no process uses any.
+    pub fn remove_parts(&self) {
+        if let Ok(entries) = std::fs::read_dir(self.parts_dir()) {
+            for entry in entries.flatten() {
+                let name = entry.file_name().to_string_lossy().into_owned();
+                for path in shm_objects(&self.part_prefix(&name)) {
+                    let _ = remove_if_exists(&path);
+                }
+            }
+        }
+        let _ = std::fs::remove_dir_all(self.parts_dir());
+    }
+
     /// Refuses team names that cannot name shared memory (or that would prefix another's).
     pub fn check_team_name(run: &str) -> Result<(), BadTeamName> {
         if run.is_empty()
@@ -138,6 +187,7 @@ impl RunNamespace {
 
     /// Removes everything of the run. Only call once no agent of the run is alive.
     pub fn cleanup(&self) -> std::io::Result<()> {
+        self.remove_parts();
         for path in shm_objects(&self.prefix) {
             remove_if_exists(&path)?;
         }

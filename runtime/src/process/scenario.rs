@@ -98,6 +98,12 @@ pub struct Scenario {
     /// bridge); `None`: every agent is here.
     #[serde(default)]
     pub local_agents: Option<Vec<usize>>,
+    /// The robots that take part in this run of a team whose robots come and go (a
+    /// standing team's roster: [`Scenario::graph`] is the graph they induce, and nobody
+    /// waits for the others); `None`: every robot. One run's, not the team's: the team's
+    /// digest leaves it out.
+    #[serde(default)]
+    pub roster: Option<Vec<usize>>,
 }
 
 /// A scenario that cannot be used.
@@ -164,6 +170,7 @@ impl Scenario {
             timeline: options.timeline(),
             transport_config: None,
             local_agents: None,
+            roster: None,
         };
         let bits = |values: &[f64]| values.iter().map(|v| v.to_bits()).collect();
         match workload {
@@ -253,9 +260,14 @@ impl Scenario {
         }
     }
 
+    /// The team's graph: the one its roster induces, when robots come and go.
     pub fn graph(&self) -> Result<Graph, ScenarioError> {
-        Graph::from_edges(self.robots, &self.edges, self.topology.clone())
-            .map_err(|e| ScenarioError::Inconsistent(e.to_string()))
+        let graph = Graph::from_edges(self.robots, &self.edges, self.topology.clone())
+            .map_err(|e| ScenarioError::Inconsistent(e.to_string()))?;
+        Ok(match &self.roster {
+            Some(roster) => graph.induced(roster),
+            None => graph,
+        })
     }
 
     /// The team's method with its settings.

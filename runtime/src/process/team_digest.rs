@@ -26,13 +26,14 @@ const PARTS: [(&str, &[&str]); 3] = [
 ];
 
 /// Fields that name one run or one host, not the team.
-const RUN_ONLY: [&str; 10] = [
+const RUN_ONLY: [&str; 11] = [
     "run_id",
     "prefix",
     "transport_root",
     "board_shm",
     "transport_config",
     "local_agents",
+    "roster",
     "round_timeout_ms",
     "startup_timeout_ms",
     "wait",

@@ -85,9 +85,8 @@ impl ShmExchange {
         .map_err(|e| transport(i, one_line(&e)))?;
         board.set_connected(i);
         let started = Instant::now();
-        let team: Vec<usize> = (0..agents).collect();
         board
-            .await_connected(&team, deadline)
+            .await_connected(&endpoint.team(), deadline)
             .map_err(|waited| match waited {
                 Rendezvous::Stopped(signal) => ExchangeError::Stopped { agent: i, signal },
                 Rendezvous::Failed(failed) => ExchangeError::PeerFailed {

@@ -39,17 +39,35 @@ pub struct Answer {
     /// Robots that took no task this episode and relayed.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub unavailable: Vec<usize>,
-    /// Robots that left (their programs closed their input): the team has ended.
+    /// Robots that leave the team with this episode (their programs closed their input):
+    /// they relayed in it, and the team goes on without them.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub left: Vec<usize>,
+    /// Robots that asked to leave but stay: without them the rest of the team would fall
+    /// apart (the team file's `leave`); they relayed in this episode.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub leave_refused: Vec<usize>,
+    /// Robots cut off from the team when robots left (`leave = "force"`) or vanished: the
+    /// team goes on without them from the next episode.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub lost: Vec<usize>,
+    /// Robots that take part from this episode on (started for a free slot, or back after
+    /// leaving or crashing).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub joined: Vec<usize>,
+    /// Robots whose processes died (or vanished from the network) since the last episode:
+    /// the team went on without them. An episode they cut short is solved again without
+    /// them, or, if another robot had already answered it, left unsolved.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub crashed: Vec<usize>,
     /// Milliseconds from this robot's row to its answer.
     pub ms: f64,
 }
 
 impl Answer {
-    /// The team has ended (a robot left): no further episode.
+    /// This robot is out of the team after this episode: it left, or it was cut off.
     pub fn ended(&self) -> bool {
-        !self.left.is_empty()
+        self.left.contains(&self.robot) || self.lost.contains(&self.robot)
     }
 }
 
@@ -60,10 +78,27 @@ pub enum RowError {
     Length { got: usize, tasks: usize },
     #[error("cost {index} is {value}: give a finite number (null for a forbidden task)")]
     NotFinite { index: usize, value: f64 },
-    #[error("the team has ended (robot(s) {0:?} left)")]
-    Ended(Vec<usize>),
+    #[error("this robot left the team")]
+    Left,
+    /// The team went on without this robot ([`crate::standing::roster::CutOff`]).
+    #[error("this robot was cut off from the team: {0}")]
+    Lost(String),
     #[error("the team failed in an earlier episode")]
     Failed,
+}
+
+/// A leave refused: without this robot the others would fall apart (the team file's
+/// `leave = "refuse"`, the default). The robot stays in the team and relays.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "robot {robot} cannot leave (episode {episode}): without it the team would fall apart into {apart:?}; it stays and relays (leave = \"force\" in the team file lets it go)"
+)]
+pub struct LeaveRefused {
+    pub robot: usize,
+    /// The episode in which it asked (and relayed).
+    pub episode: u64,
+    /// The parts the rest of the team would fall into.
+    pub apart: Vec<Vec<usize>>,
 }
 
 /// Refuses a row that no episode of a team of up to `tasks` tasks can use: no costs, more

@@ -1,13 +1,15 @@
-//! One episode of a standing team, as one robot runs it: the opening agreement, the method
-//! on the part of the team that takes part, the closing agreement.
+//! One episode of a standing team, as one robot runs it on its roster: the opening
+//! agreement (with who leaves and who asks to join), the method on the part of the roster
+//! that takes part, the closing agreement; and the sync that starts every roster.
 
 use crate::exchange::round_loop::{AgentPlan, AgentStop, RoundLoop};
 use crate::exchange::{Exchange, ExchangeError};
 use crate::options::OnFailure;
 use crate::options::SolveOptions;
 use crate::process::scenario::Scenario;
-use crate::standing::agreement::{Closing, Flooded, Opening, Presence};
+use crate::standing::agreement::{Closing, Flooded, Opening, Presence, RosterNews, Sync};
 use crate::standing::answer::Answer;
+use crate::standing::roster::{Change, LeaveRule, Roster, change};
 use crate::team::team_file::Team;
 use crate::workload::plan::{BadRho, prepare};
 use admm_ta_agents::agent::{ConsensusAgent, NewCostsError};
@@ -40,6 +42,8 @@ pub(super) enum EpisodeError {
 /// What one robot saw of an episode.
 pub(super) struct Outcome {
     pub(super) opening: Opening,
+    /// How the roster changes after it.
+    pub(super) change: Change,
     /// Its task (`None`: it relayed, or nothing was solved).
     task: Option<usize>,
     certified: bool,
@@ -53,13 +57,15 @@ pub(super) struct Outcome {
 }
 
 impl Outcome {
-    /// The robot's answer (`row`: the row it gave).
+    /// The robot's answer (`row`: the row it gave; `news`: the roster's changes since its
+    /// last answer).
     pub(super) fn answer(
         self,
         episode: u64,
         robot: usize,
         row: Option<&[Option<f64>]>,
         took: Duration,
+        mut news: RosterNews,
     ) -> Answer {
         let total = self.closing.as_ref().and_then(Closing::total);
         // A forbidden pair in the certified optimum: the rows have no feasible assignment
@@ -92,7 +98,17 @@ impl Outcome {
             }),
             missing: self.opening.missing(),
             unavailable: self.opening.unavailable(),
-            left: self.opening.leaving(),
+            left: self.change.left,
+            leave_refused: self.change.refused,
+            lost: {
+                news.merge(&RosterNews {
+                    lost: self.change.lost,
+                    ..RosterNews::default()
+                });
+                news.lost
+            },
+            joined: news.joined,
+            crashed: news.crashed,
             ms: took.as_secs_f64() * 1e3,
         }
     }
@@ -101,9 +117,6 @@ impl Outcome {
 /// Why the episode's agreement leaves nothing to solve, if it does (every robot reaches the
 /// same verdict: they hold the same opening).
 fn nothing_to_solve(opening: &Opening, on_failure: OnFailure) -> Option<String> {
-    if !opening.leaving().is_empty() {
-        return Some(format!("robot(s) {:?} left the team", opening.leaving()));
-    }
     let missing = opening.missing();
     if !missing.is_empty() && on_failure == OnFailure::Abort {
         return Some(format!(
@@ -151,9 +164,10 @@ fn flood(
     Ok(())
 }
 
-/// A robot's side of its standing team's episodes: what every episode needs and what
-/// goes on from one to the next (the round loop, the agent of the last part).
-pub(super) struct Episodes {
+/// What every roster of a robot's standing team shares: the team file's settings and
+/// graph, and the robot's number.
+#[derive(Clone)]
+pub(super) struct Settings {
     pub(super) id: usize,
     pub(super) robots: usize,
     pub(super) tasks: usize,
@@ -161,18 +175,59 @@ pub(super) struct Episodes {
     pub(super) warm: bool,
     pub(super) seed: u64,
     pub(super) on_failure: OnFailure,
+    pub(super) leave: LeaveRule,
     pub(super) episode_timeout: Duration,
     pub(super) options: SolveOptions,
+    /// The team file's graph (every slot).
     pub(super) graph: Graph,
+}
+
+impl Settings {
+    /// Robot `id`'s settings of the private team in `team` (whose `scenario` every robot
+    /// derives alike), on the team file's `graph`.
+    pub(super) fn new(
+        team: &Team,
+        id: usize,
+        scenario: &Scenario,
+        options: SolveOptions,
+        graph: Graph,
+    ) -> Self {
+        Self {
+            id,
+            robots: scenario.robots,
+            tasks: scenario.tasks,
+            maximize: team.file.maximize,
+            warm: team.file.warm_start.unwrap_or(true),
+            seed: team.file.seed,
+            on_failure: team.file.on_failure.unwrap_or_default(),
+            leave: team.file.leave.unwrap_or_default(),
+            episode_timeout: Duration::from_secs_f64(team.episode_timeout()),
+            options,
+            graph,
+        }
+    }
+}
+
+/// A robot's side of its standing team's episodes on one roster: what every episode needs
+/// and what goes on from one to the next (the round loop, the agent of the last part).
+pub(super) struct Episodes {
+    pub(super) settings: Settings,
+    /// The robots of this roster.
+    roster: Roster,
+    /// The graph the roster induces (the robots keep their numbers), its diameter, and the
+    /// same graph renumbered (what the method's ρ and stop read of it).
+    graph: Graph,
+    compact: Graph,
+    diameter: usize,
     pub(super) plan: AgentPlan,
     /// The agent of the last episode's part of the team (built on the first episode), with
     /// its stop rule.
-    pub(super) agent: Option<(MaskedAgent, LocalCertifiedStop)>,
-    pub(super) rounds: Option<RoundLoop>,
+    agent: Option<(MaskedAgent, LocalCertifiedStop)>,
+    rounds: Option<RoundLoop>,
     /// Room for one round message (the agreement's).
-    pub(super) message: Vec<f64>,
+    message: Vec<f64>,
     /// This robot's last row and the team's scale of that episode (how far its costs moved).
-    pub(super) last: Option<(Vec<Option<f64>>, TeamScale)>,
+    last: Option<(Vec<Option<f64>>, TeamScale)>,
 }
 
 /// A warm start pays off when the costs moved less than this share of the team's range
@@ -199,31 +254,27 @@ fn moved_far(row: &[Option<f64>], last: &[Option<f64>], scale: &TeamScale) -> bo
 }
 
 impl Episodes {
-    /// Robot `id`'s side of the private team in `team` (whose `scenario` every robot derives
-    /// alike), with its round `plan`, on `graph`.
+    /// The episodes of `settings`'s robot on `roster` (connected in the team file's graph,
+    /// with the robot in it), with its round `plan`, in messages of `payload_len` values.
     pub(super) fn new(
-        team: &Team,
-        id: usize,
-        scenario: &Scenario,
-        options: SolveOptions,
-        graph: Graph,
+        settings: Settings,
+        roster: Roster,
         plan: AgentPlan,
+        payload_len: usize,
     ) -> Self {
+        let graph = settings.graph.induced(roster.robots());
+        let compact = settings.graph.compacted(roster.robots());
+        let diameter = compact.diameter().unwrap_or(0);
         Self {
-            id,
-            robots: scenario.robots,
-            tasks: scenario.tasks,
-            maximize: team.file.maximize,
-            warm: team.file.warm_start.unwrap_or(true),
-            seed: team.file.seed,
-            on_failure: team.file.on_failure.unwrap_or_default(),
-            episode_timeout: Duration::from_secs_f64(team.episode_timeout()),
-            options,
+            settings,
+            roster,
             graph,
+            compact,
+            diameter,
             plan,
             agent: None,
             rounds: None,
-            message: vec![0.0; scenario.payload_len()],
+            message: vec![0.0; payload_len],
             last: None,
         }
     }
@@ -231,6 +282,59 @@ impl Episodes {
     /// The round last gathered.
     pub(super) fn round(&self) -> u64 {
         self.rounds.as_ref().map_or(0, RoundLoop::round)
+    }
+
+    /// Rounds of every flood: the roster's diameter, at least one (a robot alone has 0).
+    fn spread_rounds(&self) -> u64 {
+        (self.diameter as u64).max(1)
+    }
+
+    /// How long the first round of a flood waits: the slowest robot's program may take the
+    /// episode deadline to give its row.
+    fn first_wait(&self) -> Duration {
+        self.settings.episode_timeout + self.plan.round_timeout
+    }
+
+    /// Floods `value` for the roster's diameter (the first message of this roster, if it is:
+    /// its round 0).
+    fn spread(
+        &mut self,
+        exchange: &mut dyn Exchange,
+        value: &mut dyn Flooded,
+        wait: Duration,
+    ) -> Result<(), ExchangeError> {
+        if self.rounds.is_none() {
+            self.message.fill(0.0);
+            value.write(&mut self.message);
+            let message = &self.message;
+            let first = RoundLoop::start_with(exchange, &self.plan, 1, &mut |out| {
+                out.copy_from_slice(message)
+            })?;
+            self.rounds = Some(first);
+        }
+        let times = self.spread_rounds();
+        let rounds = self.rounds.as_mut().expect("started");
+        flood(
+            rounds,
+            exchange,
+            &self.plan,
+            value,
+            times,
+            wait,
+            &mut self.message,
+        )
+    }
+
+    /// The sync that starts a roster: every robot's `own` (the episode it is at, what it
+    /// finds changed), merged over the roster.
+    pub(super) fn sync(
+        &mut self,
+        exchange: &mut dyn Exchange,
+        mut own: Sync,
+    ) -> Result<Sync, ExchangeError> {
+        let wait = self.first_wait();
+        self.spread(exchange, &mut own, wait)?;
+        Ok(own)
     }
 
     /// The agent of `part` (this robot at `place` among its robots, or a relay) and the
@@ -249,93 +353,144 @@ impl Episodes {
         // The part's shape (no costs: each robot gives its agent its own row).
         let shape = CostMatrix::new(r, k, vec![0.0; r * k])?;
         let problem = TaskAssignmentProblem::internal_from(shape, case)?;
-        let setup = self.options.method_setup().ok_or(EpisodeError::NoAgents)?;
-        let plan = prepare(&problem, &self.graph, &self.options, setup)?;
+        let setup = self
+            .settings
+            .options
+            .method_setup()
+            .ok_or(EpisodeError::NoAgents)?;
+        let plan = prepare(&problem, &self.compact, &self.settings.options, setup)?;
         // Its own neighbours, whatever its place among the robots that take part.
-        let degree = self.graph.degree(self.id);
+        let (n, id) = (self.settings.robots, self.settings.id);
+        let degree = self.graph.degree(id);
         let inner = plan.agents.agent_with_degree(place.unwrap_or(0), degree);
-        let stop = LocalCertifiedStop::new(plan.diameter, self.robots, plan.tolerance)?
+        let stop = LocalCertifiedStop::new(plan.diameter, n, plan.tolerance)?
             .with_cadence(plan.stop_cadence);
-        let agent = MaskedAgent::new(inner, self.tasks, self.robots, part.clone(), place, degree);
+        let agent = MaskedAgent::new(inner, self.settings.tasks, n, part.clone(), place, degree);
         Ok((agent, stop))
     }
 
-    /// The agreement, the method and the closing of one episode.
-    pub(super) fn run(
+    /// The opening agreement: this robot's own (how it takes part, its row's scale, the
+    /// joiners it sees), merged over the roster.
+    fn open(
         &mut self,
         exchange: &mut dyn Exchange,
         row: Option<&[Option<f64>]>,
         presence: Presence,
-    ) -> Result<Outcome, EpisodeError> {
-        let (n, m, id) = (self.robots, self.tasks, self.id);
-        // At least one round: a team of one robot has diameter 0.
-        let spread_rounds = (self.graph.diameter().unwrap_or(0) as u64).max(1);
-        let scale = row.map_or(TeamScale::EMPTY, |r| TeamScale::of_row(r, self.maximize));
-        let mut opening = Opening::own(n, m, id, presence, scale);
+        joiners: &[usize],
+    ) -> Result<Opening, ExchangeError> {
+        let s = &self.settings;
+        let scale = row.map_or(TeamScale::EMPTY, |r| TeamScale::of_row(r, s.maximize));
+        let mut opening = Opening::own(s.robots, s.tasks, s.id, presence, scale);
         if let (Some(row), Some((last, last_scale))) = (row, &self.last)
             && moved_far(row, last, last_scale)
         {
             opening.set_moved();
         }
-        // The slowest robot's program may take the episode deadline to give its row.
-        let wait = self.episode_timeout + self.plan.round_timeout;
-        {
-            if self.rounds.is_none() {
-                self.message.fill(0.0);
-                opening.write(&mut self.message);
-                let message = &self.message;
-                let first = RoundLoop::start_with(exchange, &self.plan, 1, &mut |out| {
-                    out.copy_from_slice(message)
-                })?;
-                self.rounds = Some(first);
-            }
-            let rounds = self.rounds.as_mut().expect("started");
-            let message = &mut self.message;
-            flood(
-                rounds,
-                exchange,
-                &self.plan,
-                &mut opening,
-                spread_rounds,
-                wait,
-                message,
-            )?;
+        for &j in joiners.iter().filter(|&&j| !self.roster.contains(j)) {
+            opening.set_joining(j);
         }
-        let unsolved = |opening: Opening, why: String, infeasible: bool| Outcome {
-            opening,
-            task: None,
-            certified: false,
-            rounds: 0,
-            agreement_rounds: spread_rounds,
-            closing: None,
-            unsolved: Some(why),
-            infeasible,
-        };
-        if let Some(why) = nothing_to_solve(&opening, self.on_failure) {
-            return Ok(unsolved(opening, why, false));
+        let wait = self.first_wait();
+        self.spread(exchange, &mut opening, wait)?;
+        Ok(opening)
+    }
+
+    /// The part of the roster that solves the episode the `opening` describes, or why
+    /// nothing is solved (and whether that is for want of a feasible assignment).
+    fn part_of(&self, opening: &Opening) -> Result<Part, (String, bool)> {
+        if let Some(why) = nothing_to_solve(opening, self.settings.on_failure) {
+            return Err((why, false));
         }
         let (_, k) = opening.lengths().expect("checked: some robot gave costs");
+        // Leavers relay in the episode of their leave.
         let absent: Vec<usize> = opening
             .missing()
             .into_iter()
             .chain(opening.unavailable())
+            .chain(opening.leaving())
             .collect();
-        let robots: Vec<usize> = (0..n).filter(|i| !absent.contains(i)).collect();
+        let robots: Vec<usize> = self
+            .roster
+            .robots()
+            .iter()
+            .copied()
+            .filter(|i| !absent.contains(i))
+            .collect();
         if robots.len() < k {
             let why = format!(
                 "infeasible: {} robot(s) took part for {k} tasks, and every task needs one",
                 robots.len()
             );
-            return Ok(unsolved(opening, why, true));
+            return Err((why, true));
         }
         if opening.scale.is_empty() {
             let why = "infeasible: every task is forbidden to every robot".to_string();
-            return Ok(unsolved(opening, why, true));
+            return Err((why, true));
         }
-        let part = Part {
+        Ok(Part {
             robots,
             tasks: (0..k).collect(),
+        })
+    }
+
+    /// The agreement, the method and the closing of one episode (`joiners`: the robots this
+    /// one sees ask to join).
+    pub(super) fn run(
+        &mut self,
+        exchange: &mut dyn Exchange,
+        row: Option<&[Option<f64>]>,
+        presence: Presence,
+        joiners: &[usize],
+    ) -> Result<Outcome, EpisodeError> {
+        let opening = self.open(exchange, row, presence, joiners)?;
+        let change = change(
+            &self.settings.graph,
+            &self.roster,
+            &opening.leaving(),
+            &opening.joining(),
+            self.settings.leave,
+        );
+        let agreement_rounds = self.spread_rounds();
+        let part = match self.part_of(&opening) {
+            Ok(part) => part,
+            Err((why, infeasible)) => {
+                return Ok(Outcome {
+                    opening,
+                    change,
+                    task: None,
+                    certified: false,
+                    rounds: 0,
+                    agreement_rounds,
+                    closing: None,
+                    unsolved: Some(why),
+                    infeasible,
+                });
+            }
         };
+        let (task, certified, rounds, closing) = self.solve(exchange, row, &opening, part)?;
+        Ok(Outcome {
+            opening,
+            change,
+            task,
+            certified,
+            rounds,
+            agreement_rounds: agreement_rounds * 2 + 1,
+            closing: Some(closing),
+            unsolved: None,
+            infeasible: false,
+        })
+    }
+
+    /// The method on `part`, then the closing agreement: this robot's task (`None`: it
+    /// relayed), whether the stop certified it, the method's rounds and the closing.
+    fn solve(
+        &mut self,
+        exchange: &mut dyn Exchange,
+        row: Option<&[Option<f64>]>,
+        opening: &Opening,
+        part: Part,
+    ) -> Result<(Option<usize>, bool, u64, Closing), EpisodeError> {
+        let (n, id) = (self.settings.robots, self.settings.id);
+        let k = part.tasks.len();
         let place = part.robots.iter().position(|&r| r == id);
         // The same part warm-starts from the last episode's iterates; another part starts
         // from zero.
@@ -343,7 +498,7 @@ impl Episodes {
         if !same_part {
             self.agent = Some(self.part_agent(&part, place)?);
         }
-        let warm = self.warm && same_part && !opening.moved();
+        let warm = self.settings.warm && same_part && !opening.moved();
         if let Some(row) = row {
             self.last = Some((row.to_vec(), opening.scale));
         }
@@ -351,8 +506,9 @@ impl Episodes {
             (Some(_), Some(row)) => {
                 // Its own row as a solve of the stacked rows would normalise and perturb it.
                 let robots = part.robots.len();
-                let mut costs = opening.scale.normalised_row(row, self.maximize, robots, k);
-                ties::perturb(&mut costs, id, opening.scale.epsilon(robots), self.seed);
+                let s = &self.settings;
+                let mut costs = opening.scale.normalised_row(row, s.maximize, robots, k);
+                ties::perturb(&mut costs, id, opening.scale.epsilon(robots), s.seed);
                 costs
             }
             // A relay adds nothing to the team's costs.
@@ -380,25 +536,17 @@ impl Episodes {
             _ => (None, 0.0),
         };
         let message = &mut self.message;
-        let mut closing = Closing::own(n, message.len(), id, task, cost);
+        let mut closing = Closing::own(n, self.roster.robots(), message.len(), id, task, cost);
+        let times = (self.diameter as u64).max(1);
         flood(
             rounds,
             exchange,
             plan,
             &mut closing,
-            spread_rounds,
+            times,
             plan.round_timeout,
             message,
         )?;
-        Ok(Outcome {
-            opening,
-            task,
-            certified: certified.is_some(),
-            rounds: method_rounds,
-            agreement_rounds: spread_rounds * 2 + 1,
-            closing: Some(closing),
-            unsolved: None,
-            infeasible: false,
-        })
+        Ok((task, certified.is_some(), method_rounds, closing))
     }
 }

@@ -1,33 +1,57 @@
 //! One robot of a standing team with private costs: [`TeamMember`].
+//!
+//! Size: one type and its life in the team — joining (found, adopt a roster, or wait to be
+//! admitted), the episode loop with its recovery after a crash, leaving, the checks between
+//! episodes — all on the same private state (the current roster, the last one formed, what
+//! the next answer tells); split, each part would have to expose it to the others.
 
-use crate::board::Board;
-use crate::endpoint::AgentEndpoint;
 use crate::exchange::ExchangeError;
-use crate::process::agent::tell_the_team;
-use crate::process::connect::connect;
 use crate::process::member_error::MemberError;
-use crate::process::namespace::RunNamespace;
-use crate::process::scenario::Scenario;
-use crate::standing::agreement::Presence;
-use crate::standing::answer::{Answer, RowError};
-use crate::standing::episode::{EpisodeError, Episodes};
-use crate::team::errors::{PrivateTeamError, TeamFileError};
-use crate::team::member::{Membership, member_of};
+use crate::standing::agreement::{Presence, RosterNews, Sync};
+use crate::standing::answer::{Answer, LeaveRefused, RowError};
+use crate::standing::episode::{EpisodeError, Outcome, Settings};
+use crate::standing::epoch::{Context, Epoch, Forming, latest_epoch};
+use crate::standing::plane::{BoardPlane, TeamPlane};
+use crate::standing::roster::{Change, CutOff, EpochId, Roster, after_loss};
+use crate::team::errors::{JoinError, PrivateTeamError, TeamFileError};
+use crate::team::member::member_of;
 use crate::team::team_file::Team;
 use std::path::Path;
 use std::time::{Duration, Instant};
+
+/// Where a robot stands in its team.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Standing {
+    /// It takes part.
+    In,
+    /// It left.
+    Left,
+    /// The team went on without it (a forced leave or a loss cut it off).
+    Lost(String),
+    /// The team failed (a signal, or a failure nobody could recover from).
+    Failed,
+}
 
 /// One robot of a standing team whose robots keep their costs (`costs = "private"` in the
 /// team file): it joins once, then solves episode after episode with its own row, and
 /// never sends, receives or stores another robot's costs.
 ///
-/// Around every episode the team floods, for the graph's diameter `D` rounds each, its
+/// Around every episode the team floods, for its roster's diameter `D` rounds each, its
 /// scale (lowest and highest allowed cost and their lattice, so that every robot normalises
-/// its own row as a solve of the stacked rows would), the episode's tasks and who takes no
-/// part before, and every robot's cost of its own task after (the total and the
-/// feasibility) — [`crate::standing::agreement`]. The method then starts from the last
-/// episode's iterates (`warm_start`, the default, when the same robots and tasks take part)
-/// with a fresh certified stop.
+/// its own row as a solve of the stacked rows would), the episode's tasks, who takes no
+/// part, who leaves and who asks to join before, and every robot's cost of its own task
+/// after (the total and the feasibility) — [`crate::standing::agreement`]. The method then
+/// starts from the last episode's iterates (`warm_start`, the default, when the same robots
+/// and tasks take part) with a fresh certified stop.
+///
+/// **Robots come and go.** The team file lists the robots' slots; the team's *roster* is
+/// who takes part now ([`crate::standing::roster`]). A robot started for a free slot (one
+/// nobody runs, or whose robot left or crashed) is admitted at the next episode boundary
+/// and answers from the episode after; [`TeamMember::leave`] takes a robot out at the next
+/// boundary (refused, and the robot stays, when the others would fall apart); a robot whose
+/// process dies costs the team at most the episode in flight: the others drop it, solve that
+/// episode again without it and go on. Every roster is a fresh run of the team's transport
+/// on the graph it induces, with its own diameter: the certificate holds on every one.
 ///
 /// ```no_run
 /// use admm_ta_runtime::standing::TeamMember;
@@ -44,21 +68,63 @@ use std::time::{Duration, Instant};
 /// # Ok(()) }
 /// ```
 pub struct TeamMember {
-    episodes: Episodes,
-    scenario: Scenario,
+    ctx: Context,
+    /// The roster this robot is in (formed, synced).
+    epoch: Option<Epoch>,
+    /// The last roster it formed (or, founding the team, tried to): what a recovery
+    /// starts from.
+    base: Option<EpochId>,
+    /// The base formed: robots that vanish from it may have gone on without this one.
+    base_formed: bool,
+    /// Its roster failed: the error, until it recovers.
+    broken: Option<ExchangeError>,
+    /// The episode it answers next.
     episode: u64,
-    /// Robots that left: the team has ended.
-    left: Vec<usize>,
-    /// The run failed: nothing more goes out.
-    failed: bool,
-    endpoint: Option<Box<dyn AgentEndpoint>>,
-    membership: Option<Membership>,
-    namespace: RunNamespace,
+    /// What its next answer tells of the roster's changes.
+    news: RosterNews,
+    /// What it adds to the next sync: the changes it knows of.
+    known: RosterNews,
+    standing: Standing,
+    /// When it last looked at its neighbours between episodes.
+    looked: Instant,
+}
+
+/// How often a robot waiting between episodes looks at its neighbours on the plane.
+const LOOK_EVERY: Duration = Duration::from_millis(100);
+
+/// How long a robot waits for a vanished robot to show as gone before it takes a failure
+/// for the team's.
+fn settle(plane: &dyn TeamPlane, round_timeout: Duration) -> Duration {
+    if plane.exact() {
+        Duration::from_millis(300)
+    } else {
+        // A Zenoh lease (10 s) and a little more, at most a round's deadline.
+        Duration::from_secs(11).max(round_timeout.min(Duration::from_secs(11)))
+    }
+}
+
+/// Robot `id`'s plane of the team (its scenario and namespace are the team's, or its
+/// host's): the team's board on one machine, Zenoh across machines.
+fn open_plane(
+    team: &Team,
+    scenario: &crate::process::scenario::Scenario,
+    namespace: &crate::process::namespace::RunNamespace,
+    id: usize,
+    deadline: Instant,
+) -> Result<Box<dyn TeamPlane>, MemberError> {
+    if team.file.transport.across_hosts() {
+        return crate::team::zenoh_plane::open(team, scenario, id, deadline);
+    }
+    let plane =
+        BoardPlane::open(scenario, namespace, id, deadline).map_err(MemberError::refused)?;
+    Ok(Box::new(plane))
 }
 
 impl TeamMember {
-    /// Joins the team of `team_path` as robot `id`, waiting for its neighbours until the
-    /// team file's start-up deadline.
+    /// Joins the team of `team_path` as robot `id`: it forms the team's first roster with
+    /// the others (waiting for every robot of the team file until its start-up deadline),
+    /// takes its place in a roster forming with it, or — the team running without it — asks
+    /// to join and waits to be admitted at the next episode boundary.
     ///
     /// While it joins, and while an episode runs, termination signals are recorded (the
     /// team stops cleanly: the call returns the stop and every robot of the team stops);
@@ -75,69 +141,83 @@ impl TeamMember {
         let options = team.solve_options().map_err(MemberError::refused)?;
         let (scenario, namespace) = member_of(&team, id)?;
         let graph = scenario.graph().map_err(MemberError::refused)?;
-        let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
-        let membership = if team.file.transport.host_board() {
-            Some(
-                Membership::join(&scenario, &namespace, &[id], deadline)
-                    .map_err(MemberError::refused)?,
-            )
-        } else {
-            None
-        };
-        let plan = scenario.plan(id).map_err(MemberError::refused)?;
-        let endpoint = match connect(&scenario, &graph, id, &namespace.dir, false, deadline) {
-            Ok(endpoint) => endpoint,
-            Err(e) => {
-                if let Some(membership) = membership {
-                    membership.leave();
-                }
-                return Err(e);
-            }
-        };
-        tracing::debug!(robot = id, "joined the standing team");
-        Ok(Self {
-            episodes: Episodes::new(&team, id, &scenario, options, graph, plan),
-            scenario,
+        let startup = Duration::from_millis(scenario.startup_timeout_ms);
+        let plane = open_plane(&team, &scenario, &namespace, id, started + startup)?;
+        let settings = Settings::new(&team, id, &scenario, options, graph);
+        let mut member = Self {
+            ctx: Context {
+                team,
+                settings,
+                scenario,
+                namespace,
+                plane,
+            },
+            epoch: None,
+            base: None,
+            base_formed: false,
+            broken: None,
             episode: 0,
-            left: Vec::new(),
-            failed: false,
-            endpoint: Some(endpoint),
-            membership,
-            namespace,
-        })
+            news: RosterNews::default(),
+            known: RosterNews::default(),
+            standing: Standing::In,
+            looked: Instant::now(),
+        };
+        member.enter(started)?;
+        tracing::debug!(robot = id, "joined the standing team");
+        Ok(member)
     }
 
     /// This robot's number.
     pub fn id(&self) -> usize {
-        self.episodes.id
+        self.ctx.me()
     }
 
     /// The most costs a row may have (the team's declared number of tasks).
     pub fn tasks(&self) -> usize {
-        self.episodes.tasks
+        self.ctx.settings.tasks
     }
 
     /// The rows are profits (the team file's `maximize`).
     pub fn maximize(&self) -> bool {
-        self.episodes.maximize
+        self.ctx.settings.maximize
     }
 
-    /// The team's robots.
+    /// The team's robots (its slots: who takes part changes).
     pub fn robots(&self) -> usize {
-        self.episodes.robots
+        self.ctx.settings.robots
+    }
+
+    /// The robots that take part now (the current roster).
+    pub fn roster(&self) -> Vec<usize> {
+        self.epoch
+            .as_ref()
+            .map_or_else(Vec::new, |e| e.id.roster.robots().to_vec())
     }
 
     /// How long the team waits for a robot's row ([`TeamMember::abstain`] when it has none).
     pub fn episode_timeout(&self) -> Duration {
-        self.episodes.episode_timeout
+        self.ctx.settings.episode_timeout
+    }
+
+    /// The episode this robot answers next.
+    pub fn episode(&self) -> u64 {
+        self.episode
     }
 
     /// Checks `row` as [`TeamMember::assign`] would, without the team.
     pub fn check_row(&self, row: &[Option<f64>]) -> Result<(), RowError> {
-        if !self.left.is_empty() {
-            return Err(RowError::Ended(self.left.clone()));
-        }
+        self.usable()?;
         crate::standing::answer::check_row(row, self.tasks())
+    }
+
+    /// An error when this robot can take part in no further episode.
+    fn usable(&self) -> Result<(), RowError> {
+        match &self.standing {
+            Standing::In => Ok(()),
+            Standing::Left => Err(RowError::Left),
+            Standing::Lost(why) => Err(RowError::Lost(why.clone())),
+            Standing::Failed => Err(RowError::Failed),
+        }
     }
 
     /// One episode with this robot's `row`, one cost per task of the episode (every robot
@@ -162,51 +242,121 @@ impl TeamMember {
         self.episode_with(None, Presence::Unavailable)
     }
 
-    /// Leaves the team: the other robots learn it in the next episode's agreement (their
-    /// answers name this robot in `left`) and the team ends. Returns once they have heard.
-    pub fn leave(mut self) -> Result<(), MemberError> {
-        if self.left.is_empty() && !self.failed {
-            self.episode_with(None, Presence::Leaving)?;
+    /// Leaves the team: it relays in one more episode, in which the others learn it (their
+    /// answers name it in `left`), then it is out and the team goes on without it. When the
+    /// others would fall apart without it, the leave is refused ([`LeaveRefused`], inside
+    /// [`MemberError::Refused`]) and it stays: ask again later (each call is an episode in
+    /// which it relays), or set `leave = "force"` in the team file.
+    pub fn leave(&mut self) -> Result<(), MemberError> {
+        if self.standing != Standing::In {
+            return Ok(());
+        }
+        let answer = self.episode_with(None, Presence::Leaving)?;
+        if self.standing == Standing::In {
+            let roster = self.roster();
+            let others: Vec<usize> = roster.into_iter().filter(|&r| r != self.id()).collect();
+            return Err(MemberError::refused(LeaveRefused {
+                robot: self.id(),
+                episode: answer.episode,
+                apart: self.ctx.settings.graph.components_among(&others),
+            }));
         }
         Ok(())
     }
 
     /// While the robot waits for its program's row: an error when the team must stop — a
-    /// termination signal to this process (the whole team stops), or, on the team's board, a
-    /// stop request or a failed robot. (A Zenoh team has no board: its robots learn it in
-    /// the next episode's first round.)
+    /// termination signal to this process (the whole team stops), or a stop request of
+    /// another robot. A roster that failed meanwhile (a robot crashed) is formed again
+    /// without the robots gone, as the others do.
     pub fn check(&mut self) -> Result<(), MemberError> {
-        if self.failed {
+        if self.standing != Standing::In {
             return Ok(());
         }
         if let Some(signal) = crate::signals::received() {
             return Err(self.stop(signal));
         }
-        let round = self.episodes.round();
-        let verdict = match self.membership.as_ref().map(Membership::board) {
-            Some(board) => board.check_team(self.id(), round),
-            None => Ok(()),
-        };
-        verdict.map_err(|e| {
-            self.failed = true;
-            if let ExchangeError::Stopped { signal, .. } = e {
-                // Another process got the signal: this one ends as if it had.
-                crate::signals::record(signal);
+        if let Some(signal) = self.ctx.plane.stop_requested() {
+            return Err(self.stopped(signal));
+        }
+        if self.broken.is_none()
+            && let Some(epoch) = &self.epoch
+        {
+            if let Err(e) = epoch.check(self.id()) {
+                if let ExchangeError::Stopped { signal, .. } = e {
+                    return Err(self.stopped(signal));
+                }
+                self.broken = Some(e);
+            } else if self.looked.elapsed() >= LOOK_EVERY {
+                self.looked = Instant::now();
+                self.look_at_neighbours();
             }
-            MemberError::failed(e)
-        })
+        }
+        if self.broken.is_some() {
+            let _signals = crate::signals::install();
+            self.ready()?;
+        }
+        Ok(())
+    }
+
+    /// A neighbour of the roster gone from the plane: the roster failed (every robot of it
+    /// learns it from the mark).
+    fn look_at_neighbours(&mut self) {
+        let me = self.id();
+        let Some(epoch) = &self.epoch else {
+            return;
+        };
+        let neighbours: Vec<usize> = self
+            .ctx
+            .settings
+            .graph
+            .neighbours(me)
+            .iter()
+            .copied()
+            .filter(|&n| epoch.id.roster.contains(n))
+            .collect();
+        if let Some(&gone) = self.ctx.plane.gone(&neighbours).first() {
+            let error = ExchangeError::PeerFailed {
+                agent: me,
+                failed: gone,
+                round: epoch.episodes.round(),
+                how: "left the team without a word".into(),
+            };
+            if let Some(board) = epoch.board() {
+                let _ = board.mark_failed(gone);
+            }
+            self.broken = Some(error);
+        }
     }
 
     /// Stops the whole team because this process got termination signal `signal`.
     pub fn stop(&mut self, signal: i32) -> MemberError {
         crate::signals::record(signal);
+        self.ctx.plane.request_stop(signal, self.id());
         let stopped = ExchangeError::Stopped {
             agent: self.id(),
             signal,
         };
-        self.blame(&stopped);
-        self.failed = true;
+        if let Some(epoch) = &self.epoch {
+            epoch.blame(self.id(), &stopped);
+        }
+        self.standing = Standing::Failed;
         MemberError::failed(stopped)
+    }
+
+    /// Another robot got termination signal `signal`: this one ends as if it had.
+    fn stopped(&mut self, signal: i32) -> MemberError {
+        crate::signals::record(signal);
+        self.standing = Standing::Failed;
+        MemberError::failed(ExchangeError::Stopped {
+            agent: self.id(),
+            signal,
+        })
+    }
+
+    /// The team failed: nothing more goes out.
+    fn fail(&mut self, error: impl Into<crate::process::member_error::Cause>) -> MemberError {
+        self.standing = Standing::Failed;
+        MemberError::failed(error)
     }
 
     fn episode_with(
@@ -214,66 +364,376 @@ impl TeamMember {
         row: Option<&[Option<f64>]>,
         presence: Presence,
     ) -> Result<Answer, MemberError> {
-        if self.failed {
-            return Err(MemberError::refused(RowError::Failed));
-        }
-        if !self.left.is_empty() {
-            return Err(MemberError::refused(RowError::Ended(self.left.clone())));
-        }
+        self.usable().map_err(MemberError::refused)?;
         let began = Instant::now();
         // A termination signal while the episode runs stops the team cleanly.
         let _signals = crate::signals::install();
-        let exchange = self
-            .endpoint
-            .as_mut()
-            .expect("joined until dropped")
-            .exchange();
-        let outcome = match self.episodes.run(exchange, row, presence) {
-            Ok(outcome) => outcome,
-            Err(e) => {
-                self.failed = true;
-                if let EpisodeError::Exchange(error) = &e {
-                    self.blame(error);
+        loop {
+            self.ready()?;
+            let pending = self.episode;
+            let me = self.id();
+            let joiners = self.ctx.plane.joiners();
+            let epoch = self.epoch.as_mut().expect("ready");
+            let (exchange, episodes) = epoch.parts();
+            match episodes.run(exchange, row, presence, &joiners) {
+                Ok(outcome) => return Ok(self.finish(outcome, row, began)),
+                Err(EpisodeError::Exchange(e)) => {
+                    epoch.blame(me, &e);
+                    if let ExchangeError::Stopped { signal, .. } = e {
+                        return Err(self.stopped(signal));
+                    }
+                    tracing::debug!(error = %e, episode = pending, "the roster failed");
+                    self.broken = Some(e);
+                    self.ready()?;
+                    if self.episode > pending {
+                        // Another robot answered this episode already: it is lost.
+                        return Ok(self.lost_episode(pending, began));
+                    }
+                    // Solved again, on the new roster.
                 }
-                return Err(MemberError::failed(e));
+                Err(e) => return Err(self.fail(e)),
             }
-        };
-        let episode = self.episode;
-        self.episode += 1;
-        self.left = outcome.opening.leaving();
-        Ok(outcome.answer(episode, self.id(), row, began.elapsed()))
+        }
     }
 
-    /// After a failed episode: who is to blame, on the board and to the other agents (no
-    /// launcher reports this one: a failure of its own is marked on the board; the first
-    /// mark wins).
-    fn blame(&self, error: &ExchangeError) {
-        let Some(endpoint) = &self.endpoint else {
+    /// The answer of episode `episode`, which a crash cut short after another robot had
+    /// answered it.
+    fn lost_episode(&mut self, episode: u64, began: Instant) -> Answer {
+        let news = std::mem::take(&mut self.news);
+        Answer {
+            episode,
+            robot: self.id(),
+            task: None,
+            certified: false,
+            rounds: 0,
+            agreement_rounds: 0,
+            cost: None,
+            total_cost: None,
+            assignment: None,
+            feasible: true,
+            unsolved: Some(format!(
+                "robot(s) {:?} crashed during this episode, after another robot had its answer",
+                news.crashed
+            )),
+            missing: Vec::new(),
+            unavailable: Vec::new(),
+            left: Vec::new(),
+            leave_refused: Vec::new(),
+            lost: news.lost,
+            joined: news.joined,
+            crashed: news.crashed,
+            ms: began.elapsed().as_secs_f64() * 1e3,
+        }
+    }
+
+    /// The answer of an episode the roster finished, and the change of roster it agreed.
+    fn finish(&mut self, outcome: Outcome, row: Option<&[Option<f64>]>, began: Instant) -> Answer {
+        let episode = self.episode;
+        self.episode += 1;
+        let change = outcome.change.clone();
+        let news = std::mem::take(&mut self.news);
+        let me = self.id();
+        let answer = outcome.answer(episode, me, row, began.elapsed(), news);
+        if change.left.contains(&me) {
+            self.depart(Standing::Left);
+        } else if change.lost.contains(&me) {
+            let why = format!(
+                "robot(s) {:?} left and the team went on with robot(s) {:?}",
+                change.left,
+                change.next.robots()
+            );
+            self.depart(Standing::Lost(why));
+        } else if let Some(epoch) = &self.epoch
+            && change.next != epoch.id.roster
+        {
+            self.move_on(change);
+        }
+        answer
+    }
+
+    /// Out of the team: its roster and the plane.
+    fn depart(&mut self, standing: Standing) {
+        if let Some(epoch) = self.epoch.take() {
+            epoch.close(&*self.ctx.plane, true);
+        }
+        self.ctx.plane.leave_team();
+        self.standing = standing;
+    }
+
+    /// To the roster an episode agreed on (its number the next).
+    fn move_on(&mut self, change: Change) {
+        let Some(epoch) = self.epoch.take() else {
             return;
         };
-        let board = self.membership.as_ref().map(Membership::board);
-        tell_the_team(&**endpoint, board, self.id(), error);
-        if let (Some(board), false) = (board, matches!(error, ExchangeError::Stopped { .. })) {
-            let _ = board.mark_failed(self.id());
+        let next = EpochId {
+            number: epoch.id.number + 1,
+            roster: change.next,
+        };
+        epoch.close(&*self.ctx.plane, true);
+        self.known = RosterNews {
+            joined: change.joined,
+            ..RosterNews::default()
+        };
+        match Epoch::form(&self.ctx, next, Instant::now() + self.startup()) {
+            Ok(epoch) => self.install(epoch),
+            Err(e) => {
+                tracing::debug!(error = %e, "the next roster did not form");
+                self.broken = Some(self.forming_error(e));
+            }
         }
+    }
+
+    fn startup(&self) -> Duration {
+        Duration::from_millis(self.ctx.scenario.startup_timeout_ms)
+    }
+
+    fn round_timeout(&self) -> Duration {
+        Duration::from_millis(self.ctx.scenario.round_timeout_ms)
+    }
+
+    /// A roster that did not form, as the failure it leaves behind.
+    fn forming_error(&self, e: Forming) -> ExchangeError {
+        ExchangeError::Transport {
+            agent: self.id(),
+            what: format!("the next roster did not form: {e}"),
+        }
+    }
+
+    /// Takes roster `epoch` as this robot's: the sync that starts it (the episode the team
+    /// is at, what changed). A failed sync leaves it broken (recovered from it).
+    fn install(&mut self, mut epoch: Epoch) {
+        self.ctx.plane.set_member();
+        let me = self.id();
+        let n = self.robots();
+        let known = std::mem::take(&mut self.known);
+        let own = Sync::own(n, self.episode, &known);
+        let (exchange, episodes) = epoch.parts();
+        let synced = episodes.sync(exchange, own);
+        self.base = Some(epoch.id.clone());
+        self.base_formed = true;
+        match synced {
+            Ok(sync) => {
+                self.episode = self.episode.max(sync.episode);
+                self.news.merge(&sync.news());
+                self.ctx.plane.set_formed(&epoch.id);
+            }
+            Err(e) => {
+                epoch.blame(me, &e);
+                self.known = known;
+                self.broken = Some(e);
+            }
+        }
+        self.epoch = Some(epoch);
+    }
+
+    /// A formed, synced roster to run the next episode on: recovers a broken one.
+    fn ready(&mut self) -> Result<(), MemberError> {
+        if let Some(signal) = crate::signals::received() {
+            return Err(self.stop(signal));
+        }
+        while self.broken.is_some() || self.epoch.is_none() {
+            if let Some(signal) = self.ctx.plane.stop_requested() {
+                return Err(self.stopped(signal));
+            }
+            let failure = self.broken.take();
+            self.recover(failure)?;
+        }
+        Ok(())
+    }
+
+    /// Forms a roster without the robots gone since `failure` broke the last one (see the
+    /// module of [`crate::standing::roster`]).
+    fn recover(&mut self, failure: Option<ExchangeError>) -> Result<(), MemberError> {
+        let me = self.id();
+        if let Some(epoch) = self.epoch.take() {
+            epoch.close(&*self.ctx.plane, false);
+        }
+        let Some(base) = self.base.clone() else {
+            // Never formed a roster: join as a new robot does.
+            return self.enter(Instant::now());
+        };
+        let started = Instant::now();
+        let deadline = started + self.startup() + self.episode_timeout() + self.round_timeout();
+        let settle_until = started + settle(&*self.ctx.plane, self.round_timeout());
+        let failure = failure.unwrap_or_else(|| ExchangeError::Transport {
+            agent: me,
+            what: "the roster failed".into(),
+        });
+        let mut given_up: Vec<EpochId> = Vec::new();
+        loop {
+            if let Some(signal) = crate::signals::received() {
+                return Err(self.stop(signal));
+            }
+            if let Some(signal) = self.ctx.plane.stop_requested() {
+                return Err(self.stopped(signal));
+            }
+            let others: Vec<usize> = base
+                .roster
+                .robots()
+                .iter()
+                .copied()
+                .filter(|&r| r != me)
+                .collect();
+            let gone = self.ctx.plane.gone(&others);
+            let now = Instant::now();
+            // Where it may have been cut off rather than its neighbours dead, it goes on
+            // only with most of the roster it formed.
+            let majority = !self.ctx.plane.exact() && self.base_formed;
+            let adopt = latest_epoch(&*self.ctx.plane, me, Some(base.number))
+                .filter(|e| !given_up.contains(e));
+            if gone.is_empty() && adopt.is_none() {
+                if now < settle_until {
+                    std::thread::sleep(Duration::from_millis(20));
+                    continue;
+                }
+                // Nobody vanished: the failure is the team's.
+                return Err(self.fail(failure));
+            }
+            let next = match after_loss(&self.ctx.settings.graph, &base.roster, &gone, me, majority)
+            {
+                Ok((next, lost)) => {
+                    self.known = RosterNews {
+                        joined: Vec::new(),
+                        crashed: gone.clone(),
+                        lost,
+                    };
+                    EpochId {
+                        number: base.number + 1,
+                        roster: next,
+                    }
+                }
+                Err(cut) => return Err(self.cut_off(cut)),
+            };
+            let id = match adopt {
+                Some(found) if found.number >= next.number => found,
+                _ => next,
+            };
+            if given_up.contains(&id) {
+                if now >= deadline {
+                    return Err(self.fail(failure));
+                }
+                std::thread::sleep(Duration::from_millis(20));
+                continue;
+            }
+            tracing::debug!(robot = me, gone = ?gone, epoch = %id.name(), "forming the roster again");
+            match Epoch::form(&self.ctx, id.clone(), deadline) {
+                Ok(epoch) => {
+                    self.install(epoch);
+                    return Ok(());
+                }
+                Err(Forming::Stopped(signal)) => return Err(self.stopped(signal)),
+                Err(e) => {
+                    tracing::debug!(error = %e, "the roster did not form");
+                    given_up.push(id);
+                    if Instant::now() >= deadline {
+                        return Err(self.fail(self.forming_error(e)));
+                    }
+                }
+            }
+        }
+    }
+
+    /// The team went on without this robot.
+    fn cut_off(&mut self, cut: CutOff) -> MemberError {
+        if let Some(epoch) = self.epoch.take() {
+            epoch.close(&*self.ctx.plane, false);
+        }
+        self.ctx.plane.leave_team();
+        self.standing = Standing::Lost(cut.to_string());
+        MemberError::failed(cut)
+    }
+
+    /// A robot coming to the team: forms its first roster with the others (none formed
+    /// yet), takes its place in one forming with it, or asks to join and waits to be
+    /// admitted (see [`TeamMember::join`]).
+    fn enter(&mut self, started: Instant) -> Result<(), MemberError> {
+        let me = self.id();
+        let startup = self.startup();
+        let admission = startup + 2 * (self.episode_timeout() + self.round_timeout());
+        let deadline = started + admission;
+        let first = EpochId {
+            number: 0,
+            roster: Roster::all(self.robots()),
+        };
+        let mut given_up: Vec<EpochId> = Vec::new();
+        loop {
+            if let Some(signal) = crate::signals::received() {
+                return Err(self.stop(signal));
+            }
+            if let Some(signal) = self.ctx.plane.stop_requested() {
+                return Err(self.stopped(signal));
+            }
+            let plane = &*self.ctx.plane;
+            let found = latest_epoch(plane, me, None).filter(|e| !given_up.contains(e));
+            let running = plane.epochs().iter().any(|e| !plane.in_epoch(e).is_empty());
+            let id = match found {
+                Some(id) => id,
+                None if given_up.contains(&first) => {
+                    // The team's first roster did not form with every robot: those that
+                    // came go on without the others.
+                    self.base = Some(first);
+                    self.base_formed = false;
+                    self.broken = Some(ExchangeError::Transport {
+                        agent: me,
+                        what: "the team's first roster did not form".into(),
+                    });
+                    return self.ready();
+                }
+                None if !running => first.clone(),
+                None => {
+                    // The team runs without this robot: it asks to join.
+                    self.ctx.plane.set_joining();
+                    if Instant::now() >= deadline {
+                        return Err(self.not_admitted(admission));
+                    }
+                    std::thread::sleep(Duration::from_millis(20));
+                    continue;
+                }
+            };
+            self.ctx.plane.set_member();
+            let until = if id.number == 0 {
+                started + startup
+            } else {
+                deadline
+            };
+            match Epoch::form(&self.ctx, id.clone(), until) {
+                Ok(epoch) => {
+                    self.install(epoch);
+                    return self.ready();
+                }
+                Err(Forming::Stopped(signal)) => return Err(self.stopped(signal)),
+                Err(e) => {
+                    tracing::debug!(error = %e, epoch = %id.name(), "the roster did not form");
+                    if Instant::now() >= deadline {
+                        return Err(self.fail(self.forming_error(e)));
+                    }
+                    given_up.push(id);
+                }
+            }
+        }
+    }
+
+    /// The team never admitted this robot.
+    fn not_admitted(&mut self, waited: Duration) -> MemberError {
+        let me = self.id();
+        self.standing = Standing::Failed;
+        MemberError::failed(JoinError::NotAdmitted {
+            robot: me,
+            waited,
+            neighbours: self.ctx.settings.graph.neighbours(me).to_vec(),
+        })
     }
 }
 
 impl Drop for TeamMember {
-    /// Leaves the team's transport and board (the last member removes its shared memory);
-    /// finished, not dead, for the others.
+    /// Leaves the roster's transport and board (the last robot out removes its shared
+    /// memory) and the team: without [`TeamMember::leave`] first, the others take this
+    /// robot for crashed.
     fn drop(&mut self) {
-        if let Ok(board) = Board::open(&self.scenario.board_shm, self.robots())
-            && !self.failed
-        {
-            board.set_finished(self.id());
+        let finished = self.standing == Standing::In;
+        if let Some(epoch) = self.epoch.take() {
+            epoch.close(&*self.ctx.plane, finished);
         }
-        drop(self.endpoint.take());
-        if let Some(membership) = self.membership.take() {
-            membership.leave();
-        } else {
-            // A Zenoh team: nothing of the run is in its directory but other agents' files.
-            let _ = std::fs::remove_dir(&self.namespace.dir);
-        }
+        self.ctx.plane.leave_team();
     }
 }

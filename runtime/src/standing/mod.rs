@@ -19,9 +19,12 @@
 pub mod agreement;
 pub mod answer;
 mod episode;
+mod epoch;
 pub mod member;
+pub(crate) mod plane;
+pub mod roster;
 pub mod serve;
 pub mod threads;
 
-pub use answer::{Answer, RowError};
+pub use answer::{Answer, LeaveRefused, RowError};
 pub use member::TeamMember;

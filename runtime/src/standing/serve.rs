@@ -6,26 +6,30 @@
 //! has joined its team wait in the pipe):
 //! * per episode, the [`Answer`]: `{"episode": k, "robot": I, "task": j or null,
 //!   "certified": bool, "rounds": r, "agreement_rounds": a, "cost": c, "total_cost": C,
-//!   "assignment": [...], "feasible": bool, "ms": t}` (plus `"missing": [...]` when robots
-//!   gave no row in time: nothing was solved, and `"left": [...]` when robots left: the team
-//!   has ended and the sidecar exits 0);
+//!   "assignment": [...], "feasible": bool, "ms": t}`, plus, when it applies, `"missing"`,
+//!   `"unavailable"`, `"left"`, `"leave_refused"`, `"lost"`, `"joined"` and `"crashed"`
+//!   (lists of robots: the roster's changes);
 //! * a row it cannot use: `{"error": "...", "episode": k, "robot": I}`; the team keeps
 //!   waiting for a valid row until the episode deadline;
-//! * the team failed (a robot's process died, a deadline passed, a signal):
-//!   `{"error": "...", "failed": true, "episode": k, "robot": I}`, and the sidecar exits
-//!   with the code of `agent` (4, or the signal's).
+//! * its leave refused (the others would fall apart without it): `{"error": "...",
+//!   "leave_refused": true, "episode": k, "robot": I}`, once; it keeps relaying and asking
+//!   until it may go;
+//! * the team failed (a signal, a failure nobody recovers from) or went on without this
+//!   robot (cut off): `{"error": "...", "failed": true, "episode": k, "robot": I}`, and the
+//!   sidecar exits with the code of `agent` (4, or the signal's).
 //!
 //! **In** (standard input), one line per episode: `{"costs": [c_0, …, c_{M−1}]}`, numbers,
 //! `null` for a task this robot may not take, one per task of the team file (`M`); an
 //! episode with fewer tasks says so, `{"costs": [c_0, …, c_{k−1}], "tasks": k}` (the first
-//! `k` tasks exist, the same `k` at every robot); or `{"available": false}`: this robot takes no task this episode and relays for its
-//! neighbours. No row within the team file's `episode_timeout`: every robot's answer names
-//! this one in `missing`, and the team solves nothing (`on_failure = "abort"`, the default)
-//! or solves without it (`"continue"`). End of input: the robot leaves, and the team ends
-//! with the next episode's agreement.
+//! `k` tasks exist, the same `k` at every robot); or `{"available": false}`: this robot takes
+//! no task this episode and relays for its neighbours. No row within the team file's
+//! `episode_timeout`: every robot's answer names this one in `missing`, and the team solves
+//! nothing (`on_failure = "abort"`, the default) or solves without it (`"continue"`). End of
+//! input: the robot leaves at the next episode boundary (it relays in that episode) and the
+//! sidecar exits 0; the team goes on without it.
 
 use crate::process::member_error::MemberError;
-use crate::standing::answer::{Answer, RowError};
+use crate::standing::answer::{Answer, LeaveRefused, RowError};
 use crate::standing::member::TeamMember;
 use serde::Deserialize;
 use std::io::{BufRead, Write};
@@ -41,8 +45,6 @@ const MAX_LINE: u64 = 64 << 20;
 pub enum ServeEnd {
     /// Its program closed its input: it left the team.
     Left,
-    /// Robots left (these): the team ended.
-    TeamEnded(Vec<usize>),
     /// Its program stopped reading its answers: it left the team.
     OutputClosed,
 }
@@ -256,12 +258,111 @@ pub fn one_episode(team_path: &Path, id: usize, row_path: &Path) -> Result<Answe
     let row = read_row(row_path, team.file.maximize).map_err(MemberError::refused)?;
     let mut member = TeamMember::join(team_path, id)?;
     let answer = member.assign(&row)?;
-    member.leave()?;
+    leave_for_good(&mut member, &mut std::io::sink(), false)?;
     Ok(answer)
 }
 
+/// Leaves the team for a program that ended (or no longer reads): each refused leave is an
+/// episode in which the robot relays; the first refusal is told (when the program reads).
+fn leave_for_good(
+    member: &mut TeamMember,
+    output: &mut dyn Write,
+    mut tell: bool,
+) -> Result<(), MemberError> {
+    loop {
+        let episode = member.episode();
+        let id = member.id();
+        match member.leave() {
+            Ok(()) => return Ok(()),
+            Err(MemberError::Refused(cause)) if cause.is::<LeaveRefused>() => {
+                if tell {
+                    let line = serde_json::json!({
+                        "error": cause.to_string(),
+                        "leave_refused": true,
+                        "episode": episode,
+                        "robot": id,
+                    });
+                    tell = send(output, &line);
+                }
+            }
+            Err(e) => {
+                if tell {
+                    tell_failure(output, episode, id, &e);
+                }
+                return Err(e);
+            }
+        }
+    }
+}
+
+/// What the robot program asks for next (waiting up to the episode deadline, looking at the
+/// team meanwhile): a row or an unavailable episode, an abstention at the deadline, or an end.
+enum Next {
+    Answer(Box<Answer>),
+    End(ServeEnd),
+}
+
+/// Serves one episode: the program's next usable line, or the deadline.
+fn serve_episode(
+    member: &mut TeamMember,
+    lines: &Receiver<Input>,
+    output: &mut dyn Write,
+) -> Result<Next, MemberError> {
+    let id = member.id();
+    let deadline = Instant::now() + member.episode_timeout();
+    loop {
+        let episode = member.episode();
+        member
+            .check()
+            .inspect_err(|e| tell_failure(output, episode, id, e))?;
+        let now = Instant::now();
+        if now >= deadline {
+            tracing::info!(episode, "no row within the episode deadline");
+            let answer = member
+                .abstain()
+                .inspect_err(|e| tell_failure(output, episode, id, e))?;
+            return Ok(Next::Answer(Box::new(answer)));
+        }
+        let slice = (deadline - now).min(Duration::from_millis(50));
+        let bad = match lines.recv_timeout(slice) {
+            Ok(Input::Line(line)) if line.trim().is_empty() => None,
+            Ok(Input::Line(line)) => match parse_line(member, &line, episode) {
+                Ok(request) => {
+                    let answer = match request {
+                        Request::Row(row) => member.assign(&row),
+                        Request::Unavailable => member.unavailable(),
+                    };
+                    let answer = answer.inspect_err(|e| tell_failure(output, episode, id, e))?;
+                    return Ok(Next::Answer(Box::new(answer)));
+                }
+                Err(error) => Some(error.to_string()),
+            },
+            Ok(Input::Bad(why)) => Some(why),
+            Ok(Input::End(why)) => {
+                if let Some(why) = why {
+                    tracing::warn!(error = %why, "the robot program's input failed");
+                }
+                leave_for_good(member, output, true)?;
+                return Ok(Next::End(ServeEnd::Left));
+            }
+            Err(RecvTimeoutError::Disconnected) => {
+                leave_for_good(member, output, true)?;
+                return Ok(Next::End(ServeEnd::Left));
+            }
+            Err(RecvTimeoutError::Timeout) => None,
+        };
+        if let Some(why) = bad
+            && !send(output, &row_error(episode, id, &why))
+        {
+            leave_for_good(member, output, false)?;
+            return Ok(Next::End(ServeEnd::OutputClosed));
+        }
+    }
+}
+
 /// Serves robot `id` of the private team in `team_path` to the program on the other end of
-/// `input` and `output` until it closes its input, the team ends, or the run fails.
+/// `input` and `output` until it closes its input (the robot leaves), the team goes on
+/// without it, or the team fails.
 pub fn serve(
     team_path: &Path,
     id: usize,
@@ -275,69 +376,27 @@ pub fn serve(
         robot = id,
         robots = member.robots(),
         tasks = member.tasks(),
+        roster = ?member.roster(),
         "joined the team: reading rows"
     );
     let lines = read_lines(input);
-    let mut episode = 0u64;
     loop {
-        let deadline = Instant::now() + member.episode_timeout();
-        let answer: Answer = loop {
-            member
-                .check()
-                .inspect_err(|e| tell_failure(output, episode, id, e))?;
-            let now = Instant::now();
-            if now >= deadline {
-                tracing::info!(episode, "no row within the episode deadline");
-                break member
-                    .abstain()
-                    .inspect_err(|e| tell_failure(output, episode, id, e))?;
-            }
-            let slice = (deadline - now).min(Duration::from_millis(50));
-            match lines.recv_timeout(slice) {
-                Ok(Input::Line(line)) if line.trim().is_empty() => {}
-                Ok(Input::Line(line)) => match parse_line(&member, &line, episode) {
-                    Ok(request) => {
-                        let answer = match request {
-                            Request::Row(row) => member.assign(&row),
-                            Request::Unavailable => member.unavailable(),
-                        };
-                        break answer.inspect_err(|e| tell_failure(output, episode, id, e))?;
-                    }
-                    Err(error) => {
-                        if !send(output, &row_error(episode, id, &error.to_string())) {
-                            member.leave()?;
-                            return Ok(ServeEnd::OutputClosed);
-                        }
-                    }
-                },
-                Ok(Input::Bad(why)) => {
-                    if !send(output, &row_error(episode, id, &why)) {
-                        member.leave()?;
-                        return Ok(ServeEnd::OutputClosed);
-                    }
-                }
-                Ok(Input::End(why)) => {
-                    if let Some(why) = why {
-                        tracing::warn!(error = %why, "the robot program's input failed");
-                    }
-                    member.leave()?;
-                    return Ok(ServeEnd::Left);
-                }
-                Err(RecvTimeoutError::Disconnected) => {
-                    member.leave()?;
-                    return Ok(ServeEnd::Left);
-                }
-                Err(RecvTimeoutError::Timeout) => {}
-            }
+        let answer = match serve_episode(&mut member, &lines, output)? {
+            Next::Answer(answer) => answer,
+            Next::End(end) => return Ok(end),
         };
-        episode = answer.episode + 1;
         let json = serde_json::to_value(&answer).expect("an answer serialises");
         let delivered = send(output, &json);
-        if answer.ended() {
-            return Ok(ServeEnd::TeamEnded(answer.left));
+        if answer.lost.contains(&id) {
+            let cut = MemberError::failed(RowError::Lost(format!(
+                "robot(s) {:?} left and the team went on without it",
+                answer.left
+            )));
+            tell_failure(output, answer.episode + 1, id, &cut);
+            return Err(cut);
         }
         if !delivered {
-            member.leave()?;
+            leave_for_good(&mut member, output, false)?;
             return Ok(ServeEnd::OutputClosed);
         }
     }

@@ -22,9 +22,10 @@
 
 use crate::exchange::ExchangeError;
 use crate::process::member_error::MemberError;
-use crate::standing::agreement::Presence;
+use crate::standing::agreement::{Presence, RosterNews};
 use crate::standing::answer::{Answer, check_row};
-use crate::standing::episode::{EpisodeError, Episodes};
+use crate::standing::episode::{EpisodeError, Episodes, Settings};
+use crate::standing::roster::Roster;
 use crate::team::errors::{PrivateTeamError, TeamFileError};
 use crate::team::member::team_scenario;
 use crate::team::team_file::Team;
@@ -73,14 +74,8 @@ pub fn run_on_threads(
                 plan: &crate::exchange::round_loop::AgentPlan|
      -> Result<Vec<Answer>, ExchangeError> {
         let id = plan.index;
-        let mut robot = Episodes::new(
-            team,
-            id,
-            &scenario,
-            options.clone(),
-            graph.clone(),
-            plan.clone(),
-        );
+        let settings = Settings::new(team, id, &scenario, options.clone(), graph.clone());
+        let mut robot = Episodes::new(settings, Roster::all(n), plan.clone(), payload_len);
         let mut answers = Vec::with_capacity(episodes as usize);
         for episode in 0..episodes {
             let input = rows(episode, id);
@@ -100,7 +95,7 @@ pub fn run_on_threads(
                 Input::Unavailable => (None, Presence::Unavailable),
                 Input::Missing => (None, Presence::Missing),
             };
-            let outcome = match robot.run(exchange, row, presence) {
+            let outcome = match robot.run(exchange, row, presence, &[]) {
                 Ok(outcome) => outcome,
                 Err(EpisodeError::Exchange(e)) => return Err(e),
                 Err(e) => {
@@ -113,7 +108,7 @@ pub fn run_on_threads(
                     });
                 }
             };
-            answers.push(outcome.answer(episode, id, row, began.elapsed()));
+            answers.push(outcome.answer(episode, id, row, began.elapsed(), RosterNews::default()));
         }
         Ok(answers)
     };

@@ -36,7 +36,7 @@ use crate::team::member::{Membership, member_scenario};
 use crate::team::team_file::{HostEntry, Team};
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
-use crate::zenoh_net::session::{announce_failure, missing_hosts, watch_failures};
+use crate::zenoh_net::session::{announce_failure, watch_failures};
 use crossbeam::channel::{Receiver, RecvTimeoutError, unbounded};
 use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
@@ -129,6 +129,8 @@ pub struct Bridge {
     threads: Vec<JoinHandle<()>>,
     membership: Option<Membership>,
     _subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
+    /// The bridge's token: subscribed to the other hosts' agents.
+    _token: Option<zenoh::liveliness::LivelinessToken>,
 }
 
 /// Who is where, from the bridge's point of view.
@@ -173,26 +175,67 @@ impl Layout {
     }
 }
 
+/// One run a host bridges: its scenario and namespace on this host, its Zenoh keys, the
+/// host's agents in it, the hosts it spans and the deadline of its start-up.
+pub(crate) struct BridgeRun {
+    pub(crate) scenario: Scenario,
+    pub(crate) namespace: crate::process::namespace::RunNamespace,
+    pub(crate) links: ZenohLinks,
+    /// This host.
+    pub(crate) host: String,
+    /// The hosts with agents in the run: their bridges subscribe to this host's agents
+    /// before these start.
+    pub(crate) hosts: Vec<String>,
+    /// The run's agents on this host.
+    pub(crate) local: Vec<usize>,
+    pub(crate) deadline: Instant,
+}
+
 impl Bridge {
     /// Joins the host's board for the remote agents, subscribes to their Zenoh keys and
-    /// starts the two forwarding threads.
+    /// starts the two forwarding threads (a mixed team's one run).
     pub fn start(team: &Team, host: &HostEntry, router: &HostRouter) -> Result<Self, MemberError> {
         let started = Instant::now();
         let (scenario, namespace) = member_scenario(team, Some(host))?;
+        let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
+        let run = BridgeRun {
+            scenario,
+            namespace,
+            links: team.zenoh_links(host),
+            host: host.name.clone(),
+            hosts: team.file.hosts.iter().map(|h| h.name.clone()).collect(),
+            local: host.agents.clone(),
+            deadline,
+        };
+        Self::start_run(run, router.session().clone())
+    }
+
+    /// Bridges `run` over `session` (see [`Bridge::start`]); once subscribed to the other
+    /// hosts' agents, says so with the bridge's token.
+    pub(crate) fn start_run(run: BridgeRun, session: Session) -> Result<Self, MemberError> {
+        let BridgeRun {
+            scenario,
+            namespace,
+            links,
+            host,
+            hosts,
+            local,
+            deadline,
+        } = run;
         let graph = scenario.graph().map_err(MemberError::failed)?;
         let n = scenario.robots;
         let layout = Layout {
-            local: host.agents.clone(),
+            local,
             neighbours: (0..n).map(|a| graph.neighbours(a).to_vec()).collect(),
             degrees: (0..n).map(|a| graph.degree(a)).collect(),
             payload_len: scenario.payload_len(),
         };
-        let deadline = started + Duration::from_millis(scenario.startup_timeout_ms);
-        let remote: Vec<usize> = (0..n).filter(|&a| !layout.is_local(a)).collect();
+        let in_run = |a: &usize| scenario.roster.as_ref().is_none_or(|r| r.contains(a));
+        let remote: Vec<usize> = (0..n)
+            .filter(|a| !layout.is_local(*a) && in_run(a))
+            .collect();
         let membership = Membership::join(&scenario, &namespace, &remote, deadline)
             .map_err(MemberError::failed)?;
-        let links = team.zenoh_links(host);
-        let session = router.session().clone();
         let shared = Arc::new(Shared {
             stop: AtomicBool::new(false),
             announced: AtomicUsize::new(NONE),
@@ -230,12 +273,18 @@ impl Bridge {
                 .map_err(BridgeError::from)?,
             );
         }
+        let token = session
+            .liveliness()
+            .declare_token(links.bridge_key(&host))
+            .wait()
+            .map_err(|e| call("cannot declare the bridge's token".into(), e.to_string()))?;
         let forwarder = Forwarder {
             shared: Arc::clone(&shared),
             session,
             links,
             scenario,
             layout,
+            hosts,
         };
         let threads = vec![
             forwarder
@@ -248,6 +297,7 @@ impl Bridge {
             threads,
             membership: Some(membership),
             _subscribers: subscribers,
+            _token: Some(token),
         })
     }
 
@@ -324,6 +374,8 @@ struct Forwarder {
     links: ZenohLinks,
     scenario: Scenario,
     layout: Layout,
+    /// The hosts whose bridges must be subscribed to this host's agents first.
+    hosts: Vec<String>,
 }
 
 impl Forwarder {
@@ -346,10 +398,17 @@ impl Forwarder {
     /// Local agents' messages out to Zenoh.
     fn forward_out(&self, deadline: Instant) -> Result<(), BridgeError> {
         let text = BridgeError::Service;
-        // Every host (so every other bridge) subscribed to our agents before we let them
-        // start: a host declares its token after its bridge's subscriptions.
+        // Every other bridge of the run subscribed to our agents before we let them start:
+        // a bridge declares its token after its subscriptions.
         loop {
-            let missing = missing_hosts(&self.session, &self.links)?;
+            let up =
+                crate::zenoh_net::session::alive_keys(&self.session, self.links.bridge_key("*"))?;
+            let missing: Vec<String> = self
+                .hosts
+                .iter()
+                .filter(|h| !up.contains(&self.links.bridge_key(h)))
+                .cloned()
+                .collect();
             if missing.is_empty() {
                 break;
             }

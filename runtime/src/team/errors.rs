@@ -185,6 +185,15 @@ pub enum HostsError {
 /// team's board).
 #[derive(Debug, thiserror::Error)]
 pub enum JoinError {
+    /// A robot that asked to join a running standing team was not admitted in time.
+    #[error(
+        "robot {robot} was not admitted to the running team within {waited:?}: its neighbours in the team file ({neighbours:?}) take no part, or the team ran no episode"
+    )]
+    NotAdmitted {
+        robot: usize,
+        waited: Duration,
+        neighbours: Vec<usize>,
+    },
     #[error("--id {id} is out of range for a team of {robots} robots")]
     NoSuchAgent { id: usize, robots: usize },
     #[error("cannot create {}", path.display())]

@@ -234,7 +234,8 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         })
         .map_err(MemberError::failed)?
     };
-    let bridge = if team.file.transport.bridged() {
+    // A standing team's hosts bridge each roster on its own (`standing_host`).
+    let bridge = if team.file.transport.bridged() && !team.is_private() {
         Some(crate::team::bridge::Bridge::start(&team, &host, &router)?)
     } else {
         None
@@ -274,6 +275,16 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         session,
         key: links.goodbye_key(&host.name),
     };
+    if team.is_private() {
+        return crate::team::standing_host::serve_standing_team(
+            &team,
+            &host,
+            session,
+            &links,
+            &watch,
+            startup_deadline,
+        );
+    }
     let run_deadline = startup_deadline
         + Duration::from_secs_f64(team.file.round_timeout) * (team.file.max_iters as u32 + 2);
     let mut presence = watch.presence.lock().unwrap_or_else(|e| e.into_inner());

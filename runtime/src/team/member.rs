@@ -132,6 +132,18 @@ pub(crate) struct Membership {
     board: Board,
     namespace: RunNamespace,
     slots: Vec<usize>,
+    joining: Joining,
+}
+
+/// What a [`Membership`] is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Joining {
+    /// A run of the team's transport: its first member creates the transport's resources,
+    /// and a slot whose process already took part in it is refused.
+    Run,
+    /// A standing team's presence ([`crate::standing`]): no transport of its own, and a
+    /// slot may come back (a robot restarted after it left or crashed).
+    Presence,
 }
 
 impl Membership {
@@ -141,6 +153,17 @@ impl Membership {
         namespace: &RunNamespace,
         slots: &[usize],
         deadline: Instant,
+    ) -> Result<Self, JoinError> {
+        Self::join_as(scenario, namespace, slots, deadline, Joining::Run)
+    }
+
+    /// [`Membership::join`] for what `joining` says.
+    pub(crate) fn join_as(
+        scenario: &Scenario,
+        namespace: &RunNamespace,
+        slots: &[usize],
+        deadline: Instant,
+        joining: Joining,
     ) -> Result<Self, JoinError> {
         let _lock = FileLock::acquire(&namespace.dir.join("lock"), deadline)?;
         let n = scenario.robots;
@@ -165,22 +188,29 @@ impl Membership {
             if let Some(pid) = board.member_pid(slot).filter(|_| board.member_alive(slot)) {
                 return Err(JoinError::AlreadyRunning { slot, pid });
             }
-            if !fresh && board.registered(slot) {
+            if !fresh && joining == Joining::Run && board.registered(slot) {
                 return Err(JoinError::TookPart { slot });
             }
         }
         for &slot in slots {
             board.set_member_pid(slot, std::process::id());
         }
-        // Mode 0700, ours, not a symlink (its name in /dev/shm is predictable).
-        crate::process::private_dir::ensure_private_dir(&scenario.transport_root)?;
-        let resources = if fresh {
+        let resources = if joining == Joining::Presence {
+            if fresh {
+                // A team of this name that died whole: the leftovers of its parts go.
+                namespace.remove_parts();
+            }
+            None
+        } else if fresh {
+            // Mode 0700, ours, not a symlink (its name in /dev/shm is predictable).
+            crate::process::private_dir::ensure_private_dir(&scenario.transport_root)?;
             // Nodes of a dead team of this name.
             let _ = cleanup_dead(scenario, &namespace.dir);
             // The first member creates every service of the team before anybody opens one
             // (the others wait for the lock we hold).
             Some(RunResources::create(scenario, &namespace.dir)?)
         } else {
+            crate::process::private_dir::ensure_private_dir(&scenario.transport_root)?;
             None
         };
         Ok(Self {
@@ -188,6 +218,7 @@ impl Membership {
             board,
             namespace: namespace.clone(),
             slots: slots.to_vec(),
+            joining,
         })
     }
 
@@ -207,13 +238,22 @@ impl Membership {
             board,
             namespace,
             slots,
+            joining,
         } = self;
         let deadline = Instant::now() + Duration::from_secs(5);
         let last = match FileLock::acquire(&namespace.dir.join("lock"), deadline) {
             Ok(_lock) => {
                 let mut last = false;
                 for &slot in &slots {
-                    last |= board.member_left(slot);
+                    last |= match joining {
+                        Joining::Run => board.member_left(slot),
+                        // Slots come and go: the last one alive is the last.
+                        Joining::Presence => {
+                            board.set_slot_state(slot, 0);
+                            board.set_member_pid(slot, 0);
+                            !(0..board.agents()).any(|a| board.member_alive(a))
+                        }
+                    };
                 }
                 drop(resources);
                 last

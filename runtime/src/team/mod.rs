@@ -18,6 +18,7 @@ mod hosts;
 pub mod member;
 pub mod team_file;
 pub mod team_timeline;
+pub(crate) mod zenoh_plane;
 
 #[cfg(feature = "zenoh")]
 pub mod bridge;
@@ -31,3 +32,5 @@ mod host_digest;
 mod presence;
 #[cfg(feature = "zenoh")]
 mod priority;
+#[cfg(feature = "zenoh")]
+mod standing_host;

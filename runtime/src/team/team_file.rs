@@ -113,6 +113,11 @@ pub struct TeamFile {
     /// solved; the default) or `continue` (the others solve it; that robot relays).
     #[serde(default)]
     pub on_failure: Option<crate::options::OnFailure>,
+    /// A private team's answer to a robot whose leave would split the others: `refuse` (it
+    /// stays and relays; the default) or `force` (it goes, and the team goes on in its
+    /// largest connected part).
+    #[serde(default)]
+    pub leave: Option<crate::standing::roster::LeaveRule>,
 }
 
 fn complete() -> String {
@@ -204,6 +209,7 @@ impl Team {
                 ("on_failure", f.on_failure.is_some()),
                 ("episode_timeout", f.episode_timeout.is_some()),
                 ("warm_start", f.warm_start.is_some()),
+                ("leave", f.leave.is_some()),
             ];
             if let Some((key, _)) = set.into_iter().find(|(_, set)| *set) {
                 return Err(TeamFileError::Private(PrivateTeamError::NotPrivateKey {
@@ -286,6 +292,7 @@ impl Team {
             key_prefix: format!("admm-ta/team/{}", self.file.run),
             connect: vec![host.endpoint.clone()],
             hosts: self.file.hosts.iter().map(|h| h.name.clone()).collect(),
+            epoch: None,
         }
     }
 

@@ -14,27 +14,40 @@ pub struct ZenohLinks {
     /// every host sees the whole run.
     #[serde(default)]
     pub hosts: Vec<String>,
+    /// One roster of a standing team (its name): the run's round messages, presence and
+    /// failures live below `<key_prefix>/<epoch>`; hosts, digests and stop requests stay
+    /// the team's.
+    #[serde(default)]
+    pub epoch: Option<String>,
 }
 
 impl ZenohLinks {
+    /// Where the run's own keys live (the team's prefix, or its roster's below it).
+    fn run_prefix(&self) -> std::borrow::Cow<'_, str> {
+        match &self.epoch {
+            Some(epoch) => format!("{}/{epoch}", self.key_prefix).into(),
+            None => self.key_prefix.as_str().into(),
+        }
+    }
+
     /// Key agent `i` publishes its round messages on.
     pub fn round_key(&self, i: usize) -> String {
-        format!("{}/round/{i}", self.key_prefix)
+        format!("{}/round/{i}", self.run_prefix())
     }
 
     /// Key of agent `i`'s liveliness token (present while it runs).
     pub fn alive_key(&self, i: usize) -> String {
-        format!("{}/alive/{i}", self.key_prefix)
+        format!("{}/alive/{i}", self.run_prefix())
     }
 
     /// Every agent's liveliness token.
     pub fn alive_all(&self) -> String {
-        format!("{}/alive/*", self.key_prefix)
+        format!("{}/alive/*", self.run_prefix())
     }
 
     /// The agent whose liveliness token `key` is.
     pub fn agent_of_alive_key(&self, key: &str) -> Option<usize> {
-        key.strip_prefix(&self.key_prefix)?
+        key.strip_prefix(self.run_prefix().as_ref())?
             .strip_prefix("/alive/")?
             .parse()
             .ok()
@@ -42,7 +55,66 @@ impl ZenohLinks {
 
     /// Key on which the index of the agent that failed is announced (the first one wins).
     pub fn failure_key(&self) -> String {
+        format!("{}/failed", self.run_prefix())
+    }
+
+    /// Key on which stop requests (termination signals) are announced: the team's.
+    pub fn stop_key(&self) -> String {
         format!("{}/failed", self.key_prefix)
+    }
+
+    /// Key of host `name`'s bridge for this run (a mixed team's: declared once it is
+    /// subscribed to the other hosts' agents, so theirs may start).
+    pub fn bridge_key(&self, name: &str) -> String {
+        format!("{}/bridge/{name}", self.run_prefix())
+    }
+
+    /// Key of a standing team's robot `i` asking to join (present while it waits).
+    pub fn joining_key(&self, i: usize) -> String {
+        format!("{}/joining/{i}", self.key_prefix)
+    }
+
+    /// Every joining robot's key.
+    pub fn joining_all(&self) -> String {
+        format!("{}/joining/*", self.key_prefix)
+    }
+
+    /// The robot of joining key `key`.
+    pub fn robot_of_joining_key(&self, key: &str) -> Option<usize> {
+        key.strip_prefix(&self.key_prefix)?
+            .strip_prefix("/joining/")?
+            .parse()
+            .ok()
+    }
+
+    /// Key of robot `i` being in roster `epoch` (named `name`, its robots as the bitmap
+    /// `roster`) of a standing team, or (`formed`) of the roster having formed.
+    pub fn epoch_key(&self, formed: bool, name: &str, roster: &str, i: usize) -> String {
+        let what = if formed { "formed" } else { "in" };
+        format!("{}/rosters/{what}/{name}/{roster}/{i}", self.key_prefix)
+    }
+
+    /// Every roster key ([`ZenohLinks::epoch_key`]).
+    pub fn epoch_all(&self) -> String {
+        format!("{}/rosters/**", self.key_prefix)
+    }
+
+    /// What roster key `key` says: formed (or in), the roster's name and bitmap, the robot.
+    pub fn of_epoch_key<'k>(&self, key: &'k str) -> Option<(bool, &'k str, &'k str, usize)> {
+        let rest = key
+            .strip_prefix(&self.key_prefix)?
+            .strip_prefix("/rosters/")?;
+        let mut parts = rest.split('/');
+        let formed = match parts.next()? {
+            "formed" => true,
+            "in" => false,
+            _ => return None,
+        };
+        let (name, roster, robot) = (parts.next()?, parts.next()?, parts.next()?);
+        if parts.next().is_some() {
+            return None;
+        }
+        Some((formed, name, roster, robot.parse().ok()?))
     }
 
     /// Every host's liveliness token.
@@ -139,6 +211,19 @@ mod tests {
             links.of_digest_key(&links.digest_key("ab12", 7, "b")),
             Some(("ab12".into(), 7, "b".into()))
         );
+        let roster = ZenohLinks {
+            epoch: Some("e3xab".into()),
+            ..links.clone()
+        };
+        assert_eq!(roster.round_key(3), "admm-ta/team/demo/e3xab/round/3");
+        assert_eq!(roster.agent_of_alive_key(&roster.alive_key(4)), Some(4));
+        assert_eq!(roster.agent_of_alive_key(&links.alive_key(4)), None);
+        assert_eq!(roster.stop_key(), links.failure_key());
+        assert_eq!(
+            links.of_epoch_key(&links.epoch_key(true, "e3xab", "f1", 9)),
+            Some((true, "e3xab", "f1", 9))
+        );
+        assert_eq!(links.robot_of_joining_key(&links.joining_key(2)), Some(2));
     }
 
     #[test]

@@ -119,6 +119,7 @@ mod built {
                 key_prefix: format!("admm-ta/run/{run_id}"),
                 connect: vec![router.endpoint.clone()],
                 hosts: Vec::new(),
+                epoch: None,
             };
             let first = Arc::new(AtomicUsize::new(usize::MAX));
             let subscriber = {

@@ -283,7 +283,7 @@ pub(crate) fn announce_stop(
     signal: i32,
 ) {
     let _ = session
-        .put(links.failure_key(), format!("stop {signal}"))
+        .put(links.stop_key(), format!("stop {signal}"))
         .congestion_control(zenoh::qos::CongestionControl::Block)
         .wait();
 }
@@ -295,7 +295,7 @@ pub(crate) fn watch_stops(
     on_stop: impl Fn(i32) + Send + Sync + 'static,
 ) -> Result<zenoh::pubsub::Subscriber<()>, ZenohError> {
     session
-        .declare_subscriber(links.failure_key())
+        .declare_subscriber(links.stop_key())
         .callback(move |sample| {
             let text = String::from_utf8_lossy(&sample.payload().to_bytes()).into_owned();
             if let Some(signal) = text

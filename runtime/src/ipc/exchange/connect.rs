@@ -198,7 +198,7 @@ impl Ports {
             }
             if Instant::now() >= deadline {
                 // Marks the one to blame: an agent that never started, not its neighbours.
-                let _ = board.never_connected(&team(endpoint));
+                let _ = board.never_connected(&endpoint.team());
                 // A neighbour that started has published its service.
                 let missing: Vec<usize> = endpoint
                     .neighbours
@@ -293,14 +293,6 @@ impl Ports {
     }
 }
 
-/// The agents whose connection this agent waits for: its host's (a bridged team), or all.
-fn team(endpoint: &ConnectRequest) -> Vec<usize> {
-    match &endpoint.local_agents {
-        Some(local) => local.clone(),
-        None => (0..endpoint.agents()).collect(),
-    }
-}
-
 /// Phase 5: the second half of the start-up rendezvous ([`Board::await_connected`]) as an
 /// exchange error.
 fn await_team(
@@ -310,7 +302,7 @@ fn await_team(
     started: Instant,
 ) -> Result<(), ExchangeError> {
     board
-        .await_connected(&team(endpoint), deadline)
+        .await_connected(&endpoint.team(), deadline)
         .map_err(|waited| rendezvous_error(endpoint.index, waited, started))
 }
 
