@@ -24,10 +24,10 @@ from __future__ import annotations
 import sys as _sys
 
 from . import _core
-from ._core import linear_sum_assignment
+from ._core import LeaveRefused, linear_sum_assignment
 from ._errors import NotCertifiedError, NotOptimalError, SolveError
 from ._solve import SolveResult, solve
-from ._team import LeaveRefused, TeamMember
+from ._team import TeamMember
 
 __all__ = [
     "linear_sum_assignment",

@@ -348,7 +348,10 @@ pyo3::create_exception!(
 /// A member's error as Python's: a refused leave is a `LeaveRefused`, another refusal (a
 /// bad team file, a bad row) a `ValueError`, a failure of the team a `RuntimeError`.
 fn member_error(error: MemberError) -> PyErr {
-    if error.cause().is::<admm_ta::runtime::standing::LeaveRefused>() {
+    if error
+        .cause()
+        .is::<admm_ta::runtime::standing::LeaveRefused>()
+    {
         LeaveRefused::new_err(error.text())
     } else if error.is_refusal() {
         PyValueError::new_err(error.text())

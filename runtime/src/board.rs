@@ -268,6 +268,13 @@ impl Board {
         self.member_pid(agent).is_some_and(process_alive)
     }
 
+    /// Agent `agent` of an independently started team joined and its process is gone since
+    /// (it did not leave: a member that leaves clears its process id).
+    pub fn member_died(&self, agent: usize) -> bool {
+        self.member_pid(agent)
+            .is_some_and(|pid| !process_alive(pid))
+    }
+
     /// Marks agent `failed` as failed (the first mark wins); every agent stops at its next
     /// wait. Returns the agent already marked, if another was first.
     pub fn mark_failed(&self, failed: usize) -> Option<usize> {

@@ -405,3 +405,144 @@ fn a_host_killed_mid_run_ends_every_host_naming_it() {
     lose_a_host_mid_run("zenoh", true);
     lose_a_host_mid_run("mixed", true);
 }
+
+/// With a round deadline no longer than Zenoh's lease (10 s), an agent that times out
+/// waiting for a neighbour does not name it before the network had a lease to say who is
+/// gone: the hosts left name the host cut off, not a healthy agent that waited for it.
+#[test]
+fn a_short_round_deadline_still_names_the_host_cut_off() {
+    let Some(net) = NetHosts::create(4) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("cs{}", std::process::id());
+    let team = team_file(dir.path(), &net, &run, "zenoh", 4, 10.0);
+    // Agent 14 (host h3) stops sending after round 2; then h3 is cut off.
+    let started = start(&net, &team, 4, Some("14:2:hang"));
+    std::thread::sleep(Duration::from_secs(3));
+    net.cut(3);
+    let (hosts, _) = wait(started, Duration::from_secs(90), &[14]);
+    for (h, (out, _)) in hosts.iter().enumerate().take(3) {
+        let message = text(out);
+        assert!(
+            message.contains("host h3 left the team during the run without a goodbye"),
+            "h{h}: {message}"
+        );
+    }
+    for name in shm_left(&run) {
+        let path = Path::new("/dev/shm").join(name);
+        let _ = std::fs::remove_dir_all(&path).or_else(|_| std::fs::remove_file(&path));
+    }
+}
+
+/// A standing team on four namespace hosts (two robots each, a ring) loses a host to a cut
+/// link: the robots of the three others drop its robots (named in `crashed`) and go on,
+/// every episode certified and optimal; the robots cut off say so and exit 4.
+#[test]
+fn a_standing_team_goes_on_without_a_host_cut_off() {
+    use crate::private::{Row, Sidecar, optimum};
+    use serde_json::Value;
+    let Some(net) = NetHosts::create(4) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("sc{}", std::process::id());
+    let (per_host, m) = (2, 4);
+    let n = per_host * 4;
+    let path = dir.path().join("team.toml");
+    let mut text_of_team = format!(
+        "run = \"{run}\"\nrobots = {n}\ncosts = \"private\"\ntasks = {m}\ntopology = \"ring\"\nstartup_timeout = 30.0\nround_timeout = 30.0\nepisode_timeout = 60.0\ntransport = \"zenoh\"\n"
+    );
+    for (h, address) in net.addresses.iter().enumerate() {
+        let agents: Vec<String> = (h * per_host..(h + 1) * per_host)
+            .map(|a| a.to_string())
+            .collect();
+        text_of_team += &format!(
+            "\n[[hosts]]\nname = \"h{h}\"\nagents = [{}]\nendpoint = \"tcp/{address}:7447\"\n",
+            agents.join(", ")
+        );
+    }
+    std::fs::write(&path, text_of_team).unwrap();
+    let team = path.to_str().unwrap();
+    let mut hosts: Vec<Child> = (0..4)
+        .map(|h| {
+            net.admm_ta(h, &["host", "--team", team, "--name", &format!("h{h}")])
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let mut robots: Vec<Sidecar> = (0..n)
+        .map(|id| {
+            let mut command = Command::new("ip");
+            command.args(["netns", "exec", &net.namespaces[id / per_host], ADMM_TA]);
+            command.args(["agent", "--team", team, "--id", &id.to_string(), "--serve"]);
+            Sidecar::spawn(command, id)
+        })
+        .collect();
+    let mut value = 0.0;
+    let mut row = || -> Row {
+        (0..m)
+            .map(|_| {
+                value = (value * 7.3 + 1.1) % 10.0;
+                Some((value * 100.0f64).round() / 100.0)
+            })
+            .collect()
+    };
+    let mut check = |robots: &mut [Sidecar], count: usize, what: &str| {
+        let rows: Vec<Row> = (0..robots.len()).map(|_| row()).collect();
+        for (s, r) in robots.iter_mut().zip(&rows) {
+            s.send_row(r);
+        }
+        let answers: Vec<Value> = robots.iter_mut().take(count).map(Sidecar::next).collect();
+        let best = optimum(&rows[..count], false).unwrap();
+        for a in &answers {
+            assert_eq!(a["certified"], true, "{what}: {a}");
+            let total = a["total_cost"].as_f64().unwrap();
+            assert!(
+                common::relative_gap(total, best) <= 1e-9,
+                "{what}: {a}, optimum {best}"
+            );
+        }
+        answers
+    };
+    for k in 0..2 {
+        check(&mut robots, n, &format!("episode {k}"));
+    }
+    net.cut(3);
+    let answers = check(&mut robots, n - per_host, "the episode of the cut");
+    assert_eq!(
+        answers[0]["crashed"],
+        serde_json::json!([6, 7]),
+        "{}",
+        answers[0]
+    );
+    for s in &mut robots[n - per_host..] {
+        let line = s.next();
+        assert_eq!(line["failed"], true, "{line}");
+        assert!(
+            line["error"].as_str().unwrap().contains("cut off"),
+            "{line}"
+        );
+    }
+    let mut cut_off = robots.split_off(n - per_host);
+    for k in 0..2 {
+        check(&mut robots, n - per_host, &format!("after the cut, {k}"));
+    }
+    for s in &mut robots {
+        s.close();
+    }
+    for s in robots {
+        let (status, stderr) = s.finish();
+        assert!(status.success(), "robot: {stderr}");
+    }
+    for s in cut_off.drain(..) {
+        let (status, _) = s.finish();
+        assert_eq!(status.code(), Some(4));
+    }
+    for (h, host) in hosts.iter_mut().enumerate().take(3) {
+        let status = common::wait_with_deadline(host, Duration::from_secs(60));
+        assert!(status.success(), "h{h}");
+    }
+    let _ = hosts[3].kill();
+    let _ = hosts[3].wait();
+}

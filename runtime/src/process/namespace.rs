@@ -108,7 +108,8 @@ impl RunNamespace {
         Ok(Self {
             // 't' is not a hex digit: no launcher run's prefix (`adta<hex>_`) starts so. The
             // user's id keeps teams of the same name of two users apart (the digits end at
-            // the first dash, so no two users' prefixes coincide).
+            // the first dash, so no two users' prefixes coincide). [`team_parts_prefix`]
+            // writes it too.
             prefix: format!("adtat{uid}-{run}_"),
             id: format!("team-{run}"),
             dir,
@@ -132,15 +133,16 @@ impl RunNamespace {
         })
     }
 
-    /// The shared-memory prefix of part `name`: short (a hash of the team's prefix and the
-    /// part's name), as the Unix sockets of a transport's events must fit in 108 bytes.
+    /// The shared-memory prefix of part `name`: short, as the Unix sockets of a transport's
+    /// events must fit in 108 bytes — [`RunNamespace::parts_prefix`] and a hash of the name.
     fn part_prefix(&self, name: &str) -> String {
-        let hash = format!("{}/{name}", self.prefix)
-            .bytes()
-            .fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
-                (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-            });
-        format!("adtap{hash:016x}_")
+        format!("{}{:08x}_", self.parts_prefix(), short_hash(name))
+    }
+
+    /// What the shared memory of every part of this namespace starts with (`adtap` and a
+    /// hash of its prefix).
+    pub fn parts_prefix(&self) -> String {
+        parts_prefix_of(&self.prefix)
     }
 
     /// The directory of the parts made by [`RunNamespace::within`].
@@ -200,6 +202,28 @@ impl RunNamespace {
         }
         removed
     }
+}
+
+/// 32 bits of FNV-1a over `text`.
+fn short_hash(text: &str) -> u32 {
+    let h = text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    (h ^ (h >> 32)) as u32
+}
+
+/// [`RunNamespace::parts_prefix`] of a namespace whose prefix is `prefix`.
+fn parts_prefix_of(prefix: &str) -> String {
+    format!("adtap{:08x}", short_hash(prefix))
+}
+
+/// What the shared memory of every part of the team named `run` on this machine starts
+/// with (how a test finds what a standing team's rosters left behind), without touching
+/// anything.
+pub fn team_parts_prefix(run: &str) -> String {
+    // SAFETY: geteuid cannot fail.
+    let uid = unsafe { libc::geteuid() };
+    parts_prefix_of(&format!("adtat{uid}-{run}_"))
 }
 
 /// A team name that cannot name shared memory.

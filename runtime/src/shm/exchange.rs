@@ -138,9 +138,22 @@ impl ShmExchange {
     }
 
     /// Stops this agent on a stop request, a failure mark, or (looked at every 64 rounds
-    /// and after a whole sleep slice, `slept`) a launcher that is gone.
+    /// and after a whole sleep slice, `slept`) a launcher that is gone or, with no launcher
+    /// (an independently started team), a neighbour whose process died.
     fn check_peers(&self, round: u64, slept: bool) -> Result<(), ExchangeError> {
         self.board.check_team(self.index, round)?;
+        if self.launcher.is_none()
+            && slept
+            && let Some(&failed) = self.neighbours.iter().find(|&&j| self.board.member_died(j))
+        {
+            let _ = self.board.mark_failed(failed);
+            return Err(ExchangeError::PeerFailed {
+                agent: self.index,
+                failed,
+                round,
+                how: "died (its process is gone)".into(),
+            });
+        }
         if let Some(launcher) = self.launcher
             && (slept || round.is_multiple_of(64))
             && std::os::unix::process::parent_id() != launcher

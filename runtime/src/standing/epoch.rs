@@ -53,8 +53,10 @@ impl Context {
         if let Some(config) = scenario.transport_config.as_mut()
             && let Some(object) = config.as_object_mut()
         {
-            // A Zenoh team's keys of this roster.
+            // A Zenoh team's keys of this roster, and the hosts it waits for: those with
+            // robots in it (a host lost with its robots is none of its business).
             object.insert("epoch".into(), id.name().into());
+            object.insert("hosts".into(), self.team.hosts_of(&id.roster).into());
         }
         scenario
     }

@@ -21,6 +21,7 @@ pub mod answer;
 mod episode;
 mod epoch;
 pub mod member;
+mod outcome;
 pub(crate) mod plane;
 pub mod roster;
 pub mod serve;

@@ -36,7 +36,7 @@ use crate::team::member::{Membership, member_scenario};
 use crate::team::team_file::{HostEntry, Team};
 use crate::zenoh_net::links::ZenohLinks;
 use crate::zenoh_net::router::HostRouter;
-use crate::zenoh_net::session::{announce_failure, watch_failures};
+use crate::zenoh_net::session::{announce_failure, missing_hosts, watch_failures};
 use crossbeam::channel::{Receiver, RecvTimeoutError, unbounded};
 use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
@@ -399,16 +399,18 @@ impl Forwarder {
     fn forward_out(&self, deadline: Instant) -> Result<(), BridgeError> {
         let text = BridgeError::Service;
         // Every other bridge of the run subscribed to our agents before we let them start:
-        // a bridge declares its token after its subscriptions.
+        // a bridge declares its token after its subscriptions, and its host declares its own
+        // once its team file is found the running team's.
         loop {
             let up =
                 crate::zenoh_net::session::alive_keys(&self.session, self.links.bridge_key("*"))?;
-            let missing: Vec<String> = self
-                .hosts
-                .iter()
-                .filter(|h| !up.contains(&self.links.bridge_key(h)))
-                .cloned()
-                .collect();
+            let mut missing = missing_hosts(&self.session, &self.links)?;
+            missing.extend(
+                self.hosts
+                    .iter()
+                    .filter(|h| !up.contains(&self.links.bridge_key(h)))
+                    .cloned(),
+            );
             if missing.is_empty() {
                 break;
             }

@@ -276,14 +276,20 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         key: links.goodbye_key(&host.name),
     };
     if team.is_private() {
-        return crate::team::standing_host::serve_standing_team(
+        let served = crate::team::standing_host::serve_standing_team(
             &team,
             &host,
             session,
             &links,
             &watch,
             startup_deadline,
-        );
+        )?;
+        return Ok(HostReport {
+            host: host.name,
+            agents_seen: served.robots_seen,
+            forwarded_out: served.forwarded.0,
+            forwarded_in: served.forwarded.1,
+        });
     }
     let run_deadline = startup_deadline
         + Duration::from_secs_f64(team.file.round_timeout) * (team.file.max_iters as u32 + 2);

@@ -13,7 +13,6 @@ use crate::process::member_error::MemberError;
 use crate::standing::roster::{EpochId, Roster};
 use crate::team::bridge::{Bridge, BridgeRun};
 use crate::team::errors::HostError;
-use crate::team::host::HostReport;
 use crate::team::member::member_scenario;
 use crate::team::presence::TeamWatch;
 use crate::team::team_file::{HostEntry, Team};
@@ -72,19 +71,13 @@ impl<'t> RosterBridges<'t> {
         scenario.transport_root = part.transport_root();
         scenario.board_shm = part.board_shm();
         let startup = Duration::from_millis(scenario.startup_timeout_ms);
-        let hosts = self
-            .team
-            .file
-            .hosts
-            .iter()
-            .filter(|h| h.agents.iter().any(|&a| id.roster.contains(a)))
-            .map(|h| h.name.clone())
-            .collect();
+        let hosts = self.team.hosts_of(&id.roster);
         Ok(BridgeRun {
             scenario,
             namespace: part,
             links: ZenohLinks {
                 epoch: Some(id.name()),
+                hosts: hosts.clone(),
                 ..self.links.clone()
             },
             host: self.host.name.clone(),
@@ -160,6 +153,13 @@ impl<'t> RosterBridges<'t> {
     }
 }
 
+/// What a standing team's host saw: the robots of the team that came, the round messages
+/// its bridges forwarded out and in.
+pub(super) struct Served {
+    pub(super) robots_seen: usize,
+    pub(super) forwarded: (u64, u64),
+}
+
 /// Runs host `host` of the standing team `team` (see the module) once its router and its
 /// watches are up: until every robot of the team has left, or a termination signal.
 pub(super) fn serve_standing_team(
@@ -169,7 +169,7 @@ pub(super) fn serve_standing_team(
     links: &ZenohLinks,
     watch: &Arc<TeamWatch>,
     startup_deadline: Instant,
-) -> Result<HostReport, MemberError> {
+) -> Result<Served, MemberError> {
     let started = Instant::now();
     let n = team.file.robots;
     let mut bridges = team.file.transport.bridged().then(|| RosterBridges {
@@ -240,15 +240,12 @@ pub(super) fn serve_standing_team(
                 .unwrap_or_else(|e| e.into_inner()),
         );
     }
-    let agents_seen = {
+    let robots_seen = {
         let p = watch.presence.lock().unwrap_or_else(|e| e.into_inner());
         p.seen.iter().filter(|&&s| s).count()
     };
-    let (forwarded_out, forwarded_in) = bridges.map_or((0, 0), RosterBridges::finish);
-    Ok(HostReport {
-        host: host.name.clone(),
-        agents_seen,
-        forwarded_out,
-        forwarded_in,
+    Ok(Served {
+        robots_seen,
+        forwarded: bridges.map_or((0, 0), RosterBridges::finish),
     })
 }

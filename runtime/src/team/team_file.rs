@@ -274,6 +274,16 @@ impl Team {
         self.file.hosts.iter().find(|h| h.agents.contains(&id))
     }
 
+    /// The names of the hosts with robots in `roster`.
+    pub fn hosts_of(&self, roster: &crate::standing::roster::Roster) -> Vec<String> {
+        self.file
+            .hosts
+            .iter()
+            .filter(|h| h.agents.iter().any(|&a| roster.contains(a)))
+            .map(|h| h.name.clone())
+            .collect()
+    }
+
     /// The host called `name`.
     pub fn host(&self, name: &str) -> Result<&HostEntry, TeamFileError> {
         self.file

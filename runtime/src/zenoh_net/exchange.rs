@@ -72,6 +72,13 @@ const RESEND_ROUNDS: u64 = 2;
 
 const RESEND_AT_MOST_EVERY: Duration = Duration::from_secs(1);
 
+/// After a timeout, how long an agent waits for the network to say who is gone before it
+/// names the neighbour it waited for: a Zenoh lease (10 s) and a little more. A neighbour
+/// that waits for an agent cut off from the network sends nothing either, and must not be
+/// the one named: the cut-off agent's token vanishes within the lease, or a host announces
+/// its host lost.
+const VERDICT_WITHIN: Duration = Duration::from_secs(11);
+
 /// How often start-up asks which neighbours are present.
 const PRESENCE_POLL: Duration = Duration::from_millis(50);
 
@@ -454,9 +461,61 @@ impl ZenohExchange {
         session::announce_stop(&self.session, &self.links, signal);
     }
 
+    /// A failure or a stop request announced on the run (between runs: a standing team's
+    /// robot waiting for its next row).
+    pub fn announced(&self) -> Result<(), ExchangeError> {
+        let inbound = self.shared.lock();
+        if let Some(signal) = inbound.stopped {
+            return Err(ExchangeError::Stopped {
+                agent: self.index,
+                signal,
+            });
+        }
+        match inbound.failed {
+            Some(failed) => Err(ExchangeError::PeerFailed {
+                agent: self.index,
+                failed,
+                round: self.gathered,
+                how: "failed".into(),
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// Announces `agent` as the one that failed, so that every agent of the run stops.
     pub fn blame(&self, agent: usize) {
         announce_failure(&self.session, &self.links, agent);
+    }
+
+    /// Whom to name after a timeout in round `round`: a neighbour whose message is missing
+    /// and whose token vanished meanwhile; nobody (`None`) when another agent or a host
+    /// announced a failure or a stop first (the first announcement is the team's verdict);
+    /// else, once the network had [`VERDICT_WITHIN`] to say, the first missing neighbour.
+    pub fn timeout_culprit(&self, round: u64) -> Option<usize> {
+        let until = Instant::now() + VERDICT_WITHIN;
+        let mut inbound = self.shared.lock();
+        loop {
+            if inbound.failed.is_some() || inbound.stopped.is_some() {
+                return None;
+            }
+            let departed = (0..self.neighbours.len())
+                .find(|&k| self.held_round[k] != Some(round) && inbound.departed[k].is_some());
+            if let Some(k) = departed {
+                return Some(self.neighbours[k]);
+            }
+            let now = Instant::now();
+            if now >= until || crate::signals::received().is_some() {
+                break;
+            }
+            inbound = self
+                .shared
+                .wake
+                .wait_timeout(inbound, (until - now).min(FAILURE_CHECK_SLICE))
+                .unwrap_or_else(|p| p.into_inner())
+                .0;
+        }
+        drop(inbound);
+        self.first_missing(round)
     }
 
     /// The first neighbour whose round-`round` message is missing (after a timeout).

@@ -173,16 +173,27 @@ mod built {
             self.request_stop(signal);
         }
 
-        /// No launcher sees every host: whoever fails first tells the others.
+        /// No launcher sees every host: whoever fails first tells the others. After a
+        /// timeout, not before the network had a lease to say who is gone
+        /// ([`ZenohExchange::timeout_culprit`]): the neighbour waited for may be waiting
+        /// itself for an agent cut off.
         fn blame_for(&self, error: &ExchangeError) {
             let culprit = match error {
                 ExchangeError::Aborted { .. } => return,
                 // Possibly seen only by us (its token vanished): pass it on.
                 ExchangeError::PeerFailed { failed, .. } => Some(*failed),
-                ExchangeError::Timeout { round, .. } => self.first_missing(*round),
+                ExchangeError::Timeout { round, .. } => match self.timeout_culprit(*round) {
+                    Some(culprit) => Some(culprit),
+                    // Another agent or a host named the failure first.
+                    None => return,
+                },
                 e => culprit(e),
             };
             self.blame(culprit.unwrap_or(error.agent()));
+        }
+
+        fn check(&self) -> Result<(), ExchangeError> {
+            self.announced()
         }
     }
 }

@@ -10,8 +10,11 @@
 //! * `episodes`: every episode optimal (transports, costs, maximizing, 100 episodes,
 //!   parts of the team);
 //! * `faults`: bad rows, missing rows, leaving, signals, refusals, row files, hosts, the
-//!   Python example.
+//!   Python example;
+//! * `elastic`: robots that leave, join and crash while the team goes on, on every
+//!   transport a standing team runs on.
 
+mod elastic;
 mod episodes;
 mod faults;
 
@@ -27,7 +30,7 @@ use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::mpsc::{Receiver, channel};
 use std::time::Duration;
 
-pub(super) type Row = Vec<Option<f64>>;
+pub(crate) type Row = Vec<Option<f64>>;
 
 pub(super) fn admm_ta() -> Command {
     Command::new(env!("CARGO_BIN_EXE_admm-ta"))
@@ -53,19 +56,35 @@ pub(super) fn team_file(
 }
 
 /// One robot's sidecar, as its program sees it.
-pub(super) struct Sidecar {
-    pub(super) id: usize,
-    pub(super) child: Child,
+pub(crate) struct Sidecar {
+    pub(crate) id: usize,
+    pub(crate) child: Child,
     stdin: Option<ChildStdin>,
     lines: Receiver<String>,
+    /// Its standard error so far (read as it comes).
+    stderr: std::sync::Arc<std::sync::Mutex<String>>,
 }
 
 impl Sidecar {
     pub(super) fn start(team: &Path, id: usize) -> Self {
-        let mut child = admm_ta()
+        Self::start_with(team, id, &[])
+    }
+
+    /// A sidecar with more environment variables (`RUST_LOG`, `ADMM_TA_FAULT`).
+    pub(super) fn start_with(team: &Path, id: usize, env: &[(&str, &str)]) -> Self {
+        let mut command = admm_ta();
+        command
             .args(["agent", "--team", team.to_str().unwrap(), "--id"])
             .arg(id.to_string())
             .arg("--serve")
+            .envs(env.iter().copied());
+        Self::spawn(command, id)
+    }
+
+    /// Robot `id`'s sidecar started by `command` (an `admm-ta agent --serve`, maybe in a
+    /// network namespace).
+    pub(crate) fn spawn(mut command: Command, id: usize) -> Self {
+        let mut child = command
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -81,12 +100,46 @@ impl Sidecar {
                 }
             }
         });
+        let stderr = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
+        let mut err = child.stderr.take().unwrap();
+        let text = std::sync::Arc::clone(&stderr);
+        std::thread::spawn(move || {
+            let mut buffer = [0u8; 4096];
+            while let Ok(read) = std::io::Read::read(&mut err, &mut buffer) {
+                if read == 0 {
+                    return;
+                }
+                text.lock()
+                    .unwrap()
+                    .push_str(&String::from_utf8_lossy(&buffer[..read]));
+            }
+        });
         let stdin = child.stdin.take();
         Self {
             id,
             child,
             stdin,
             lines,
+            stderr,
+        }
+    }
+
+    /// Its standard error so far.
+    pub(crate) fn stderr_text(&self) -> String {
+        self.stderr.lock().unwrap().clone()
+    }
+
+    /// Waits (up to a minute) until its standard error says `text`.
+    pub(super) fn await_stderr(&self, text: &str) {
+        let until = std::time::Instant::now() + Duration::from_secs(60);
+        while !self.stderr_text().contains(text) {
+            assert!(
+                std::time::Instant::now() < until,
+                "robot {}: no {text:?} on stderr within 60 s: {}",
+                self.id,
+                self.stderr_text()
+            );
+            std::thread::sleep(Duration::from_millis(10));
         }
     }
 
@@ -104,31 +157,38 @@ impl Sidecar {
     }
 
     /// Its row (an episode with fewer tasks than the team's says how many).
-    pub(super) fn send_row(&mut self, row: &Row) {
+    pub(crate) fn send_row(&mut self, row: &Row) {
         self.send(&serde_json::json!({ "costs": row, "tasks": row.len() }).to_string());
     }
 
     /// The next line, within a minute (a test never hangs).
-    pub(super) fn next(&mut self) -> Value {
+    pub(crate) fn next(&mut self) -> Value {
         match self.lines.recv_timeout(Duration::from_secs(60)) {
             Ok(line) => serde_json::from_str(&line).unwrap_or_else(|e| panic!("{line}: {e}")),
             Err(_) => {
                 let _ = self.child.kill();
-                let out = self.child.wait_with_output_now();
-                panic!("robot {}: no line within 60 s; stderr: {out}", self.id)
+                let _ = self.child.wait();
+                std::thread::sleep(Duration::from_millis(50));
+                panic!(
+                    "robot {}: no line within 60 s; stderr: {}",
+                    self.id,
+                    self.stderr_text()
+                )
             }
         }
     }
 
-    pub(super) fn close(&mut self) {
+    pub(crate) fn close(&mut self) {
         self.stdin = None;
     }
 
     /// Its exit status, within a minute, and its standard error.
-    pub(super) fn finish(mut self) -> (std::process::ExitStatus, String) {
+    pub(crate) fn finish(mut self) -> (std::process::ExitStatus, String) {
         self.stdin = None;
         let status = common::wait_with_deadline(&mut self.child, Duration::from_secs(60));
-        (status, self.child.wait_with_output_now())
+        // The reader has the rest once the pipe closes.
+        std::thread::sleep(Duration::from_millis(20));
+        (status, self.stderr_text())
     }
 }
 
@@ -173,7 +233,7 @@ pub(super) fn episode(sidecars: &mut [Sidecar], rows: &[Row]) -> Vec<Value> {
 }
 
 /// The centralized optimum of the stacked rows (`None`: no feasible assignment).
-pub(super) fn optimum(rows: &[Row], maximize: bool) -> Option<f64> {
+pub(crate) fn optimum(rows: &[Row], maximize: bool) -> Option<f64> {
     let (n, m) = (rows.len(), rows[0].len());
     let forbidden = if maximize {
         f64::NEG_INFINITY
@@ -213,20 +273,26 @@ pub(super) fn assert_optimal(answers: &[Value], rows: &[Row], maximize: bool, wh
     }
 }
 
-/// Shared-memory files of the team `run`.
+/// Shared-memory files of the team `run` (on one machine, or on hosts `alpha` and `beta`):
+/// its own and its rosters'.
 pub(super) fn shm_of(run: &str) -> Vec<String> {
+    use admm_ta_runtime::process::namespace::team_parts_prefix;
+    let parts: Vec<String> = ["".to_string(), "-alpha".into(), "-beta".into()]
+        .iter()
+        .map(|host| team_parts_prefix(&format!("{run}{host}")))
+        .collect();
     std::fs::read_dir("/dev/shm")
         .map(|entries| {
             entries
                 .flatten()
                 .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|name| name.contains(run))
+                .filter(|name| name.contains(run) || parts.iter().any(|p| name.starts_with(p)))
                 .collect()
         })
         .unwrap_or_default()
 }
 
-pub(super) fn uniform(rng: &mut SeededRng, n: usize, m: usize, scale: f64, shift: f64) -> Vec<Row> {
+pub(crate) fn uniform(rng: &mut SeededRng, n: usize, m: usize, scale: f64, shift: f64) -> Vec<Row> {
     (0..n)
         .map(|_| {
             (0..m)

@@ -1,21 +1,22 @@
 //! One robot of a standing team with private costs: [`TeamMember`].
 //!
-//! Size: one type and its life in the team — joining (found, adopt a roster, or wait to be
-//! admitted), the episode loop with its recovery after a crash, leaving, the checks between
-//! episodes — all on the same private state (the current roster, the last one formed, what
-//! the next answer tells); split, each part would have to expose it to the others.
+//! Its episodes, its leave and its checks between episodes are here; how it gets to a
+//! roster (joining, moving on, forming one again after a crash) is in `rosters`.
 
 use crate::exchange::ExchangeError;
 use crate::process::member_error::MemberError;
-use crate::standing::agreement::{Presence, RosterNews, Sync};
+use crate::standing::agreement::{Presence, RosterNews};
 use crate::standing::answer::{Answer, LeaveRefused, RowError};
-use crate::standing::episode::{EpisodeError, Outcome, Settings};
-use crate::standing::epoch::{Context, Epoch, Forming, latest_epoch};
+use crate::standing::episode::{EpisodeError, Settings};
+use crate::standing::epoch::{Context, Epoch};
+use crate::standing::outcome::Outcome;
 use crate::standing::plane::{BoardPlane, TeamPlane};
-use crate::standing::roster::{Change, CutOff, EpochId, Roster, after_loss};
-use crate::team::errors::{JoinError, PrivateTeamError, TeamFileError};
+use crate::standing::roster::EpochId;
+use crate::team::errors::{PrivateTeamError, TeamFileError};
 use crate::team::member::member_of;
 use crate::team::team_file::Team;
+mod rosters;
+
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -76,8 +77,8 @@ pub struct TeamMember {
     base: Option<EpochId>,
     /// The base formed: robots that vanish from it may have gone on without this one.
     base_formed: bool,
-    /// Its roster failed: the error, until it recovers.
-    broken: Option<ExchangeError>,
+    /// Its roster failed: why, until it recovers.
+    broken: Option<Broken>,
     /// The episode it answers next.
     episode: u64,
     /// What its next answer tells of the roster's changes.
@@ -89,19 +90,33 @@ pub struct TeamMember {
     looked: Instant,
 }
 
-/// How often a robot waiting between episodes looks at its neighbours on the plane.
-const LOOK_EVERY: Duration = Duration::from_millis(100);
+/// A roster that failed.
+#[derive(Debug)]
+struct Broken {
+    error: ExchangeError,
+    /// It failed while forming (a robot that never came, a sync cut short): the same
+    /// robots may form it again even when none of them is gone.
+    forming: bool,
+}
 
-/// How long a robot waits for a vanished robot to show as gone before it takes a failure
-/// for the team's.
-fn settle(plane: &dyn TeamPlane, round_timeout: Duration) -> Duration {
-    if plane.exact() {
-        Duration::from_millis(300)
-    } else {
-        // A Zenoh lease (10 s) and a little more, at most a round's deadline.
-        Duration::from_secs(11).max(round_timeout.min(Duration::from_secs(11)))
+impl Broken {
+    fn running(error: ExchangeError) -> Self {
+        Self {
+            error,
+            forming: false,
+        }
+    }
+
+    fn forming(error: ExchangeError) -> Self {
+        Self {
+            error,
+            forming: true,
+        }
     }
 }
+
+/// How often a robot waiting between episodes looks at its neighbours on the plane.
+const LOOK_EVERY: Duration = Duration::from_millis(100);
 
 /// Robot `id`'s plane of the team (its scenario and namespace are the team's, or its
 /// host's): the team's board on one machine, Zenoh across machines.
@@ -248,18 +263,19 @@ impl TeamMember {
     /// [`MemberError::Refused`]) and it stays: ask again later (each call is an episode in
     /// which it relays), or set `leave = "force"` in the team file.
     pub fn leave(&mut self) -> Result<(), MemberError> {
-        if self.standing != Standing::In {
-            return Ok(());
-        }
-        let answer = self.episode_with(None, Presence::Leaving)?;
-        if self.standing == Standing::In {
-            let roster = self.roster();
-            let others: Vec<usize> = roster.into_iter().filter(|&r| r != self.id()).collect();
-            return Err(MemberError::refused(LeaveRefused {
-                robot: self.id(),
-                episode: answer.episode,
-                apart: self.ctx.settings.graph.components_among(&others),
-            }));
+        let me = self.id();
+        while self.standing == Standing::In {
+            let answer = self.episode_with(None, Presence::Leaving)?;
+            if answer.leave_refused.contains(&me) {
+                let others: Vec<usize> = self.roster().into_iter().filter(|&r| r != me).collect();
+                return Err(MemberError::refused(LeaveRefused {
+                    robot: me,
+                    episode: answer.episode,
+                    apart: self.ctx.settings.graph.components_among(&others),
+                }));
+            }
+            // Else it left, or a crash cut the episode short after another robot had
+            // answered it: the leave goes into the next.
         }
         Ok(())
     }
@@ -285,7 +301,7 @@ impl TeamMember {
                 if let ExchangeError::Stopped { signal, .. } = e {
                     return Err(self.stopped(signal));
                 }
-                self.broken = Some(e);
+                self.broken = Some(Broken::running(e));
             } else if self.looked.elapsed() >= LOOK_EVERY {
                 self.looked = Instant::now();
                 self.look_at_neighbours();
@@ -324,7 +340,7 @@ impl TeamMember {
             if let Some(board) = epoch.board() {
                 let _ = board.mark_failed(gone);
             }
-            self.broken = Some(error);
+            self.broken = Some(Broken::running(error));
         }
     }
 
@@ -383,7 +399,7 @@ impl TeamMember {
                         return Err(self.stopped(signal));
                     }
                     tracing::debug!(error = %e, episode = pending, "the roster failed");
-                    self.broken = Some(e);
+                    self.broken = Some(Broken::running(e));
                     self.ready()?;
                     if self.episode > pending {
                         // Another robot answered this episode already: it is lost.
@@ -449,279 +465,6 @@ impl TeamMember {
             self.move_on(change);
         }
         answer
-    }
-
-    /// Out of the team: its roster and the plane.
-    fn depart(&mut self, standing: Standing) {
-        if let Some(epoch) = self.epoch.take() {
-            epoch.close(&*self.ctx.plane, true);
-        }
-        self.ctx.plane.leave_team();
-        self.standing = standing;
-    }
-
-    /// To the roster an episode agreed on (its number the next).
-    fn move_on(&mut self, change: Change) {
-        let Some(epoch) = self.epoch.take() else {
-            return;
-        };
-        let next = EpochId {
-            number: epoch.id.number + 1,
-            roster: change.next,
-        };
-        epoch.close(&*self.ctx.plane, true);
-        self.known = RosterNews {
-            joined: change.joined,
-            ..RosterNews::default()
-        };
-        match Epoch::form(&self.ctx, next, Instant::now() + self.startup()) {
-            Ok(epoch) => self.install(epoch),
-            Err(e) => {
-                tracing::debug!(error = %e, "the next roster did not form");
-                self.broken = Some(self.forming_error(e));
-            }
-        }
-    }
-
-    fn startup(&self) -> Duration {
-        Duration::from_millis(self.ctx.scenario.startup_timeout_ms)
-    }
-
-    fn round_timeout(&self) -> Duration {
-        Duration::from_millis(self.ctx.scenario.round_timeout_ms)
-    }
-
-    /// A roster that did not form, as the failure it leaves behind.
-    fn forming_error(&self, e: Forming) -> ExchangeError {
-        ExchangeError::Transport {
-            agent: self.id(),
-            what: format!("the next roster did not form: {e}"),
-        }
-    }
-
-    /// Takes roster `epoch` as this robot's: the sync that starts it (the episode the team
-    /// is at, what changed). A failed sync leaves it broken (recovered from it).
-    fn install(&mut self, mut epoch: Epoch) {
-        self.ctx.plane.set_member();
-        let me = self.id();
-        let n = self.robots();
-        let known = std::mem::take(&mut self.known);
-        let own = Sync::own(n, self.episode, &known);
-        let (exchange, episodes) = epoch.parts();
-        let synced = episodes.sync(exchange, own);
-        self.base = Some(epoch.id.clone());
-        self.base_formed = true;
-        match synced {
-            Ok(sync) => {
-                self.episode = self.episode.max(sync.episode);
-                self.news.merge(&sync.news());
-                self.ctx.plane.set_formed(&epoch.id);
-            }
-            Err(e) => {
-                epoch.blame(me, &e);
-                self.known = known;
-                self.broken = Some(e);
-            }
-        }
-        self.epoch = Some(epoch);
-    }
-
-    /// A formed, synced roster to run the next episode on: recovers a broken one.
-    fn ready(&mut self) -> Result<(), MemberError> {
-        if let Some(signal) = crate::signals::received() {
-            return Err(self.stop(signal));
-        }
-        while self.broken.is_some() || self.epoch.is_none() {
-            if let Some(signal) = self.ctx.plane.stop_requested() {
-                return Err(self.stopped(signal));
-            }
-            let failure = self.broken.take();
-            self.recover(failure)?;
-        }
-        Ok(())
-    }
-
-    /// Forms a roster without the robots gone since `failure` broke the last one (see the
-    /// module of [`crate::standing::roster`]).
-    fn recover(&mut self, failure: Option<ExchangeError>) -> Result<(), MemberError> {
-        let me = self.id();
-        if let Some(epoch) = self.epoch.take() {
-            epoch.close(&*self.ctx.plane, false);
-        }
-        let Some(base) = self.base.clone() else {
-            // Never formed a roster: join as a new robot does.
-            return self.enter(Instant::now());
-        };
-        let started = Instant::now();
-        let deadline = started + self.startup() + self.episode_timeout() + self.round_timeout();
-        let settle_until = started + settle(&*self.ctx.plane, self.round_timeout());
-        let failure = failure.unwrap_or_else(|| ExchangeError::Transport {
-            agent: me,
-            what: "the roster failed".into(),
-        });
-        let mut given_up: Vec<EpochId> = Vec::new();
-        loop {
-            if let Some(signal) = crate::signals::received() {
-                return Err(self.stop(signal));
-            }
-            if let Some(signal) = self.ctx.plane.stop_requested() {
-                return Err(self.stopped(signal));
-            }
-            let others: Vec<usize> = base
-                .roster
-                .robots()
-                .iter()
-                .copied()
-                .filter(|&r| r != me)
-                .collect();
-            let gone = self.ctx.plane.gone(&others);
-            let now = Instant::now();
-            // Where it may have been cut off rather than its neighbours dead, it goes on
-            // only with most of the roster it formed.
-            let majority = !self.ctx.plane.exact() && self.base_formed;
-            let adopt = latest_epoch(&*self.ctx.plane, me, Some(base.number))
-                .filter(|e| !given_up.contains(e));
-            if gone.is_empty() && adopt.is_none() {
-                if now < settle_until {
-                    std::thread::sleep(Duration::from_millis(20));
-                    continue;
-                }
-                // Nobody vanished: the failure is the team's.
-                return Err(self.fail(failure));
-            }
-            let next = match after_loss(&self.ctx.settings.graph, &base.roster, &gone, me, majority)
-            {
-                Ok((next, lost)) => {
-                    self.known = RosterNews {
-                        joined: Vec::new(),
-                        crashed: gone.clone(),
-                        lost,
-                    };
-                    EpochId {
-                        number: base.number + 1,
-                        roster: next,
-                    }
-                }
-                Err(cut) => return Err(self.cut_off(cut)),
-            };
-            let id = match adopt {
-                Some(found) if found.number >= next.number => found,
-                _ => next,
-            };
-            if given_up.contains(&id) {
-                if now >= deadline {
-                    return Err(self.fail(failure));
-                }
-                std::thread::sleep(Duration::from_millis(20));
-                continue;
-            }
-            tracing::debug!(robot = me, gone = ?gone, epoch = %id.name(), "forming the roster again");
-            match Epoch::form(&self.ctx, id.clone(), deadline) {
-                Ok(epoch) => {
-                    self.install(epoch);
-                    return Ok(());
-                }
-                Err(Forming::Stopped(signal)) => return Err(self.stopped(signal)),
-                Err(e) => {
-                    tracing::debug!(error = %e, "the roster did not form");
-                    given_up.push(id);
-                    if Instant::now() >= deadline {
-                        return Err(self.fail(self.forming_error(e)));
-                    }
-                }
-            }
-        }
-    }
-
-    /// The team went on without this robot.
-    fn cut_off(&mut self, cut: CutOff) -> MemberError {
-        if let Some(epoch) = self.epoch.take() {
-            epoch.close(&*self.ctx.plane, false);
-        }
-        self.ctx.plane.leave_team();
-        self.standing = Standing::Lost(cut.to_string());
-        MemberError::failed(cut)
-    }
-
-    /// A robot coming to the team: forms its first roster with the others (none formed
-    /// yet), takes its place in one forming with it, or asks to join and waits to be
-    /// admitted (see [`TeamMember::join`]).
-    fn enter(&mut self, started: Instant) -> Result<(), MemberError> {
-        let me = self.id();
-        let startup = self.startup();
-        let admission = startup + 2 * (self.episode_timeout() + self.round_timeout());
-        let deadline = started + admission;
-        let first = EpochId {
-            number: 0,
-            roster: Roster::all(self.robots()),
-        };
-        let mut given_up: Vec<EpochId> = Vec::new();
-        loop {
-            if let Some(signal) = crate::signals::received() {
-                return Err(self.stop(signal));
-            }
-            if let Some(signal) = self.ctx.plane.stop_requested() {
-                return Err(self.stopped(signal));
-            }
-            let plane = &*self.ctx.plane;
-            let found = latest_epoch(plane, me, None).filter(|e| !given_up.contains(e));
-            let running = plane.epochs().iter().any(|e| !plane.in_epoch(e).is_empty());
-            let id = match found {
-                Some(id) => id,
-                None if given_up.contains(&first) => {
-                    // The team's first roster did not form with every robot: those that
-                    // came go on without the others.
-                    self.base = Some(first);
-                    self.base_formed = false;
-                    self.broken = Some(ExchangeError::Transport {
-                        agent: me,
-                        what: "the team's first roster did not form".into(),
-                    });
-                    return self.ready();
-                }
-                None if !running => first.clone(),
-                None => {
-                    // The team runs without this robot: it asks to join.
-                    self.ctx.plane.set_joining();
-                    if Instant::now() >= deadline {
-                        return Err(self.not_admitted(admission));
-                    }
-                    std::thread::sleep(Duration::from_millis(20));
-                    continue;
-                }
-            };
-            self.ctx.plane.set_member();
-            let until = if id.number == 0 {
-                started + startup
-            } else {
-                deadline
-            };
-            match Epoch::form(&self.ctx, id.clone(), until) {
-                Ok(epoch) => {
-                    self.install(epoch);
-                    return self.ready();
-                }
-                Err(Forming::Stopped(signal)) => return Err(self.stopped(signal)),
-                Err(e) => {
-                    tracing::debug!(error = %e, epoch = %id.name(), "the roster did not form");
-                    if Instant::now() >= deadline {
-                        return Err(self.fail(self.forming_error(e)));
-                    }
-                    given_up.push(id);
-                }
-            }
-        }
-    }
-
-    /// The team never admitted this robot.
-    fn not_admitted(&mut self, waited: Duration) -> MemberError {
-        let me = self.id();
-        self.standing = Standing::Failed;
-        MemberError::failed(JoinError::NotAdmitted {
-            robot: me,
-            waited,
-            neighbours: self.ctx.settings.graph.neighbours(me).to_vec(),
-        })
     }
 }
 
