@@ -360,7 +360,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         {
             let listed: Vec<usize> = (0..n).filter(|&a| presence.alive[a]).collect();
             if !listed.is_empty()
-                && let Some(lost) = lost_verdict(&presence, &team, &host.name, Some(failed))
+                && let Some(lost) = presence.lost_verdict(&team, &host.name, Some(failed))
             {
                 tracing::warn!(?listed, "agents still listed after the loss of a host");
                 return Err(MemberError::failed(lost));
@@ -435,7 +435,7 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
     let failed = presence
         .failed
         .or_else(|| bridge.as_ref().and_then(|b| b.failed()));
-    let lost = lost_verdict(&presence, &team, &host.name, failed);
+    let lost = presence.lost_verdict(&team, &host.name, failed);
     let agents_seen = presence.seen.iter().filter(|&&s| s).count();
     drop(presence);
     let (forwarded_out, forwarded_in) = bridge.map_or((0, 0), |b| b.finish());
@@ -454,37 +454,6 @@ pub fn run_host(team_path: &Path, name: &str) -> Result<HostReport, MemberError>
         forwarded_out,
         forwarded_in,
     })
-}
-
-/// The verdict of a run that lost a host, when the failure (if any) is one of the lost
-/// hosts' agents: cut off when every other host was lost, else the first lost host named.
-fn lost_verdict(
-    presence: &Presence,
-    team: &Team,
-    me: &str,
-    failed: Option<usize>,
-) -> Option<HostError> {
-    let lost = presence.lost_host()?;
-    let others = team.file.hosts.len().saturating_sub(1);
-    if presence.cut_off(others) {
-        return failed
-            .is_none_or(|f| presence.lost_hosts.iter().any(|h| lost_owns(team, h, f)))
-            .then(|| HostError::CutOff {
-                host: me.to_string(),
-                lost: presence.lost_hosts.clone(),
-            });
-    }
-    failed
-        .is_none_or(|f| lost_owns(team, lost, f))
-        .then(|| HostError::HostLost {
-            host: me.to_string(),
-            lost: lost.to_string(),
-        })
-}
-
-/// Whether agent `agent` runs on host `host` of `team`.
-fn lost_owns(team: &Team, host: &str, agent: usize) -> bool {
-    team.host(host).is_ok_and(|h| h.agents.contains(&agent))
 }
 
 /// Says this host's goodbye (a liveliness token, declared and withdrawn) when dropped.

@@ -1,6 +1,8 @@
 //! What a host knows of its team's presence: who came, who is still there, who failed,
 //! which host was lost — filled by Zenoh's callbacks, read by the host's loop.
 
+use crate::team::errors::HostError;
+use crate::team::team_file::Team;
 use std::collections::HashSet;
 use std::sync::{Condvar, Mutex};
 
@@ -50,6 +52,37 @@ impl Presence {
     pub(super) fn cut_off(&self, others: usize) -> bool {
         others >= 2 && self.lost_hosts.len() >= others
     }
+    /// The verdict of a run that lost a host, when the failure (if any) is one of the lost
+    /// hosts' agents: cut off when every other host was lost, else the first lost host
+    /// named.
+    pub(super) fn lost_verdict(
+        &self,
+        team: &Team,
+        me: &str,
+        failed: Option<usize>,
+    ) -> Option<HostError> {
+        let lost = self.lost_host()?;
+        let others = team.file.hosts.len().saturating_sub(1);
+        if self.cut_off(others) {
+            return failed
+                .is_none_or(|f| self.lost_hosts.iter().any(|h| lost_owns(team, h, f)))
+                .then(|| HostError::CutOff {
+                    host: me.to_string(),
+                    lost: self.lost_hosts.clone(),
+                });
+        }
+        failed
+            .is_none_or(|f| lost_owns(team, lost, f))
+            .then(|| HostError::HostLost {
+                host: me.to_string(),
+                lost: lost.to_string(),
+            })
+    }
+}
+
+/// Whether agent `agent` runs on host `host` of `team`.
+fn lost_owns(team: &Team, host: &str, agent: usize) -> bool {
+    team.host(host).is_ok_and(|h| h.agents.contains(&agent))
 }
 
 pub(super) struct TeamWatch {
