@@ -11,11 +11,14 @@ Each repeat starts a fresh team of `--robots` sidecars (zenoh and mixed: two hos
 loopback, half the robots each), feeds them as robot programs would (fresh uniform costs
 every episode) and runs, in this order:
 
-* `--steady` episodes with every robot;
+* one episode (the team's first: start-up effects), then `--steady` episodes with every
+  robot;
 * **leave**: robot `n − 3` closes its input (it relays in that episode, the others solve);
   `--steady` episodes without it;
 * **join**: a new process for that slot is started with its first row; the others run
-  episodes until they name it in `joined` (its first answer); `--steady` episodes with it;
+  episodes until they name it in `joined` (its first answer); the episode of the join is
+  the slower of the one that admitted it (after which the others move to the new roster)
+  and its first; `--steady` episodes with it;
 * **crash**: robot 1 is killed (SIGKILL) between episodes; the next episode (solved again
   without it after the survivors notice) is the crash episode; `--steady` episodes after.
 
@@ -133,6 +136,7 @@ def steady(fleet, count):
 def one_repeat(args, directory, k):
     fleet = Fleet(args, directory, f"elastic{k}-{os.getpid()}")
     n = args.robots
+    fleet.episode()  # the team's first episode (start-up effects)
     result = {"steady": steady(fleet, args.steady)}
     leaver = n - 3
     fleet.members[leaver].process.stdin.close()
@@ -147,7 +151,10 @@ def one_repeat(args, directory, k):
     while fleet.joining is not None:
         took, first, joined = fleet.episode()
         episodes.append(took)
-    result["join"] = {"ms": took, "episodes_until_joined": len(episodes),
+    # The episode that admitted it (the others moved to the new roster after it) and its
+    # first one.
+    result["join"] = {"ms": max(episodes[-2:]), "first_ms": took,
+                      "episodes_until_joined": len(episodes),
                       "start_to_answer_ms": (time.monotonic() - fleet.members[leaver].started) * 1e3,
                       "rounds": first["rounds"]}
     result["after join"] = steady(fleet, args.steady)

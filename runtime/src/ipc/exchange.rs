@@ -159,7 +159,22 @@ impl IpcExchange {
 
     /// Stops this agent if another agent failed ([`PeerWatch::check`]).
     fn check_peers(&mut self, round: u64, waited: Duration) -> Result<(), ExchangeError> {
-        self.watch.check(&self.board, round, waited)
+        self.watch.check(&self.board, round, waited)?;
+        // Without a launcher (an independently started team), a neighbour whose process the
+        // board records is gone: at once, not at the next scan of the nodes.
+        if self.watch.launcher.is_none()
+            && !waited.is_zero()
+            && let Some(&failed) = self.neighbours.iter().find(|&&j| self.board.member_died(j))
+        {
+            let _ = self.board.mark_failed(failed);
+            return Err(ExchangeError::PeerFailed {
+                agent: self.index,
+                failed,
+                round,
+                how: "died (its process is gone)".into(),
+            });
+        }
+        Ok(())
     }
 
     /// Moves neighbour `k`'s round-`round` message into `held[k]`; `false` if not there yet.

@@ -218,6 +218,9 @@ pub enum JoinError {
     OtherTeam(#[from] OtherTeam),
     #[error("agent {slot} of this team is already running (pid {pid}): one process per agent")]
     AlreadyRunning { slot: usize, pid: u32 },
+    /// A standing team's robot whose slot another process holds on the team's network.
+    #[error("robot {slot} of this team is already running on its network: one process per robot")]
+    AlreadyOnTheNetwork { slot: usize },
     #[error("agent {slot} already took part in this team's run: it cannot join it twice")]
     TookPart { slot: usize },
     #[error(transparent)]

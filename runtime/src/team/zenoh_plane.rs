@@ -118,6 +118,14 @@ mod built {
             session: Some(session),
         };
         plane.refresh();
+        let present = plane.present();
+        if present.contains(&plane.links.alive_key(id))
+            || present.contains(&plane.links.joining_key(id))
+        {
+            return Err(MemberError::refused(
+                crate::team::errors::JoinError::AlreadyOnTheNetwork { slot: id },
+            ));
+        }
         Ok(Box::new(plane))
     }
 

@@ -420,6 +420,18 @@ fn a_killed_robot_costs_at_most_one_episode(transport: &str) {
         let e = fleet.episode();
         assert_optimal_among(&e, &format!("{transport}: after the crash, {k}"));
     }
+    // A robot for the free slot with another team file is refused by name.
+    let rogue = team.with_file_name("rogue.toml");
+    let text = std::fs::read_to_string(&team).unwrap();
+    std::fs::write(&rogue, format!("seed = 99\n{text}")).unwrap();
+    let out = admm_ta()
+        .args(["agent", "--team", rogue.to_str().unwrap(), "--id", "2", "--serve"])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{transport}: {stderr}");
+    assert!(stderr.contains("differs"), "{transport}: {stderr}");
     fleet.join(2);
     let mut joined = false;
     for k in 5..8 {
