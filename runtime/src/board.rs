@@ -369,6 +369,11 @@ impl Board {
             if team.iter().all(|&a| self.connected(a)) {
                 return Ok(());
             }
+            // A member of an independently started team whose process died while it started.
+            if let Some(&dead) = team.iter().find(|&&a| self.member_died(a)) {
+                let _ = self.mark_failed(dead);
+                return Err(Rendezvous::Failed(dead));
+            }
             if std::time::Instant::now() >= deadline {
                 return Err(Rendezvous::NeverConnected(self.never_connected(team)));
             }

@@ -83,9 +83,25 @@ fn transport(agent: usize, what: impl Into<String>) -> ExchangeError {
 }
 
 /// A stop request (termination signal) during start-up, as the agent's one-line error.
-fn stop_during_startup(agent: usize, board: &Board) -> Result<(), ExchangeError> {
-    match board.stop_signal() {
-        Some(signal) => Err(ExchangeError::Stopped { agent, signal }),
+fn stop_during_startup(
+    agent: usize,
+    board: &Board,
+    neighbours: &[usize],
+) -> Result<(), ExchangeError> {
+    if let Some(signal) = board.stop_signal() {
+        return Err(ExchangeError::Stopped { agent, signal });
+    }
+    // A neighbour of an independently started team whose process died while it started.
+    match neighbours.iter().find(|&&j| board.member_died(j)) {
+        Some(&failed) => {
+            let _ = board.mark_failed(failed);
+            Err(ExchangeError::PeerFailed {
+                agent,
+                failed,
+                round: 0,
+                how: "died during start-up".into(),
+            })
+        }
         None => Ok(()),
     }
 }
@@ -130,7 +146,7 @@ impl UdsExchange {
                 match UnixStream::connect(&path) {
                     Ok(s) => break s,
                     Err(_) if Instant::now() < deadline => {
-                        stop_during_startup(i, &board)?;
+                        stop_during_startup(i, &board, &endpoint.neighbours)?;
                         std::thread::sleep(Duration::from_millis(1));
                     }
                     Err(e) => {
@@ -179,7 +195,7 @@ impl UdsExchange {
                     links[k] = Some(link(j, stream));
                 }
                 Err(e) if e.kind() == ErrorKind::WouldBlock && Instant::now() < deadline => {
-                    if let Err(e) = stop_during_startup(i, &board) {
+                    if let Err(e) = stop_during_startup(i, &board, &endpoint.neighbours) {
                         let _ = std::fs::remove_file(&own);
                         return Err(e.into());
                     }

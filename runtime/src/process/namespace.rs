@@ -150,6 +150,15 @@ impl RunNamespace {
         self.dir.join(PARTS_DIR)
     }
 
+    /// Removes part `name` ([`RunNamespace::within`]) with its shared memory. Only call
+    /// once no process uses it.
+    pub fn remove_part(&self, name: &str) {
+        for path in shm_objects(&self.part_prefix(name)) {
+            let _ = remove_if_exists(&path);
+        }
+        let _ = std::fs::remove_dir_all(self.parts_dir().join(name));
+    }
+
     /// Removes every part ([`RunNamespace::within`]) with its shared memory. Only call
     /// once no process uses any.
     pub fn remove_parts(&self) {

@@ -97,18 +97,18 @@ impl std::fmt::Display for Forming {
 /// How often a robot that waits for its roster looks for a later one.
 const SUPERSEDED_EVERY: Duration = Duration::from_millis(50);
 
-/// The latest roster with robot `me` in it that robots are forming (not formed yet: a
-/// restarted robot does not take its former self's place in a running roster), numbered
-/// above `after`, none of whose robots is gone from the team.
+/// The latest roster ([`EpochId`]'s order) with robot `me` in it that robots are forming
+/// (not formed yet: a restarted robot does not take its former self's place in a running
+/// roster), after `after`, none of whose robots is gone from the team.
 pub(super) fn latest_epoch(
     plane: &dyn TeamPlane,
     me: usize,
-    after: Option<u64>,
+    after: Option<&EpochId>,
 ) -> Option<EpochId> {
     plane
         .epochs()
         .into_iter()
-        .filter(|e| e.roster.contains(me) && after.is_none_or(|a| e.number > a))
+        .filter(|e| e.roster.contains(me) && after.is_none_or(|a| e > a))
         .filter(|e| !plane.in_epoch(e).is_empty() && !plane.formed(e))
         .filter(|e| {
             // The team's first roster waits for robots that have not started yet.
@@ -121,7 +121,7 @@ pub(super) fn latest_epoch(
                 .collect();
             e.number == 0 || plane.absent(&others).is_empty()
         })
-        .max_by_key(|e| (e.number, e.roster.len()))
+        .max()
 }
 
 /// Waits until every robot of roster `id` is in it (see the module).
@@ -152,7 +152,7 @@ fn await_roster(ctx: &Context, id: &EpochId, deadline: Instant) -> Result<(), Fo
         let now = Instant::now();
         if now >= next_look {
             next_look = now + SUPERSEDED_EVERY;
-            if let Some(later) = latest_epoch(plane, ctx.me(), Some(id.number)) {
+            if let Some(later) = latest_epoch(plane, ctx.me(), Some(id)) {
                 return Err(Forming::Superseded(later));
             }
         }
@@ -201,7 +201,7 @@ impl Epoch {
                 })
             }
             Err(e) => {
-                ctx.plane.leave_epoch(&id);
+                ctx.plane.give_up_epoch(&id);
                 if !ctx.team.file.transport.host_board() {
                     let _ = std::fs::remove_dir_all(&part.dir);
                 }
@@ -281,6 +281,18 @@ impl Epoch {
         if let (Some(board), false) = (self.board(), matches!(error, ExchangeError::Stopped { .. }))
         {
             let _ = board.mark_failed(me);
+        }
+    }
+
+    /// Robot `gone` of the roster vanished from the team (seen on the plane between
+    /// episodes): the roster failed, for every robot of it (`error`: this robot's view).
+    pub(super) fn report_gone(&self, gone: usize, error: &ExchangeError) {
+        match (self.board(), &self.endpoint) {
+            (Some(board), _) => {
+                let _ = board.mark_failed(gone);
+            }
+            (None, Some(endpoint)) => endpoint.blame_for(error),
+            (None, None) => {}
         }
     }
 

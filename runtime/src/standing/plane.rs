@@ -36,6 +36,11 @@ pub(crate) trait TeamPlane {
     fn enter_epoch(&self, epoch: &EpochId);
     /// Says that this robot is no longer in roster `epoch`.
     fn leave_epoch(&self, epoch: &EpochId);
+    /// Gives roster `epoch` up (it did not form): this robot is no longer in it, and what
+    /// robots made of it goes when none is left in it.
+    fn give_up_epoch(&self, epoch: &EpochId) {
+        self.leave_epoch(epoch);
+    }
     /// The robots of `epoch` that said they are in it (and are alive).
     fn in_epoch(&self, epoch: &EpochId) -> Vec<usize>;
     /// Says that roster `epoch` formed: every robot of it connected and synced (no robot
@@ -194,6 +199,13 @@ impl TeamPlane for BoardPlane {
     fn leave_epoch(&self, epoch: &EpochId) {
         let dir = self.namespace.parts_dir().join(epoch.name());
         let _ = std::fs::remove_file(dir.join(format!("{IN_FILE}{}", self.id)));
+    }
+
+    fn give_up_epoch(&self, epoch: &EpochId) {
+        self.leave_epoch(epoch);
+        if self.in_epoch(epoch).is_empty() {
+            self.namespace.remove_part(&epoch.name());
+        }
     }
 
     fn in_epoch(&self, epoch: &EpochId) -> Vec<usize> {

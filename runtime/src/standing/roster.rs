@@ -18,6 +18,7 @@
 //!   part that goes on must hold more than half of the last roster (half, with its lowest
 //!   robot): the other side of a cut stops rather than solving the same tasks again.
 
+use admm_ta_agents::certify::local_stop::MAX_DIAMETER;
 use admm_ta_topologies::Graph;
 use std::collections::BTreeSet;
 
@@ -102,11 +103,15 @@ impl Roster {
         }
         Some(Self::new(robots))
     }
+}
 
-    /// Whether the graph this roster induces in `graph` is connected (an empty roster is).
-    pub fn connected_in(&self, graph: &Graph) -> bool {
-        self.is_empty() || graph.diameter_among(&self.0).is_some()
-    }
+/// Whether `robots` induce a graph a team can run on: connected, its diameter at most
+/// [`MAX_DIAMETER`] (the stop protocol's window; none is fine).
+fn fits(graph: &Graph, robots: &[usize]) -> bool {
+    robots.is_empty()
+        || graph
+            .diameter_among(robots)
+            .is_some_and(|d| d <= MAX_DIAMETER)
 }
 
 /// One roster of a standing team's life: its number (it grows with every change) and its
@@ -116,6 +121,24 @@ impl Roster {
 pub struct EpochId {
     pub number: u64,
     pub roster: Roster,
+}
+
+/// Rosters in the order robots prefer them when two form at once: the later number, then
+/// the more robots, then the robots themselves (a total order every robot applies alike).
+impl Ord for EpochId {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        (self.number, self.roster.len(), self.roster.robots()).cmp(&(
+            other.number,
+            other.roster.len(),
+            other.roster.robots(),
+        ))
+    }
+}
+
+impl PartialOrd for EpochId {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
 }
 
 impl EpochId {
@@ -176,12 +199,7 @@ fn refused_leaves(graph: &Graph, roster: &Roster, leaving: &[usize]) -> Vec<usiz
     for l in leaving {
         kept.remove(l);
     }
-    let connected = |kept: &BTreeSet<usize>| {
-        kept.is_empty()
-            || graph
-                .diameter_among(&kept.iter().copied().collect::<Vec<_>>())
-                .is_some()
-    };
+    let connected = |kept: &BTreeSet<usize>| fits(graph, &kept.iter().copied().collect::<Vec<_>>());
     let mut refused = Vec::new();
     for &l in leaving {
         if connected(&kept) {
@@ -256,11 +274,13 @@ pub fn change(
         let before = joined.len();
         waiting.retain(|&j| {
             let adjacent = graph.neighbours(j).iter().any(|n| next.contains(n));
-            if adjacent {
+            let with: Vec<usize> = next.iter().copied().chain([j]).collect();
+            let admitted = adjacent && fits(graph, &with);
+            if admitted {
                 next.insert(j);
                 joined.push(j);
             }
-            !adjacent
+            !admitted
         });
         if joined.len() == before {
             break;
@@ -288,6 +308,11 @@ pub enum CutOff {
         gone: Vec<usize>,
         part: Vec<usize>,
     },
+    /// The part that goes on is too long a graph for the stop protocol.
+    #[error(
+        "the team cannot go on after losing robot(s) {gone:?}: the graph of the robots left has a diameter above {MAX_DIAMETER}"
+    )]
+    TooLong { gone: Vec<usize> },
     /// The part this robot is in holds no majority of the last roster: the robots it lost
     /// may have gone on without it (a network cut).
     #[error(
@@ -332,6 +357,11 @@ pub fn after_loss(
             robot: me,
             reached: part.len(),
             of: roster.len(),
+            gone: gone.to_vec(),
+        });
+    }
+    if !fits(graph, &part) {
+        return Err(CutOff::TooLong {
             gone: gone.to_vec(),
         });
     }
@@ -412,6 +442,24 @@ mod tests {
         let (next, _) = after_loss(&ring, &all, &[4, 5, 6, 7], 0, true).unwrap();
         assert_eq!(next, Roster::new([0, 1, 2, 3]));
         assert!(after_loss(&ring, &all, &[0, 1, 2, 3], 5, true).is_err());
+    }
+
+    #[test]
+    fn a_roster_too_long_for_the_stop_protocol_is_refused() {
+        let n = 2 * MAX_DIAMETER + 10;
+        let ring = generate::ring(n).unwrap();
+        let all = Roster::all(n);
+        let c = change(&ring, &all, &[3], &[], LeaveRule::Refuse);
+        assert_eq!(
+            (c.left, c.refused),
+            (vec![], vec![3]),
+            "a chain of {} robots",
+            n - 1
+        );
+        assert!(matches!(
+            after_loss(&ring, &all, &[3], 0, false),
+            Err(CutOff::TooLong { .. })
+        ));
     }
 
     #[test]

@@ -101,6 +101,8 @@ impl<'t> RosterBridges<'t> {
         }
         self.looked = Some(Instant::now());
         let rosters = self.local_rosters();
+        // A roster whose bridge failed is not bridged again while its robots are in it.
+        self.failed.retain(|name| rosters.contains_key(name));
         for (name, id) in &rosters {
             if self.running.contains_key(name) || self.failed.contains(name) {
                 continue;

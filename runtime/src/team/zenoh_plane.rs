@@ -86,11 +86,14 @@ mod built {
         let host = team
             .host_of(id)
             .ok_or_else(|| MemberError::refused(ZenohError::new("robot's host", "none")))?;
-        let links = team.zenoh_links(host);
+        let links = ZenohLinks {
+            hosts: vec![host.name.clone()],
+            ..team.zenoh_links(host)
+        };
         let within = deadline.saturating_duration_since(Instant::now());
         let session = session::open(&Role::Agent { within }, &[], &links.connect)
             .map_err(MemberError::failed)?;
-        await_hosts(&session, &links, deadline)?;
+        await_hosts(&session, &links, id, deadline)?;
         let digest = TeamDigest::of(scenario).to_hex();
         let running = alive_keys(&session, links.digest_all())
             .map_err(MemberError::failed)?
@@ -129,10 +132,13 @@ mod built {
         Ok(Box::new(plane))
     }
 
-    /// Waits for every host of the team (their tokens), until `deadline`.
+    /// Waits for robot `id`'s host (its token), until `deadline`. (A roster waits for the
+    /// hosts of its robots when it forms: the team's first for every host; a robot that
+    /// joins a running team does not wait for a host lost meanwhile.)
     fn await_hosts(
         session: &Session,
         links: &ZenohLinks,
+        id: usize,
         deadline: Instant,
     ) -> Result<(), MemberError> {
         loop {
@@ -142,7 +148,7 @@ mod built {
             }
             if let Some(signal) = crate::signals::received() {
                 return Err(MemberError::failed(ExchangeError::Stopped {
-                    agent: 0,
+                    agent: id,
                     signal,
                 }));
             }
@@ -232,6 +238,8 @@ mod built {
                     t.present.insert(key);
                 }
             }
+            // Withdrawals older than the question matter no more.
+            t.withdrawn.retain(|_, &mut w| w >= asked);
         }
 
         fn present(&self) -> BTreeSet<String> {

@@ -425,7 +425,14 @@ fn a_killed_robot_costs_at_most_one_episode(transport: &str) {
     let text = std::fs::read_to_string(&team).unwrap();
     std::fs::write(&rogue, format!("seed = 99\n{text}")).unwrap();
     let out = admm_ta()
-        .args(["agent", "--team", rogue.to_str().unwrap(), "--id", "2", "--serve"])
+        .args([
+            "agent",
+            "--team",
+            rogue.to_str().unwrap(),
+            "--id",
+            "2",
+            "--serve",
+        ])
         .stdin(Stdio::null())
         .output()
         .unwrap();

@@ -185,6 +185,15 @@ impl Ports {
                     how: "failed during start-up".into(),
                 });
             }
+            if let Some(&failed) = endpoint.neighbours.iter().find(|&&j| board.member_died(j)) {
+                let _ = board.mark_failed(failed);
+                return Err(ExchangeError::PeerFailed {
+                    agent: i,
+                    failed,
+                    round: 0,
+                    how: "died during start-up".into(),
+                });
+            }
             if last_scan.elapsed() >= DEAD_NODE_SCAN_EVERY {
                 last_scan = Instant::now();
                 if let Some(failed) = scan_dead_agents(config, i, board) {

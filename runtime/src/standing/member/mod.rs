@@ -265,9 +265,10 @@ impl TeamMember {
     pub fn leave(&mut self) -> Result<(), MemberError> {
         let me = self.id();
         while self.standing == Standing::In {
+            let roster = self.roster();
             let answer = self.episode_with(None, Presence::Leaving)?;
             if answer.leave_refused.contains(&me) {
-                let others: Vec<usize> = self.roster().into_iter().filter(|&r| r != me).collect();
+                let others: Vec<usize> = roster.into_iter().filter(|&r| r != me).collect();
                 return Err(MemberError::refused(LeaveRefused {
                     robot: me,
                     episode: answer.episode,
@@ -277,7 +278,10 @@ impl TeamMember {
             // Else it left, or a crash cut the episode short after another robot had
             // answered it: the leave goes into the next.
         }
-        Ok(())
+        match self.usable() {
+            Err(RowError::Left) => Ok(()),
+            other => other.map_err(MemberError::refused),
+        }
     }
 
     /// While the robot waits for its program's row: an error when the team must stop — a
@@ -337,9 +341,7 @@ impl TeamMember {
                 round: epoch.episodes.round(),
                 how: "left the team without a word".into(),
             };
-            if let Some(board) = epoch.board() {
-                let _ = board.mark_failed(gone);
-            }
+            epoch.report_gone(gone, &error);
             self.broken = Some(Broken::running(error));
         }
     }
@@ -370,8 +372,14 @@ impl TeamMember {
     }
 
     /// The team failed: nothing more goes out.
+    /// The team failed for this robot: it leaves its roster and the team (the others see
+    /// it gone rather than wait for it) and nothing more goes out.
     fn fail(&mut self, error: impl Into<crate::process::member_error::Cause>) -> MemberError {
         self.standing = Standing::Failed;
+        if let Some(epoch) = self.epoch.take() {
+            epoch.close(&*self.ctx.plane, false);
+        }
+        self.ctx.plane.leave_team();
         MemberError::failed(error)
     }
 

@@ -14,13 +14,13 @@ use crate::team::errors::JoinError;
 use std::time::{Duration, Instant};
 
 /// How long a robot waits for a vanished robot to show as gone before it takes a failure
-/// for the team's.
-fn settle(plane: &dyn TeamPlane, round_timeout: Duration) -> Duration {
+/// for the team's: on one machine a process's death shows at once; across machines a
+/// vanished robot's token goes within Zenoh's lease (10 s).
+fn settle(plane: &dyn TeamPlane) -> Duration {
     if plane.exact() {
         Duration::from_millis(300)
     } else {
-        // A Zenoh lease (10 s) and a little more, at most a round's deadline.
-        Duration::from_secs(11).max(round_timeout.min(Duration::from_secs(11)))
+        Duration::from_secs(11)
     }
 }
 
@@ -39,11 +39,16 @@ impl TeamMember {
         let Some(epoch) = self.epoch.take() else {
             return;
         };
-        let next = EpochId {
+        let mut next = EpochId {
             number: epoch.id.number + 1,
             roster: change.next,
         };
         epoch.close(&*self.ctx.plane, true);
+        // Robots that could not finish the episode (a crash in its last rounds) may form
+        // another roster: the later of the two is taken (the order every robot applies).
+        if let Some(later) = latest_epoch(&*self.ctx.plane, self.id(), Some(&next)) {
+            next = later;
+        }
         self.known = RosterNews {
             joined: change.joined,
             ..RosterNews::default()
@@ -128,7 +133,7 @@ impl TeamMember {
         };
         let started = Instant::now();
         let deadline = started + self.startup() + self.episode_timeout() + self.round_timeout();
-        let settle_until = started + settle(&*self.ctx.plane, self.round_timeout());
+        let settle_until = started + settle(&*self.ctx.plane);
         let (failure, forming) = match broken {
             Some(Broken { error, forming }) => (error, forming),
             None => (
@@ -159,8 +164,14 @@ impl TeamMember {
             // Where it may have been cut off rather than its neighbours dead, it goes on
             // only with most of the roster it formed.
             let majority = !self.ctx.plane.exact() && self.base_formed;
-            let adopt = latest_epoch(&*self.ctx.plane, me, Some(base.number))
-                .filter(|e| !given_up.contains(e));
+            let adopt = latest_epoch(&*self.ctx.plane, me, Some(&base))
+                .filter(|e| e.number > base.number && !given_up.contains(e));
+            if !self.base_formed && self.running_without_me() {
+                // Its first roster never formed, and the team runs without it: it asks to
+                // join as a robot that comes late does.
+                self.base = None;
+                return self.enter(Instant::now());
+            }
             if gone.is_empty() && adopt.is_none() && !forming {
                 if now < settle_until {
                     std::thread::sleep(Duration::from_millis(20));
@@ -187,7 +198,7 @@ impl TeamMember {
                 Err(cut) => return Err(self.cut_off(cut)),
             };
             let id = match adopt {
-                Some(found) if found.number >= next.number => found,
+                Some(found) if found >= next => found,
                 _ => next,
             };
             if given_up.contains(&id) {
@@ -210,9 +221,21 @@ impl TeamMember {
                     if Instant::now() >= deadline {
                         return Err(self.fail(self.forming_error(e)));
                     }
+                    // Before the next look: the others see what this robot saw.
+                    std::thread::sleep(Duration::from_millis(20));
                 }
             }
         }
+    }
+
+    /// Whether robots run a roster (formed) without this one.
+    fn running_without_me(&self) -> bool {
+        let plane = &*self.ctx.plane;
+        let me = self.id();
+        plane
+            .epochs()
+            .iter()
+            .any(|e| !e.roster.contains(me) && plane.formed(e) && !plane.in_epoch(e).is_empty())
     }
 
     /// The team went on without this robot.
