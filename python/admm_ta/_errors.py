@@ -21,7 +21,7 @@ class SolveError(RuntimeError):
     team's answer is not the certified optimum.
 
     ``str(error)`` is the command line's message; ``exit_code`` its exit code (see the
-    README's table); ``result`` the report when the team produced one.
+    guide's docs/command-line.md); ``result`` the report when the team produced one.
     """
 
     def __init__(self, message: str, exit_code: int, result: Optional[SolveResult] = None):

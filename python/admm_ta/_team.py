@@ -1,5 +1,5 @@
 """A robot of a standing team whose robots keep their own costs (a team file with
-``costs = "private"``; see the README's "Robots that keep their own costs")."""
+``costs = "private"``; see the guide's docs/standing-teams.md)."""
 
 from __future__ import annotations
 

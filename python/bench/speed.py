@@ -1,4 +1,4 @@
-"""Speed of the Python package, in one run (README, "Python: speed"):
+"""Speed of the Python package, in one run (docs/python.md, "Python: speed"):
 
 1. ``admm_ta.linear_sum_assignment`` against ``scipy.optimize.linear_sum_assignment`` at
    n = 10, 100, 1000, 3000, uniform [0, 1) and integer [0, 100) costs: median time per

@@ -444,7 +444,7 @@ impl TeamMember {
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    // Structured logs when `RUST_LOG` asks for them (README, "Logs"); a bad filter is
+    // Structured logs when `RUST_LOG` asks for them (docs/command-line.md, "Logs"); a bad filter is
     // ignored here: importing the package must not fail over it.
     let _ = admm_ta::runtime::logging::init(None);
     m.add_function(wrap_pyfunction!(linear_sum_assignment, m)?)?;

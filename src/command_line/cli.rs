@@ -35,7 +35,7 @@ pub enum Command {
     /// Solve a built-in default problem (20 robots, 20 tasks, complete graph) end to end.
     Demo(DemoArgs),
     /// Run one agent: of a team started independently (`--team FILE --id I`: any order, any
-    /// supervisor; see the README), or of a launcher's run (`--run --index --scenario`, started
+    /// supervisor; see docs/teams.md), or of a launcher's run (`--run --index --scenario`, started
     /// by `solve --transport ipc`).
     Agent(AgentArgs),
     /// Assemble the assignment of an independently started team from its agents' results.
@@ -94,7 +94,7 @@ pub struct AgentArgs {
     pub index: Option<usize>,
     /// Serve a robot program on standard input and output, one JSON object per line
     /// (a team file with costs = "private"): a row `{"costs": [...]}` in, the robot's task
-    /// out, episode after episode; end of input leaves the team (see the README).
+    /// out, episode after episode; end of input leaves the team (see docs/standing-teams.md).
     #[arg(long, requires = "team", conflicts_with = "row")]
     pub serve: bool,
     /// One episode of a private team with this robot's row from FILE (`-`: standard input;

@@ -9,7 +9,7 @@
 //! edges = [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]]
 //! ```
 //!
-//! When the cost file names its robots (a first column of names, see the README's "File
+//! When the cost file names its robots (a first column of names, see docs/file-formats.md, "File
 //! formats"), an edge may name them instead, or mix names and numbers:
 //!
 //! ```toml

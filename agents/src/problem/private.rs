@@ -12,7 +12,7 @@
 //! centralized normalisation would ([`TeamScale::normalised_row`]) and picks the
 //! tie-breaking perturbation ([`TeamScale::epsilon`]).
 //!
-//! Two things differ from a solve of the whole matrix, both documented in the README: the
+//! Two things differ from a solve of the whole matrix, both documented in docs/standing-teams.md: the
 //! spread the ρ rules read is the normalised range (1), not `√12 · std` (a standard
 //! deviation needs every cost), and the perturbation is used whenever the costs lie on a
 //! lattice (a solve also asks for repeated values). Neither changes the optimum.

@@ -229,7 +229,7 @@ fn a_signal_stops_the_standing_team() {
     assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
 }
 
-/// The README's Python robot example (standard library only) runs a standing team of its
+/// The guide's Python robot example (standard library only) runs a standing team of its
 /// robot programs to the end.
 #[test]
 fn the_python_robot_example_runs_a_standing_team() {

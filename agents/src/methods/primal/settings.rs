@@ -18,7 +18,7 @@
 //!   the readout extrapolates over the last rounds' certificate matrices
 //!   ([`crate::methods::primal::readout_filter`], set by the team's builder). On 50×50 complete graphs with
 //!   uniform costs (seeds 1–30) this takes the median decentralized certified stop from 286
-//!   rounds to 3 (see the README, "How it works").
+//!   rounds to 3 (see docs/algorithms.md).
 
 use crate::method::settings::{MethodSettings, Setting, SettingKind, SettingSpec, SettingValue};
 use serde::{Deserialize, Serialize};

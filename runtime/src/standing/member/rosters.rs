@@ -146,69 +146,27 @@ impl TeamMember {
         };
         let mut given_up: Vec<EpochId> = Vec::new();
         loop {
-            if let Some(signal) = crate::signals::received() {
-                return Err(self.stop(signal));
-            }
-            if let Some(signal) = self.ctx.plane.stop_requested() {
-                return Err(self.stopped(signal));
-            }
-            let others: Vec<usize> = base
-                .roster
-                .robots()
-                .iter()
-                .copied()
-                .filter(|&r| r != me)
-                .collect();
-            let gone = self.ctx.plane.gone(&others);
-            let now = Instant::now();
-            // Where it may have been cut off rather than its neighbours dead, it goes on
-            // only with most of the roster it formed.
-            let majority = !self.ctx.plane.exact() && self.base_formed;
-            let adopt = latest_epoch(&*self.ctx.plane, me, Some(&base))
-                .filter(|e| e.number > base.number && !given_up.contains(e));
+            self.still_running()?;
             if !self.base_formed && self.running_without_me() {
                 // Its first roster never formed, and the team runs without it: it asks to
                 // join as a robot that comes late does.
                 self.base = None;
                 return self.enter(Instant::now());
             }
-            if gone.is_empty() && adopt.is_none() && !forming {
-                if now < settle_until {
+            let id = match self.next_roster(&base, &given_up, forming)? {
+                Some(id) if !given_up.contains(&id) => id,
+                // Nobody vanished (yet), or only a roster given up is in sight.
+                next => {
+                    let settled = next.is_none() && Instant::now() >= settle_until;
+                    if settled || Instant::now() >= deadline {
+                        // Nobody vanished: the failure is the team's.
+                        return Err(self.fail(failure));
+                    }
                     std::thread::sleep(Duration::from_millis(20));
                     continue;
                 }
-                // Nobody vanished: the failure is the team's.
-                return Err(self.fail(failure));
-            }
-            let next = match after_loss(&self.ctx.settings.graph, &base.roster, &gone, me, majority)
-            {
-                Ok((next, lost)) => {
-                    self.known = RosterNews {
-                        joined: Vec::new(),
-                        crashed: gone.clone(),
-                        lost,
-                    };
-                    // A roster given up is not formed again: the next attempt is numbered
-                    // after it (a robot still on an earlier one sees it and follows).
-                    EpochId {
-                        number: base.number + 1 + given_up.len() as u64,
-                        roster: next,
-                    }
-                }
-                Err(cut) => return Err(self.cut_off(cut)),
             };
-            let id = match adopt {
-                Some(found) if found >= next => found,
-                _ => next,
-            };
-            if given_up.contains(&id) {
-                if now >= deadline {
-                    return Err(self.fail(failure));
-                }
-                std::thread::sleep(Duration::from_millis(20));
-                continue;
-            }
-            tracing::debug!(robot = me, gone = ?gone, epoch = %id.name(), "forming the roster again");
+            tracing::debug!(robot = me, epoch = %id.name(), "forming the roster again");
             match Epoch::form(&self.ctx, id.clone(), deadline) {
                 Ok(epoch) => {
                     self.install(epoch);
@@ -226,6 +184,67 @@ impl TeamMember {
                 }
             }
         }
+    }
+
+    /// An error when the team must stop: a termination signal to this process, or a stop
+    /// request of another robot.
+    fn still_running(&mut self) -> Result<(), MemberError> {
+        if let Some(signal) = crate::signals::received() {
+            return Err(self.stop(signal));
+        }
+        match self.ctx.plane.stop_requested() {
+            Some(signal) => Err(self.stopped(signal)),
+            None => Ok(()),
+        }
+    }
+
+    /// The roster to form after `base` failed: without the robots gone from it (their
+    /// largest part, this robot in it), or a later one the others are forming; numbered
+    /// after the rosters `given_up`. `None` while nobody is gone and, the roster having
+    /// failed while it ran (not `forming`), the failure may be the team's.
+    fn next_roster(
+        &mut self,
+        base: &EpochId,
+        given_up: &[EpochId],
+        forming: bool,
+    ) -> Result<Option<EpochId>, MemberError> {
+        let me = self.id();
+        let others: Vec<usize> = base
+            .roster
+            .robots()
+            .iter()
+            .copied()
+            .filter(|&r| r != me)
+            .collect();
+        let gone = self.ctx.plane.gone(&others);
+        let adopt = latest_epoch(&*self.ctx.plane, me, Some(base))
+            .filter(|e| e.number > base.number && !given_up.contains(e));
+        if gone.is_empty() && adopt.is_none() && !forming {
+            return Ok(None);
+        }
+        // Where it may have been cut off rather than its neighbours dead, it goes on only
+        // with most of the roster it formed.
+        let majority = !self.ctx.plane.exact() && self.base_formed;
+        let (next, lost) =
+            match after_loss(&self.ctx.settings.graph, &base.roster, &gone, me, majority) {
+                Ok(found) => found,
+                Err(cut) => return Err(self.cut_off(cut)),
+            };
+        self.known = RosterNews {
+            joined: Vec::new(),
+            crashed: gone,
+            lost,
+        };
+        // A roster given up is not formed again: the next attempt is numbered after it (a
+        // robot still on an earlier one sees it and follows).
+        let next = EpochId {
+            number: base.number + 1 + given_up.len() as u64,
+            roster: next,
+        };
+        Ok(Some(match adopt {
+            Some(found) if found >= next => found,
+            _ => next,
+        }))
     }
 
     /// Whether robots run a roster (formed) without this one.
@@ -263,12 +282,7 @@ impl TeamMember {
         let mut given_up: Vec<EpochId> = Vec::new();
         let mut asked = false;
         loop {
-            if let Some(signal) = crate::signals::received() {
-                return Err(self.stop(signal));
-            }
-            if let Some(signal) = self.ctx.plane.stop_requested() {
-                return Err(self.stopped(signal));
-            }
+            self.still_running()?;
             let plane = &*self.ctx.plane;
             let found = latest_epoch(plane, me, None).filter(|e| !given_up.contains(e));
             let running = plane.epochs().iter().any(|e| !plane.in_epoch(e).is_empty());
