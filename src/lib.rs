@@ -4,7 +4,7 @@
 //! A problem (costs, [`TaskAssignmentProblem`]) and a communication graph ([`Graph`], from
 //! [`generate`] or a [`TopologySpec`]) go in; a [`SolveReport`] with the assignment comes
 //! out. [`Solver`] is the short way, [`solve`] with [`SolveOptions`] the explicit one; the
-//! member crates stay reachable as [`agents`], [`runtime`] and [`topologies`].
+//! member crates stay reachable as [`agents`], [`runtime`], [`transport`] and [`topologies`].
 //!
 //! **Costs from a CSV, assignment out** (one line per robot, one number per task; the team
 //! runs in the lockstep simulation, the default):
@@ -37,7 +37,7 @@
 //! ```
 //!
 //! **A team of processes** (one OS process per robot over iceoryx2 shared memory). The
-//! launcher starts each agent as `PROGRAM agent --run ID --index I --scenario FILE`: point
+//! launcher starts each agent as `PROGRAM agent --run ID --robot I --scenario FILE`: point
 //! [`Solver::agent_program`] at the `admm-ta` binary (or at a program of your own that
 //! answers that command line with [`runtime::process::agent::run`]). Not run here: a
 //! documentation test has no `admm-ta` binary at hand; `tests/answers/library.rs` runs this
@@ -55,10 +55,12 @@
 //! ```
 
 pub mod command_line;
+pub mod request;
 
 pub use admm_ta_agents as agents;
 pub use admm_ta_runtime as runtime;
 pub use admm_ta_topologies as topologies;
+pub use admm_ta_transport as transport;
 
 pub use admm_ta_agents::certify::stopping::StopRule;
 pub use admm_ta_agents::methods::Method;
@@ -74,9 +76,9 @@ pub use admm_ta_runtime::options::{OnFailure, SolveOptions, SolveOptionsBuilder}
 pub use admm_ta_runtime::solve::error::SolveError;
 pub use admm_ta_runtime::solve::report::{OracleCheck, SolveReport};
 pub use admm_ta_runtime::solve::solve;
-pub use admm_ta_runtime::transport::Transport;
-pub use admm_ta_runtime::wait::WaitStrategy;
 pub use admm_ta_topologies::{Graph, TopologyError, TopologySpec, generate};
+pub use admm_ta_transport::Transport;
+pub use admm_ta_transport::wait::WaitStrategy;
 
 use std::path::PathBuf;
 

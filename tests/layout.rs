@@ -14,36 +14,41 @@
 //!     `ipc::exchange`);
 //! (c) no file above 500 lines unless its module doc has a line starting with `//! Size:`
 //!     that says why;
-//! (d) in the runtime, no transport module (`sim`, `threads`, `shm`, `ipc`, `uds`, `zenoh_net`,
-//!     each with its submodules) names another transport: what several of them share sits
-//!     below them;
-//! (e) in the runtime, data flows one way: a module names modules of its own layer or of
-//!     lower layers only ([`LAYERS`], the layers of `runtime/src/lib.rs`'s module map; a new
-//!     top-level module must be placed in one);
-//! (f) the registries close: outside tests, the runtime and the benchmarks name no concrete
-//!     method (no `Method::Primal`, no `methods::primal::…`: the methods are those of the
-//!     registry in `agents/src/methods/mod.rs`), and the process orchestration
-//!     (`runtime/src/process/`) names no concrete transport (neither a transport module nor
-//!     a `Transport::Ipc`);
-//! (g) no function of the runtime or the agents returns `Result<_, String>`: errors are
-//!     typed, one type per operation.
+//! (d) in the transport crate, no transport module (`sim`, `threads`, `shm`, `ipc`, `uds`,
+//!     `zenoh_net`, each with its submodules) names another transport: what several of them
+//!     share sits below them; every transport is a folder of the same shape (`mod.rs` with
+//!     its declaration, `exchange.rs`, `process.rs`);
+//! (e) within the orchestration crate (`runtime`) and the transport crate (`transport`),
+//!     data flows one way: a module names modules of its own layer or of lower layers only
+//!     ([`RUNTIME_LAYERS`] and [`TRANSPORT_LAYERS`], the layers of each crate's `lib.rs`; a
+//!     new top-level module must be placed in one). Between the two, Cargo keeps the
+//!     direction: the runtime depends on the transport crate, never the reverse;
+//! (f) the registries close: outside tests, the runtime, the transports and the benchmarks
+//!     name no concrete method (no `Method::Primal`, no `methods::primal::…`: the methods
+//!     are those of the registry in `agents/src/methods/mod.rs`), and the process
+//!     orchestration (`runtime/src/process/`) names no concrete transport (neither a
+//!     transport module nor a `Transport::Ipc`);
+//! (g) no function of the runtime, the transports or the agents returns `Result<_, String>`:
+//!     errors are typed, one type per operation.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// Stands in [`LAYERS`] for the transports: the modules the registry of
-/// `runtime/src/transport.rs` names ([`transports`]), so a new transport is placed by its
+/// Stands in [`TRANSPORT_LAYERS`] for the transports: the modules the registry of
+/// `transport/src/registry.rs` names ([`transports`]), so a new transport is placed by its
 /// registry line alone.
 const TRANSPORT_MODULES: &str = "<the transports of the registry>";
 
-/// The runtime's layers, top to bottom, by top-level module (with their submodules).
-const LAYERS: [&[&str]; 6] = [
+/// The orchestration crate's layers, top to bottom, by top-level module (with their
+/// submodules).
+const RUNTIME_LAYERS: &[&[&str]] = &[
     // Entry points.
     &[
         "solve",
-        "episodes",
+        "surveillance",
         "probe_run",
         "team",
+        "host",
         "standing",
         "observe",
     ],
@@ -51,8 +56,14 @@ const LAYERS: [&[&str]; 6] = [
     &["runner"],
     // Process orchestration.
     &["process"],
-    // Configuration: the transport registry, options, workloads.
-    &["transport", "options", "workload"],
+    // Configuration: options, workloads.
+    &["options", "workload"],
+];
+
+/// The transport crate's layers, top to bottom.
+const TRANSPORT_LAYERS: &[&[&str]] = &[
+    // The registry of transports.
+    &["registry"],
     // The transports.
     &[TRANSPORT_MODULES],
     // Shared mechanisms below every transport.
@@ -72,6 +83,9 @@ const LAYERS: [&[&str]; 6] = [
         "error_text",
     ],
 ];
+
+/// The files every transport folder has.
+const TRANSPORT_FILES: [&str; 3] = ["mod.rs", "exchange.rs", "process.rs"];
 
 /// Longest file without a stated reason.
 const MAX_LINES: usize = 500;
@@ -525,18 +539,28 @@ fn dependencies(files: &[SourceFile]) -> BTreeMap<String, BTreeSet<String>> {
         .collect()
 }
 
-/// The runtime library's files.
-fn runtime() -> Vec<SourceFile> {
-    let runtime = crates()
+/// The library files of the package in folder `package`.
+fn library(package: &str) -> Vec<SourceFile> {
+    let krate = crates()
         .into_iter()
-        .find(|c| c.package == "runtime")
-        .expect("the runtime crate");
+        .find(|c| c.package == package && c.name.ends_with("(lib)"))
+        .unwrap_or_else(|| panic!("the {package} crate"));
     assert!(
-        runtime.files.len() > 10,
+        krate.files.len() > 10,
         "found only {} files",
-        runtime.files.len()
+        krate.files.len()
     );
-    runtime.files
+    krate.files
+}
+
+/// The orchestration library's files.
+fn runtime() -> Vec<SourceFile> {
+    library("runtime")
+}
+
+/// The transport library's files.
+fn transport() -> Vec<SourceFile> {
+    library("transport")
 }
 
 /// A cycle of `graph`, if it has one, as the modules along it (the first repeated last).
@@ -586,7 +610,7 @@ fn find_cycle(graph: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>>
     None
 }
 
-/// The transports: the top-level modules the registry in `runtime/src/transport.rs` names,
+/// The transports: the top-level modules the registry in `transport/src/registry.rs` names,
 /// from its lines `Variant => crate::MODULE::…::INFO,`. None may name another.
 fn transports() -> &'static [String] {
     static MODULES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
@@ -594,7 +618,7 @@ fn transports() -> &'static [String] {
 }
 
 fn read_transports() -> Vec<String> {
-    let text = std::fs::read_to_string(root().join("runtime/src/transport.rs")).unwrap();
+    let text = std::fs::read_to_string(root().join("transport/src/registry.rs")).unwrap();
     let code = code_only(&text);
     let start = code.find("transports! {").expect("the transport registry");
     let body = &code[start..start + code[start..].find('}').unwrap()];
@@ -652,7 +676,7 @@ fn no_import_cycle_in_any_crate() {
 #[test]
 fn no_transport_names_another() {
     let mut crossings = Vec::new();
-    for (module, deps) in dependencies(&runtime()) {
+    for (module, deps) in dependencies(&transport()) {
         let Some(own) = transport_of(&module) else {
             continue;
         };
@@ -668,9 +692,9 @@ fn no_transport_names_another() {
     );
 }
 
-/// The layer of a module (0 is the top), `None` for the crate root, which only declares
-/// the modules.
-fn layer_of(module: &str) -> Option<usize> {
+/// The layer of a module in `layers` (0 is the top), `None` for the crate root, which only
+/// declares the modules.
+fn layer_of(module: &str, layers: &[&[&str]]) -> Option<usize> {
     let top = module.split("::").next().unwrap_or(module);
     if top == "crate" {
         return None;
@@ -680,10 +704,10 @@ fn layer_of(module: &str) -> Option<usize> {
     } else {
         top
     };
-    let layer = LAYERS.iter().position(|layer| layer.contains(&top));
+    let layer = layers.iter().position(|layer| layer.contains(&top));
     assert!(
         layer.is_some(),
-        "module {module} is in no layer: add it to LAYERS"
+        "module {module} is in no layer: add it to its crate's layers"
     );
     layer
 }
@@ -691,13 +715,15 @@ fn layer_of(module: &str) -> Option<usize> {
 #[test]
 fn no_module_names_a_higher_layer() {
     let mut upward = Vec::new();
-    for (module, deps) in dependencies(&runtime()) {
-        let Some(own) = layer_of(&module) else {
-            continue;
-        };
-        for dep in deps {
-            if layer_of(&dep).is_some_and(|other| other < own) {
-                upward.push(format!("{module} -> {dep}"));
+    for (files, layers) in [(runtime(), RUNTIME_LAYERS), (transport(), TRANSPORT_LAYERS)] {
+        for (module, deps) in dependencies(&files) {
+            let Some(own) = layer_of(&module, layers) else {
+                continue;
+            };
+            for dep in deps {
+                if layer_of(&dep, layers).is_some_and(|other| other < own) {
+                    upward.push(format!("{module} -> {dep}"));
+                }
             }
         }
     }
@@ -859,7 +885,7 @@ fn the_runtime_and_the_benchmarks_name_no_concrete_method() {
     let mut named = Vec::new();
     for krate in crates()
         .into_iter()
-        .filter(|c| c.package == "runtime" || c.package == "bench")
+        .filter(|c| ["runtime", "transport", "bench"].contains(&c.package.as_str()))
     {
         for file in &krate.files {
             let code = without_tests(&file.code);
@@ -878,6 +904,8 @@ fn the_runtime_and_the_benchmarks_name_no_concrete_method() {
 #[test]
 fn process_orchestration_names_no_concrete_transport() {
     let mut named = Vec::new();
+    // Within the runtime, `process` names no module of another crate by `crate::…`; its
+    // names of the transport crate are checked on its code below.
     for (module, deps) in dependencies(&runtime()) {
         if module.split("::").next() != Some("process") {
             continue;
@@ -897,6 +925,14 @@ fn process_orchestration_names_no_concrete_transport() {
         for variant in variants {
             if names(&code, &format!("Transport::{variant}")) {
                 named.push(format!("{}: Transport::{variant}", file.path.display()));
+            }
+        }
+        for module in transports() {
+            if names(&code, &format!("admm_ta_transport::{module}")) {
+                named.push(format!(
+                    "{}: admm_ta_transport::{module}",
+                    file.path.display()
+                ));
             }
         }
     }
@@ -956,7 +992,7 @@ fn the_runtime_and_the_agents_return_no_string_errors() {
     let mut found = Vec::new();
     for krate in crates()
         .into_iter()
-        .filter(|c| c.package == "runtime" || c.package == "agents")
+        .filter(|c| ["runtime", "transport", "agents"].contains(&c.package.as_str()))
     {
         for file in &krate.files {
             for result in string_results(&without_tests(&file.code)) {
@@ -965,4 +1001,42 @@ fn the_runtime_and_the_agents_return_no_string_errors() {
         }
     }
     assert!(found.is_empty(), "errors as strings: {found:?}");
+}
+
+#[test]
+fn every_transport_is_a_folder_of_the_same_shape() {
+    let mut missing = Vec::new();
+    for module in transports() {
+        let folder = root().join("transport/src").join(module);
+        for file in TRANSPORT_FILES {
+            if !folder.join(file).is_file() {
+                missing.push(format!("{module}/{file}"));
+            }
+        }
+        let declares = std::fs::read_to_string(folder.join("mod.rs"))
+            .is_ok_and(|text| names(&code_only(&text), "pub const INFO"));
+        if !declares {
+            missing.push(format!("{module}/mod.rs: its `pub const INFO`"));
+        }
+    }
+    assert!(missing.is_empty(), "transport folders missing: {missing:?}");
+}
+
+#[test]
+fn the_transport_crate_does_not_depend_on_the_orchestration() {
+    let manifest = std::fs::read_to_string(root().join("transport/Cargo.toml")).unwrap();
+    assert!(
+        !manifest.contains("admm-ta-runtime") && !manifest.contains("admm-ta ="),
+        "transport/Cargo.toml names a crate above it"
+    );
+    let mut named = Vec::new();
+    for file in transport() {
+        if names(&file.code, "admm_ta_runtime") {
+            named.push(file.path.display().to_string());
+        }
+    }
+    assert!(
+        named.is_empty(),
+        "transport files naming the runtime: {named:?}"
+    );
 }

@@ -9,8 +9,8 @@ use admm_ta_agents::problem::{CaseChoice, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::solve;
-use admm_ta_runtime::transport::{Execution, Transport};
 use admm_ta_topologies::TopologySpec;
+use admm_ta_transport::{Execution, Transport};
 use serde::Serialize;
 
 /// Settings of the comparison.

@@ -15,13 +15,13 @@ use crate::plot::{Chart, Legend, Series};
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::methods::{Contender, Method};
-use admm_ta_agents::problem::surveillance::SurveillanceScenario;
+use admm_ta_agents::problem::surveillance::SurveillanceMission;
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix};
-use admm_ta_runtime::episodes::{EpisodeRunConfig, run_episodes};
-use admm_ta_runtime::sim::LockstepSim;
-use admm_ta_runtime::timeline::{CriticalPath, RoundStamp, chrome_trace, critical_path};
-use admm_ta_runtime::workload::episode::EpisodeSettings;
+use admm_ta_runtime::surveillance::{EpisodeRunConfig, run_episodes};
+use admm_ta_runtime::workload::surveillance::{EpisodeRecord, EpisodeSettings};
 use admm_ta_topologies::{Graph, TopologySpec};
+use admm_ta_transport::sim::process::LockstepSim;
+use admm_ta_transport::timeline::{CriticalPath, RoundStamp, chrome_trace, critical_path};
 use serde::Serialize;
 
 /// One episode as the experiment saw it.
@@ -69,7 +69,7 @@ pub struct SurveillanceReport {
     /// … and up to the tie-breaking preferences (to `n·ε`): robots in the same roles
     /// rotate, so the exact cycle can be a multiple of this one.
     pub limit_cycle_roles: Option<usize>,
-    pub scenario: SurveillanceScenario,
+    pub mission: SurveillanceMission,
     pub per_episode: Vec<Episode>,
     /// With timelines (`--timeline`): whom the team waited for, round by round, over all
     /// episodes.
@@ -131,7 +131,7 @@ fn limit_cycle(costs: &[f64], tolerance: f64) -> Option<usize> {
 
 /// Runs the experiment.
 pub fn run(
-    model: SurveillanceScenario,
+    model: SurveillanceMission,
     episodes: usize,
     warm_start: bool,
     config: &EpisodeRunConfig,
@@ -160,82 +160,26 @@ pub fn run(
     )
     .map_err(|e| FigureError::Setup(e.to_string()))?;
     let run = run_episodes(&settings, &graph, config)?;
-    let mut per_episode = Vec::with_capacity(episodes);
-    let mut misses = Vec::new();
-    let mut violations = 0;
     let rows_of =
         |e: usize| -> Vec<Vec<f64>> { run.records.iter().map(|r| r[e].costs.clone()).collect() };
-    // Cold solves: the expensive part, split over the cores.
-    let workers = std::thread::available_parallelism()
-        .map_or(1, |c| c.get())
-        .min(8);
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let cold: Vec<Option<u64>> = std::thread::scope(|scope| {
-        let chunks: Vec<_> = (0..workers)
-            .map(|w| {
-                let (settings, graph, rows_of, done) = (&settings, &graph, &rows_of, &done);
-                scope.spawn(move || {
-                    (w..episodes)
-                        .step_by(workers)
-                        .map(|e| {
-                            let r = cold_rounds(
-                                settings,
-                                graph,
-                                &rows_of(e),
-                                config.max_rounds as usize,
-                            );
-                            progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
-                            (e, r)
-                        })
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        let mut all = vec![None; episodes];
-        for c in chunks {
-            for (e, r) in c.join().expect("cold-start worker") {
-                all[e] = r;
-            }
-        }
-        all
-    });
-    for e in 0..episodes {
-        let rows = rows_of(e);
-        let matrix = CostMatrix::new(n, model.tasks(), rows.concat())
-            .map_err(|e| FigureError::Setup(e.to_string()))?;
-        let best = oracle::solve_costs(&matrix, AssignmentCase::Two)
-            .map_err(|e| FigureError::Setup(e.to_string()))?;
-        let cost_of = |a: &[usize]| a.iter().enumerate().map(|(i, &t)| rows[i][t]).sum::<f64>();
-        let assignment: Vec<usize> = run.records.iter().map(|r| r[e].task).collect();
-        let covered = (0..model.tasks()).all(|t| assignment.contains(&t));
-        let (team_cost, optimal_cost) = (cost_of(&assignment), cost_of(&best));
-        let optimal = covered && team_cost - optimal_cost <= 1e-9 * optimal_cost.abs().max(1.0);
-        let certified = run.records.iter().all(|r| r[e].certified);
-        if !optimal {
-            misses.push(format!(
-                "episode {e}: cost {team_cost:.6} vs optimum {optimal_cost:.6}{}{}",
-                if covered { "" } else { ", a station uncovered" },
-                if certified {
-                    ""
-                } else {
-                    ", round limit reached before the certified stop"
-                }
-            ));
-        }
-        let batteries: Vec<f64> = run.records.iter().map(|r| r[e].battery).collect();
-        violations += batteries.iter().filter(|&&b| b < 0.0).count();
-        per_episode.push(Episode {
-            episode: e,
-            assignment,
-            team_cost,
-            optimal_cost,
-            optimal,
-            certified,
-            rounds_warm: run.records[0][e].rounds,
-            rounds_cold: cold[e],
-            batteries,
-        });
+    let cold = cold_starts(
+        &settings,
+        &graph,
+        &rows_of,
+        config.max_rounds as usize,
+        progress,
+    );
+    let mut per_episode = Vec::with_capacity(episodes);
+    let mut misses = Vec::new();
+    for (e, rounds_cold) in cold.into_iter().enumerate() {
+        let (episode, miss) = judge(e, &rows_of(e), &run.records, rounds_cold)?;
+        misses.extend(miss);
+        per_episode.push(episode);
     }
+    let violations = per_episode
+        .iter()
+        .map(|e| e.batteries.iter().filter(|&&b| b < 0.0).count())
+        .sum();
     let costs: Vec<f64> = per_episode.iter().map(|e| e.team_cost).collect();
     Ok(SurveillanceReport {
         episodes,
@@ -261,13 +205,97 @@ pub fn run(
         misses,
         limit_cycle: limit_cycle(&costs, 1e-9),
         limit_cycle_roles: limit_cycle(&costs, model.tie_break * n as f64),
-        scenario: model,
+        mission: model,
         per_episode,
         critical_path: (config.options.timeline() && run.timeline.iter().any(|t| !t.is_empty()))
             .then(|| critical_path(&graph, &run.timeline)),
         timeline: run.timeline,
         graph: Some(graph),
     })
+}
+
+/// The rounds of a cold-started solve of every episode's costs (`rows_of(e)`): the expensive
+/// part, split over the cores.
+fn cold_starts(
+    settings: &EpisodeSettings,
+    graph: &Graph,
+    rows_of: &(dyn Fn(usize) -> Vec<Vec<f64>> + Sync),
+    max_rounds: usize,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Vec<Option<u64>> {
+    let episodes = settings.episodes;
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |c| c.get())
+        .min(8);
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    std::thread::scope(|scope| {
+        let chunks: Vec<_> = (0..workers)
+            .map(|w| {
+                let done = &done;
+                scope.spawn(move || {
+                    (w..episodes)
+                        .step_by(workers)
+                        .map(|e| {
+                            let r = cold_rounds(settings, graph, &rows_of(e), max_rounds);
+                            progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+                            (e, r)
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        let mut all = vec![None; episodes];
+        for c in chunks {
+            for (e, r) in c.join().expect("cold-start worker") {
+                all[e] = r;
+            }
+        }
+        all
+    })
+}
+
+/// Episode `e` judged against the Hungarian optimum of its costs (`rows`), with what went
+/// wrong when it was not optimal.
+fn judge(
+    e: usize,
+    rows: &[Vec<f64>],
+    records: &[Vec<EpisodeRecord>],
+    rounds_cold: Option<u64>,
+) -> Result<(Episode, Option<String>), FigureError> {
+    let tasks = rows.first().map_or(0, |r| r.len());
+    let matrix = CostMatrix::new(rows.len(), tasks, rows.concat())
+        .map_err(|e| FigureError::Setup(e.to_string()))?;
+    let best = oracle::solve_costs(&matrix, AssignmentCase::Two)
+        .map_err(|e| FigureError::Setup(e.to_string()))?;
+    let cost_of = |a: &[usize]| a.iter().enumerate().map(|(i, &t)| rows[i][t]).sum::<f64>();
+    let assignment: Vec<usize> = records.iter().map(|r| r[e].task).collect();
+    let covered = (0..tasks).all(|t| assignment.contains(&t));
+    let (team_cost, optimal_cost) = (cost_of(&assignment), cost_of(&best));
+    let optimal = covered && team_cost - optimal_cost <= 1e-9 * optimal_cost.abs().max(1.0);
+    let certified = records.iter().all(|r| r[e].certified);
+    let miss = (!optimal).then(|| {
+        format!(
+            "episode {e}: cost {team_cost:.6} vs optimum {optimal_cost:.6}{}{}",
+            if covered { "" } else { ", a station uncovered" },
+            if certified {
+                ""
+            } else {
+                ", round limit reached before the certified stop"
+            }
+        )
+    });
+    let episode = Episode {
+        episode: e,
+        assignment,
+        team_cost,
+        optimal_cost,
+        optimal,
+        certified,
+        rounds_warm: records[0][e].rounds,
+        rounds_cold,
+        batteries: records.iter().map(|r| r[e].battery).collect(),
+    };
+    Ok((episode, miss))
 }
 
 /// A short human summary.
@@ -368,7 +396,7 @@ fn charts(report: &SurveillanceReport) -> Vec<(String, OutputFile)> {
         "battery",
     )
     .legend(Legend::LowerRight)
-    .reference("reserve", report.scenario.reserve);
+    .reference("reserve", report.mission.reserve);
     for i in 0..report.robots {
         let pts = report.per_episode[..shown]
             .iter()

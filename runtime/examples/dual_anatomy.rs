@@ -17,7 +17,7 @@ use admm_ta_agents::certify::oracle;
 use admm_ta_agents::method::settings::{GivenSettings, SettingValue};
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::methods::dual::VARIANT;
-use admm_ta_runtime::sim::LockstepSim;
+use admm_ta_transport::sim::process::LockstepSim;
 use common::Problems;
 
 fn main() {

@@ -29,8 +29,8 @@ use admm_ta_agents::certify::oracle;
 use admm_ta_agents::method::settings::GivenSettings;
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::{AssignmentCase, TaskAssignmentProblem};
-use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_topologies::Graph;
+use admm_ta_transport::sim::process::LockstepSim;
 use common::Problems;
 
 /// One run: per round (index 0 = before the first) every robot's task, column and

@@ -7,8 +7,8 @@ use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::oracle;
 use admm_ta_agents::methods::dual::agent::{DualAgent, DualParams, DualUpdate};
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_topologies::TopologySpec;
+use admm_ta_transport::sim::process::LockstepSim;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

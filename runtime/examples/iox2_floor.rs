@@ -29,7 +29,7 @@
 //! receive and every agent a send, so on `C` cores a round takes at least
 //! `(N (N − 1) · recv + N · send) / C` (`recv+send floor`), whatever the wake-ups cost.
 
-use admm_ta_runtime::ipc::nodes::run_config;
+use admm_ta_transport::ipc::nodes::run_config;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use std::io::{BufRead, BufReader, Write};

@@ -6,8 +6,8 @@ use admm_ta_agents::certify::rounding::argmax_assignment;
 use admm_ta_agents::methods::primal::agent::PrimalParams;
 use admm_ta_agents::methods::primal::team_agents;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_topologies::TopologySpec;
+use admm_ta_transport::sim::process::LockstepSim;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

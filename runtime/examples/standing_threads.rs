@@ -7,11 +7,11 @@
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
 use admm_ta_runtime::solve::solve;
-use admm_ta_runtime::standing::threads::{Input, run_on_threads};
+use admm_ta_runtime::standing::one_process::{Input, run_on_threads};
 use admm_ta_runtime::team::team_file::Team;
-use admm_ta_runtime::transport::Transport;
 use admm_ta_topologies::TopologySpec;
 use admm_ta_topologies::rng::SeededRng;
+use admm_ta_transport::Transport;
 use std::time::Instant;
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -7,8 +7,8 @@ use admm_ta_agents::certify::stopping::NeverStop;
 use admm_ta_agents::methods::primal::agent::PrimalParams;
 use admm_ta_agents::methods::primal::team_agents;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_topologies::TopologySpec;
+use admm_ta_transport::sim::process::LockstepSim;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -39,7 +39,7 @@ fn main() {
         let mut decisions = vec![0; n];
         let mut agreed = vec![0; n];
         let mut last_digest = 0u64;
-        let mut observer = |view: &admm_ta_runtime::sim::RoundView<'_>| {
+        let mut observer = |view: &admm_ta_transport::sim::process::RoundView<'_>| {
             let len = view.payload_len;
             let mut relaxed = 0.0;
             for i in 0..n {

@@ -5,7 +5,7 @@
 //! cargo run --release -p admm-ta-runtime --example timeline_cost
 //! ```
 
-use admm_ta_runtime::timeline::TimelineRecorder;
+use admm_ta_transport::timeline::TimelineRecorder;
 use std::hint::black_box;
 use std::time::Instant;
 

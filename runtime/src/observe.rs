@@ -11,11 +11,11 @@
 //! not yet published the round it gathers (its own last published round); one whose
 //! neighbours all have is computing.
 
-use crate::board::Board;
 use crate::process::agent::result_path;
 use crate::process::namespace::runs_dir;
 use crate::process::private_dir::euid;
 use crate::process::scenario::Scenario;
+use admm_ta_transport::board::Board;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -132,7 +132,7 @@ fn launcher_run(dir: &Path) -> Option<TeamView> {
         .trim()
         .parse()
         .ok()?;
-    if !crate::liveness::process_alive(launcher_pid) {
+    if !admm_ta_transport::liveness::process_alive(launcher_pid) {
         return None;
     }
     let bytes = std::fs::read(dir.join("scenario.json")).ok()?;
@@ -161,7 +161,7 @@ fn launcher_run(dir: &Path) -> Option<TeamView> {
         topology: Some(scenario.topology.clone()),
         stop_requested: board
             .stop_requested()
-            .map(|(signal, _)| crate::signals::name(signal)),
+            .map(|(signal, _)| admm_ta_transport::signals::name(signal)),
         agents,
     })
 }
@@ -189,7 +189,7 @@ fn independent_teams() -> Vec<TeamView> {
             .map(|i| {
                 // A member that left cleared its pid; one whose process is gone died.
                 let pid = board.member_pid(i);
-                let gone = pid.is_none_or(|p| !crate::liveness::process_alive(p));
+                let gone = pid.is_none_or(|p| !admm_ta_transport::liveness::process_alive(p));
                 agent_view(&board, i, gone, None, pid)
             })
             .collect();
@@ -212,7 +212,7 @@ fn independent_teams() -> Vec<TeamView> {
             topology: None,
             stop_requested: board
                 .stop_requested()
-                .map(|(signal, _)| crate::signals::name(signal)),
+                .map(|(signal, _)| admm_ta_transport::signals::name(signal)),
             agents,
         });
     }
@@ -261,7 +261,7 @@ fn agent_view(
 }
 
 /// The agent processes of launcher `launcher` for run `run`, by agent index (from their
-/// command lines: `… agent --run RUN --index I …`).
+/// command lines: `… agent --run RUN --robot I …`).
 fn agent_pids(launcher: u32, run: &str) -> BTreeMap<usize, u32> {
     let mut pids = BTreeMap::new();
     let Ok(entries) = std::fs::read_dir("/proc") else {
@@ -296,7 +296,7 @@ fn agent_pids(launcher: u32, run: &str) -> BTreeMap<usize, u32> {
                 .and_then(|w| std::str::from_utf8(w[1]).ok())
         };
         if value(b"--run") == Some(run)
-            && let Some(index) = value(b"--index").and_then(|i| i.parse().ok())
+            && let Some(index) = value(b"--robot").and_then(|i| i.parse().ok())
         {
             pids.insert(index, pid);
         }

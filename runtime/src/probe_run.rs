@@ -8,7 +8,7 @@
 //! use admm_ta_agents::methods::probe::ProbeStep;
 //! use admm_ta_runtime::options::run::RunOptions;
 //! use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
-//! use admm_ta_runtime::transport::Transport;
+//! use admm_ta_transport::Transport;
 //! use admm_ta_topologies::generate;
 //! let graph = generate::ring(4).unwrap();
 //! let options = RunOptions::builder().transport(Transport::Threads).warmup_rounds(10).build().unwrap();
@@ -17,13 +17,13 @@
 //! assert_eq!(report.latency.round.count, 4 * 40);
 //! ```
 
-use crate::latency::LatencySummary;
 use crate::options::run::RunOptions;
 use crate::runner::{RunError, run_team};
-use crate::usage::ThreadUsage;
 use crate::workload::Workload;
 use admm_ta_agents::methods::probe::ProbeStep;
 use admm_ta_topologies::Graph;
+use admm_ta_transport::latency::LatencySummary;
+use admm_ta_transport::usage::ThreadUsage;
 use std::time::{Duration, Instant};
 
 /// One benchmark run's settings.
@@ -63,8 +63,8 @@ pub struct ProbeReport {
     pub startup: Option<Duration>,
     /// The whole run, start-up included.
     pub wall: Duration,
-    /// Every agent's round stamps (`options.timeline()` on; [`crate::timeline`] renders them).
-    pub timeline: Vec<Vec<crate::timeline::RoundStamp>>,
+    /// Every agent's round stamps (`options.timeline()` on; [`admm_ta_transport::timeline`] renders them).
+    pub timeline: Vec<Vec<admm_ta_transport::timeline::RoundStamp>>,
 }
 
 /// Runs `run` on `graph`.

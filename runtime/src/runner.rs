@@ -4,24 +4,24 @@
 //! transport executes (lockstep, threads, processes) and the only place that merges the
 //! agents' round latency and CPU usage.
 
-use crate::exchange::ExchangeError;
-use crate::exchange::round_loop::{
-    AgentOutcome, AgentPlan, AgentStop, UnreadableOutcome, merge_outcomes, payload_digest,
-};
-use crate::latency::RoundLatency;
 use crate::options::run::RunOptions;
 use crate::process::launcher::{self, LaunchError};
 use crate::process::scenario::Scenario;
-use crate::sim::{LockstepSim, RoundView};
-use crate::threads;
-use crate::transport::{Execution, Transport};
-use crate::usage::ThreadUsage;
 use crate::workload::Workload;
-use crate::workload::episode::{EpisodeRecord, run_surveillance_agent};
+use crate::workload::surveillance::{EpisodeRecord, run_surveillance_agent};
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::method::agent::MethodAgent;
 use admm_ta_agents::methods::probe::ProbeAgent;
 use admm_ta_topologies::Graph;
+use admm_ta_transport::exchange::ExchangeError;
+use admm_ta_transport::exchange::round_loop::{
+    AgentOutcome, AgentPlan, AgentStop, UnreadableOutcome, merge_outcomes, payload_digest,
+};
+use admm_ta_transport::latency::RoundLatency;
+use admm_ta_transport::sim::process::{LockstepSim, RoundView};
+use admm_ta_transport::threads;
+use admm_ta_transport::usage::ThreadUsage;
+use admm_ta_transport::{Execution, Transport};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -68,8 +68,8 @@ pub enum RunError {
     #[error("the run finished but could not remove its files: {0:?}")]
     Leftovers(Vec<PathBuf>),
     /// A termination signal stopped a team running inside this process (while a
-    /// [`crate::signals::install`] guard lived).
-    #[error("stopped by {}", crate::signals::name(*signal))]
+    /// [`admm_ta_transport::signals::install`] guard lived).
+    #[error("stopped by {}", admm_ta_transport::signals::name(*signal))]
     Stopped { signal: i32 },
 }
 
@@ -171,7 +171,7 @@ fn lockstep(
             (outcome.rounds, outcome.stopped, None)
         }
     };
-    if let Some(signal) = crate::signals::stop_requested() {
+    if let Some(signal) = admm_ta_transport::signals::stop_requested() {
         return Err(RunError::Stopped { signal });
     }
     let decisions: Vec<usize> = match &certified {
@@ -218,7 +218,7 @@ fn on_threads(
             let mut agents = plan.agents.agents();
             let plans = plans(n, max_rounds, stop, options);
             let outcomes =
-                threads::run_threads_waiting(&mut agents, graph, &plans, options.wait())?;
+                threads::process::run_threads_waiting(&mut agents, graph, &plans, options.wait())?;
             (outcomes, Vec::new())
         }
         Workload::Probe {
@@ -231,7 +231,7 @@ fn on_threads(
                 .collect();
             let plans = plans(n, rounds, &AgentStop::MaxIters, options);
             let outcomes =
-                threads::run_threads_waiting(&mut agents, graph, &plans, options.wait())?;
+                threads::process::run_threads_waiting(&mut agents, graph, &plans, options.wait())?;
             (outcomes, Vec::new())
         }
         Workload::Episodes {
@@ -240,7 +240,7 @@ fn on_threads(
         } => {
             let mut agents: Vec<MethodAgent> = (0..n).map(|i| settings.agent(i, graph)).collect();
             let plans = plans(n, max_rounds, &AgentStop::MaxIters, options);
-            let results = threads::run_threads_with(
+            let results = threads::process::run_threads_with(
                 &mut agents,
                 graph,
                 &plans,

@@ -4,6 +4,9 @@
 //!
 //! Size: the whole command line in one file, one definition per subcommand and option with
 //! its help text; split by subcommand it would no longer read as one interface.
+//!
+//! Doc comments here are clap's help text, not rustdoc Markdown (`[[hosts]]` is a TOML table).
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
 
 use crate::command_line::method_flags::MethodFlags;
 use crate::topologies::RobotRef;
@@ -34,8 +37,8 @@ pub enum Command {
     Solve(SolveArgs),
     /// Solve a built-in default problem (20 robots, 20 tasks, complete graph) end to end.
     Demo(DemoArgs),
-    /// Run one agent: of a team started independently (`--team FILE --id I`: any order, any
-    /// supervisor; see docs/teams.md), or of a launcher's run (`--run --index --scenario`, started
+    /// Run one agent: of a team started independently (`--team FILE --robot I`: any order, any
+    /// supervisor; see docs/teams.md), or of a launcher's run (`--run --robot --scenario`, started
     /// by `solve --transport ipc`).
     Agent(AgentArgs),
     /// Assemble the assignment of an independently started team from its agents' results.
@@ -80,18 +83,15 @@ pub struct DemoArgs {
 #[derive(Args, Debug)]
 pub struct AgentArgs {
     /// The team file (TOML) naming the run, the robots, the topology and the costs.
-    #[arg(long, conflicts_with_all = ["run", "index", "scenario"], requires = "id")]
+    #[arg(long, conflicts_with_all = ["run", "scenario"], requires = "robot")]
     pub team: Option<PathBuf>,
-    /// This agent's robot: its number in the team (0-based), or its name when the cost
-    /// file names the robots.
-    #[arg(long)]
-    pub id: Option<RobotRef>,
+    /// This agent's robot: its number in the team (0-based), or, with --team, its name when
+    /// the cost file names the robots. (`--id` and `--index`, its former names, still work.)
+    #[arg(long, aliases = ["id", "index"])]
+    pub robot: Option<RobotRef>,
     /// The run's id (it must match the scenario's).
-    #[arg(long, requires_all = ["index", "scenario"])]
+    #[arg(long, requires_all = ["robot", "scenario"])]
     pub run: Option<String>,
-    /// This agent's robot index.
-    #[arg(long)]
-    pub index: Option<usize>,
     /// Serve a robot program on standard input and output, one JSON object per line
     /// (a team file with costs = "private"): a row `{"costs": [...]}` in, the robot's task
     /// out, episode after episode; end of input leaves the team (see docs/standing-teams.md).
@@ -274,131 +274,152 @@ pub enum Experiment {
     },
     /// Every method side by side (rounds to its own stop, optimality, bytes per agent, wall
     /// time) on uniform square problems, per team size and transport; prints a Markdown table.
-    Compare {
-        /// Team sizes (robots = tasks), comma-separated.
-        #[arg(long, value_delimiter = ',', default_values_t = [10usize, 20, 50])]
-        robots: Vec<usize>,
-        /// Seeds per size (problems and random graphs).
-        #[arg(long, default_value_t = 3)]
-        seeds: u64,
-        /// Methods, comma-separated (default: all).
-        #[arg(long, value_enum, value_delimiter = ',')]
-        methods: Vec<Method>,
-        /// Transports, comma-separated.
-        #[arg(long, value_enum, value_delimiter = ',', default_values = ["sim", "ipc"])]
-        transports: Vec<Transport>,
-        /// complete | chain | ring | star | grid | random:P | geometric:R
-        #[arg(long, default_value = "complete")]
-        topology: String,
-        /// Random costs: uniform [0,1) or geometric (distances in the unit square).
-        #[arg(long, value_enum, default_value = "uniform")]
-        cost_model: CostModel,
-        /// The methods' own settings (each method reads its own).
-        #[command(flatten)]
-        settings: MethodFlags,
-        /// Run the ADMM methods that have a schedule (dual methods, paper primal) with
-        /// --adaptive-rho.
-        #[arg(long)]
-        adaptive_rho: bool,
-        #[arg(long, default_value_t = 5000)]
-        max_iters: usize,
-        /// Directory for compare.json (created if missing).
-        #[arg(long)]
-        out: Option<PathBuf>,
-    },
+    Compare(CompareArgs),
     /// The persistent-surveillance case study (paper Section 4.4, Fig. 3): one team alive for
     /// every episode, each robot computing its own costs from its battery and position, each
     /// episode warm-started from the last; compared per episode with the Hungarian optimum
     /// and with a cold start. Writes surveillance.json and SVG plots into --out.
-    Surveillance {
-        #[arg(long, default_value_t = 1000)]
-        episodes: usize,
-        /// Scenario TOML file (default: the built-in one, `admm-ta-agents::problem::surveillance`).
-        #[arg(long)]
-        scenario: Option<PathBuf>,
-        /// ipc (one process per robot for the whole run), threads or uds.
-        #[arg(long, value_enum, default_value = "ipc")]
-        transport: Transport,
-        /// Start every episode from zero iterates instead of the previous episode's.
-        #[arg(long)]
-        cold_start: bool,
-        /// Round limit of each episode.
-        #[arg(long, default_value_t = 5000)]
-        max_iters: u64,
-        /// Directory for surveillance.json and the plots (created if missing).
-        #[arg(long, default_value = "experiment-results")]
-        out: PathBuf,
-        /// Print one JSON object (episodes, optimal_episodes, battery_violations,
-        /// mean_iterations_warm, mean_iterations_cold, …) instead of the summary.
-        #[arg(long)]
-        json: bool,
-        /// Record every agent's rounds over all episodes and write them as Chrome trace JSON
-        /// to FILE (rounds numbered across episodes; at most 200 000 rounds per agent); the
-        /// critical path goes into the summary and surveillance.json.
-        #[arg(long, value_name = "FILE")]
-        timeline: Option<PathBuf>,
-    },
+    Surveillance(SurveillanceArgs),
     /// Where the rounds go: per method (primal in both variants, dual, inexact dual, market,
     /// distributed Hungarian, CBAA), cost model (uniform, geometric) and graph (complete,
     /// random:0.1, chain, ring, geometric:0.3), the median rounds to the relaxed objective
     /// and the decisions within 0.1%, to optimal decisions and to the certified stop.
     /// Writes rounds_anatomy.json and one SVG per cost model into --out.
     #[command(name = "rounds-anatomy")]
-    RoundsAnatomy {
-        /// 12 robots × 8 tasks, 2 seeds, 2000 rounds (default: 50 × 30, 5 seeds, 5000).
-        #[arg(long)]
-        quick: bool,
-        /// Seeds per cell (overrides the default of the size).
-        #[arg(long)]
-        seeds: Option<u64>,
-        #[arg(long, default_value = "experiment-results")]
-        out: PathBuf,
-        /// Print the JSON instead of the table.
-        #[arg(long)]
-        json: bool,
-    },
+    RoundsAnatomy(RoundsAnatomyArgs),
     /// Every size certified: the primal method with the defaults on n × n problems (20, 50,
     /// 80, 120 robots), uniform and distance costs, chain / ring / random:0.1 / complete
     /// graphs; per point the runs certified and optimal, median and largest rounds, median
     /// wall time (sim). Exits non-zero unless every run certified the optimum.
     #[command(name = "size-sweep")]
-    SizeSweep {
-        /// 10 and 20 robots, 2 seeds (default: 20, 50, 80, 120 robots, 3 seeds).
-        #[arg(long)]
-        quick: bool,
-        /// Sizes n, comma-separated (overrides the default).
-        #[arg(long, value_delimiter = ',')]
-        sizes: Vec<usize>,
-        /// Seeds per point (overrides the default).
-        #[arg(long)]
-        seeds: Option<u64>,
-        /// Graphs, comma-separated (default chain,ring,random:0.1,complete).
-        #[arg(long, value_delimiter = ',')]
-        topologies: Vec<String>,
-        #[arg(long, default_value = "experiment-results")]
-        out: PathBuf,
-    },
+    SizeSweep(SizeSweepArgs),
     /// Table 1: iterations of primal / dual / inexact dual at 20×20 on the complete graph
     /// (paper: 28 / 159 / 387), for uniform costs in [0,1) and shifted to [1,2).
-    Table1 {
-        #[arg(long, default_value_t = 50)]
-        trials: u64,
-        /// Directory for table1.json (created if missing).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Run every method with the --adaptive-rho schedule.
-        #[arg(long)]
-        adaptive_rho: bool,
-        /// Multiply every method's default ρ by this factor (for ρ studies).
-        #[arg(long, default_value_t = 1.0)]
-        rho_scale: f64,
-        /// Round limit of every run.
-        #[arg(long, default_value_t = 3000)]
-        max_iters: usize,
-        /// Print the JSON instead of the table.
-        #[arg(long)]
-        json: bool,
-    },
+    Table1(Table1Args),
+}
+
+/// The options of `experiment compare`.
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    /// Team sizes (robots = tasks), comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [10usize, 20, 50])]
+    pub robots: Vec<usize>,
+    /// Seeds per size (problems and random graphs).
+    #[arg(long, default_value_t = 3)]
+    pub seeds: u64,
+    /// Methods, comma-separated (default: all).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub methods: Vec<Method>,
+    /// Transports, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_values = ["sim", "ipc"])]
+    pub transports: Vec<Transport>,
+    /// complete | chain | ring | star | grid | random:P | geometric:R
+    #[arg(long, default_value = "complete")]
+    pub topology: String,
+    /// Random costs: uniform [0,1) or geometric (distances in the unit square).
+    #[arg(long, value_enum, default_value = "uniform")]
+    pub cost_model: CostModel,
+    /// The methods' own settings (each method reads its own).
+    #[command(flatten)]
+    pub settings: MethodFlags,
+    /// Run the ADMM methods that have a schedule (dual methods, paper primal) with
+    /// --adaptive-rho.
+    #[arg(long)]
+    pub adaptive_rho: bool,
+    #[arg(long, default_value_t = 5000)]
+    pub max_iters: usize,
+    /// Directory for compare.json (created if missing).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// The options of `experiment surveillance`.
+#[derive(Args, Debug)]
+pub struct SurveillanceArgs {
+    #[arg(long, default_value_t = 1000)]
+    pub episodes: usize,
+    /// Mission TOML file: robots, stations, batteries, weights (default: the built-in one,
+    /// `admm-ta-agents::problem::surveillance`; `--scenario`, its former name, still works).
+    #[arg(long, alias = "scenario", value_name = "FILE")]
+    pub mission: Option<PathBuf>,
+    /// ipc (one process per robot for the whole run), threads or uds.
+    #[arg(long, value_enum, default_value = "ipc")]
+    pub transport: Transport,
+    /// Start every episode from zero iterates instead of the previous episode's.
+    #[arg(long)]
+    pub cold_start: bool,
+    /// Round limit of each episode.
+    #[arg(long, default_value_t = 5000)]
+    pub max_iters: u64,
+    /// Directory for surveillance.json and the plots (created if missing).
+    #[arg(long, default_value = "experiment-results")]
+    pub out: PathBuf,
+    /// Print one JSON object (episodes, optimal_episodes, battery_violations,
+    /// mean_iterations_warm, mean_iterations_cold, …) instead of the summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Record every agent's rounds over all episodes and write them as Chrome trace JSON
+    /// to FILE (rounds numbered across episodes; at most 200 000 rounds per agent); the
+    /// critical path goes into the summary and surveillance.json.
+    #[arg(long, value_name = "FILE")]
+    pub timeline: Option<PathBuf>,
+}
+
+/// The options of `experiment rounds-anatomy`.
+#[derive(Args, Debug)]
+pub struct RoundsAnatomyArgs {
+    /// 12 robots × 8 tasks, 2 seeds, 2000 rounds (default: 50 × 30, 5 seeds, 5000).
+    #[arg(long)]
+    pub quick: bool,
+    /// Seeds per cell (overrides the default of the size).
+    #[arg(long)]
+    pub seeds: Option<u64>,
+    #[arg(long, default_value = "experiment-results")]
+    pub out: PathBuf,
+    /// Print the JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The options of `experiment size-sweep`.
+#[derive(Args, Debug)]
+pub struct SizeSweepArgs {
+    /// 10 and 20 robots, 2 seeds (default: 20, 50, 80, 120 robots, 3 seeds).
+    #[arg(long)]
+    pub quick: bool,
+    /// Sizes n, comma-separated (overrides the default).
+    #[arg(long, value_delimiter = ',')]
+    pub sizes: Vec<usize>,
+    /// Seeds per point (overrides the default).
+    #[arg(long)]
+    pub seeds: Option<u64>,
+    /// Graphs, comma-separated (default chain,ring,random:0.1,complete).
+    #[arg(long, value_delimiter = ',')]
+    pub topologies: Vec<String>,
+    #[arg(long, default_value = "experiment-results")]
+    pub out: PathBuf,
+}
+
+/// The options of `experiment table1`.
+#[derive(Args, Debug)]
+pub struct Table1Args {
+    #[arg(long, default_value_t = 50)]
+    pub trials: u64,
+    /// Directory for table1.json (created if missing).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Run every method with the --adaptive-rho schedule.
+    #[arg(long)]
+    pub adaptive_rho: bool,
+    /// Multiply every method's default ρ by this factor (for ρ studies).
+    #[arg(long, default_value_t = 1.0)]
+    pub rho_scale: f64,
+    /// Round limit of every run.
+    #[arg(long, default_value_t = 3000)]
+    pub max_iters: usize,
+    /// Print the JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// A cost file's delimiter.

@@ -18,8 +18,8 @@ use crate::runtime::runner::RunError;
 use crate::runtime::solve::report::SolveReport;
 use crate::runtime::team::errors::CollectError;
 use crate::runtime::team::errors::TeamFileError;
-use crate::runtime::transport::ZenohNotBuilt;
 use crate::topologies::RobotNameError;
+use crate::transport::ZenohNotBuilt;
 use crate::{ConfigError, SolveError, StopRule, TopologyError};
 
 /// A bad command line or input found by the command itself (exit 2).
@@ -106,6 +106,7 @@ pub fn code_of(error: &anyhow::Error) -> u8 {
         if cause.is::<ConfigError>()
             || cause.is::<TopologyError>()
             || cause.is::<UsageError>()
+            || cause.is::<crate::request::RequestError>()
             || cause.is::<ZenohNotBuilt>()
             || cause.is::<CollectError>()
             || cause.is::<TeamFileError>()

@@ -34,7 +34,7 @@ pub fn run(args: impl IntoIterator<Item = impl Into<OsString> + Clone>) -> u8 {
             return 2;
         }
     };
-    if let Err(error) = crate::runtime::logging::init(args.log.as_deref()) {
+    if let Err(error) = crate::transport::logging::init(args.log.as_deref()) {
         eprintln!("error: {error}");
         return 2;
     }
@@ -48,8 +48,8 @@ pub fn run(args: impl IntoIterator<Item = impl Into<OsString> + Clone>) -> u8 {
             // One line naming the problem, with its causes; never a backtrace.
             eprintln!("error: {error:#}");
             // A team stopped by SIGINT, SIGTERM or SIGHUP: the conventional 128 + signal.
-            match crate::runtime::signals::received() {
-                Some(signal) => crate::runtime::signals::exit_code(signal),
+            match crate::transport::signals::received() {
+                Some(signal) => crate::transport::signals::exit_code(signal),
                 None => exit::code_of(&error),
             }
         }

@@ -2,7 +2,7 @@
 
 use crate::agents::method::info::Certification;
 use crate::agents::problem::{AssignmentCase, IDLE};
-use crate::runtime::transport::Execution;
+use crate::transport::Execution;
 use crate::{SolveReport, StopRule};
 use anyhow::Result;
 
@@ -40,7 +40,7 @@ pub fn reader_closed(error: &anyhow::Error) -> bool {
 }
 
 /// A row printed while a sweep runs: a write error is not fatal here (the sweep's report,
-/// printed with [`outln!`] at its end, reports it).
+/// printed with `outln!` at its end, reports it).
 pub fn progress_row(row: &str) {
     use std::io::Write as _;
     let _ = writeln!(std::io::stdout(), "{row}");
@@ -51,6 +51,15 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         outln!("{}", serde_json::to_string(report)?);
         return Ok(());
     }
+    print_problem(report)?;
+    print_run(report)?;
+    print_assignment(report)?;
+    print_timing(report)?;
+    print_check(report)
+}
+
+/// The degraded run's notice and the problem solved.
+fn print_problem(report: &SolveReport) -> Result<()> {
     if let Some(d) = &report.degraded {
         outln!(
             "degraded: {}; the {} survivors re-solved without robot {} (robots below by their original numbers)",
@@ -72,6 +81,11 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
         if report.maximize { ", maximizing" } else { "" },
         report.topology
     );
+    Ok(())
+}
+
+/// How the run ended: ρ, rounds, time, messages, the stop and the perturbation.
+fn print_run(report: &SolveReport) -> Result<()> {
     let info = report.method.info();
     let inner = match info.report.inner_steps {
         Some(steps) => format!(", {:.2} {steps}", report.mean_projection_steps),
@@ -106,6 +120,12 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
     if let Some(eps) = report.perturbation {
         outln!("tie-breaking perturbation ε = {eps:.3e} per robot");
     }
+    Ok(())
+}
+
+/// The assignment, by number and by name, and its cost.
+fn print_assignment(report: &SolveReport) -> Result<()> {
+    let info = report.method.info();
     let pairs: Vec<String> = report
         .assignment
         .iter()
@@ -163,6 +183,11 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
             _ => " — NOT certified optimal (the best assignment found when the run stopped)".into(),
         }
     );
+    Ok(())
+}
+
+/// Start-up, round latency and the critical path, when measured.
+fn print_timing(report: &SolveReport) -> Result<()> {
     if let Some(startup) = report.startup_ms {
         outln!(
             "{} agent processes connected in {startup:.1} ms",
@@ -210,6 +235,11 @@ pub fn print_report(report: &SolveReport, json: bool) -> Result<()> {
             }
         );
     }
+    Ok(())
+}
+
+/// The centralized check against the optimum, when asked for.
+fn print_check(report: &SolveReport) -> Result<()> {
     if let Some(check) = &report.check {
         let round = |r: Option<usize>| r.map_or("never".to_string(), |r| r.to_string());
         outln!(

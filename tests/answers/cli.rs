@@ -417,7 +417,7 @@ fn bad_options_of_every_other_command_exit_2_with_one_line() {
             "hungarian",
         ),
         (
-            &["experiment", "surveillance", "--scenario", "/etc/hostname"],
+            &["experiment", "surveillance", "--mission", "/etc/hostname"],
             "/etc/hostname",
         ),
         (

@@ -65,7 +65,7 @@ fn run(transport: &str, fault: Fault) -> (String, Duration) {
         Fault::Kill | Fault::Stop => {
             let victim = loop {
                 let agents = children_of(pid);
-                let needle = format!("--index {VICTIM} ");
+                let needle = format!("--robot {VICTIM} ");
                 if agents.len() == 8
                     && let Some((victim, _)) = agents.iter().find(|(_, c)| c.contains(&needle))
                 {

@@ -80,7 +80,7 @@ fn kill_9_of_agent_7(transport: &str, extra: &str) {
     let victim = loop {
         let agents = children_of(pid);
         if agents.len() == 20
-            && let Some((victim, _)) = agents.iter().find(|(_, c)| c.contains("--index 7 "))
+            && let Some((victim, _)) = agents.iter().find(|(_, c)| c.contains("--robot 7 "))
         {
             break *victim;
         }
@@ -285,7 +285,7 @@ fn an_agent_with_another_team_shape_is_refused_and_the_team_runs_on() {
         .unwrap();
     let digest = admm_ta::runtime::process::private_dir::sha256_hex(text.as_bytes());
     let rogue = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
-        .args(["agent", "--run", &run_id, "--index", "2", "--scenario"])
+        .args(["agent", "--run", &run_id, "--robot", "2", "--scenario"])
         .arg(&rogue_path)
         .args(["--scenario-digest", &digest])
         .output()

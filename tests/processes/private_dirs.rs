@@ -126,7 +126,7 @@ fn a_team_refuses_a_hostile_base_directory_with_one_line() {
     let out = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
         .args(["agent", "--team"])
         .arg(&team)
-        .args(["--id", "0"])
+        .args(["--robot", "0"])
         .env("TMPDIR", tmp.path())
         .env_remove("XDG_RUNTIME_DIR")
         .output()
@@ -161,7 +161,7 @@ fn an_agent_refuses_a_symlinked_open_or_replaced_scenario() {
         (&replaced, "it was replaced"),
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_admm-ta"))
-            .args(["agent", "--run", "r", "--index", "0", "--scenario"])
+            .args(["agent", "--run", "r", "--robot", "0", "--scenario"])
             .arg(path)
             .args(["--scenario-digest", &digest])
             .output()
@@ -223,7 +223,7 @@ fn two_accounts_run_teams_of_the_same_name_side_by_side() {
     let agent = |id: &str, uid: Option<u32>| {
         let mut command = Command::new(env!("CARGO_BIN_EXE_admm-ta"));
         command
-            .args(["agent", "--team", team.to_str().unwrap(), "--id", id])
+            .args(["agent", "--team", team.to_str().unwrap(), "--robot", id])
             .env("TMPDIR", tmp.path())
             .env_remove("XDG_RUNTIME_DIR")
             .stdout(Stdio::null())

@@ -82,7 +82,7 @@ fn stop_with(
     }
     let target = match agent {
         Some(k) => {
-            let needle = format!("--index {k} ");
+            let needle = format!("--robot {k} ");
             children_of(pid)
                 .into_iter()
                 .find(|(_, c)| c.contains(&needle))
@@ -192,7 +192,7 @@ fn agents_do_not_outlive_a_launcher_killed_with_sigkill() {
     // The agents are re-parented (to init or a subreaper, which reaps them): gone or zombie.
     while agents
         .iter()
-        .any(|&a| admm_ta::runtime::liveness::process_alive(a))
+        .any(|&a| admm_ta::transport::liveness::process_alive(a))
     {
         assert!(
             killed.elapsed() < Duration::from_secs(10),
@@ -268,7 +268,7 @@ fn a_signal_to_one_independently_started_agent_stops_its_team() {
             let id = id.to_string();
             (
                 format!("agent {id}"),
-                admm_ta(&["agent", "--team", team, "--id", &id], 0),
+                admm_ta(&["agent", "--team", team, "--robot", &id], 0),
             )
         })
         .collect();
@@ -315,7 +315,7 @@ fn a_signal_to_a_zenoh_launcher_or_host_stops_the_team() {
     for id in ["0", "1"] {
         children.push((
             format!("agent {id}"),
-            admm_ta(&["agent", "--team", team, "--id", id], group),
+            admm_ta(&["agent", "--team", team, "--robot", id], group),
         ));
     }
     std::thread::sleep(Duration::from_secs(3));

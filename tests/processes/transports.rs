@@ -14,8 +14,8 @@ use admm_ta_runtime::runner::RunError;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::report::SolveReport;
 use admm_ta_runtime::solve::solve;
-use admm_ta_runtime::transport::Transport;
 use admm_ta_topologies::{Graph, TopologySpec};
+use admm_ta_transport::Transport;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -397,7 +397,7 @@ fn central_stop_rules_are_refused_on_distributed_transports() {
 
 #[test]
 fn every_wait_strategy_gives_the_same_iterates_on_every_distributed_transport() {
-    use admm_ta_runtime::wait::WaitStrategy;
+    use admm_ta_transport::wait::WaitStrategy;
     let (p, g) = (problem(6, 6, 9), graph("ring", 6, 0));
     let reference = solve(
         &p,

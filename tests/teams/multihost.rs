@@ -14,7 +14,7 @@ use crate::common;
 use admm_ta_runtime::solve::report::SolveReport;
 use admm_ta_runtime::solve::solve;
 use admm_ta_runtime::team::team_file::Team;
-use admm_ta_runtime::transport::Transport;
+use admm_ta_transport::Transport;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -82,7 +82,7 @@ fn start_host(team: &Path, name: &str, agents: &[usize], env: &[(&str, &str)]) -
                     "agent",
                     "--team",
                     team.to_str().unwrap(),
-                    "--id",
+                    "--robot",
                     &id.to_string(),
                 ])
                 .envs(env.iter().copied())
@@ -495,7 +495,7 @@ fn agent_of(team: &Path, id: usize, group: i32) -> Child {
             "agent",
             "--team",
             team.to_str().unwrap(),
-            "--id",
+            "--robot",
             &id.to_string(),
         ])
         .process_group(group)

@@ -173,7 +173,7 @@ fn start(net: &NetHosts, team: &Path, per_host: usize, fault: Option<&str>) -> S
         let mut host = net.admm_ta(h, &["host", "--team", team, "--name", &name]);
         started.hosts.push(host.spawn().unwrap());
         for id in h * per_host..(h + 1) * per_host {
-            let mut agent = net.admm_ta(h, &["agent", "--team", team, "--id", &id.to_string()]);
+            let mut agent = net.admm_ta(h, &["agent", "--team", team, "--robot", &id.to_string()]);
             if let Some(fault) = fault {
                 agent.env("ADMM_TA_FAULT", fault);
             }
@@ -475,7 +475,14 @@ fn a_standing_team_goes_on_without_a_host_cut_off() {
         .map(|id| {
             let mut command = Command::new("ip");
             command.args(["netns", "exec", &net.namespaces[id / per_host], ADMM_TA]);
-            command.args(["agent", "--team", team, "--id", &id.to_string(), "--serve"]);
+            command.args([
+                "agent",
+                "--team",
+                team,
+                "--robot",
+                &id.to_string(),
+                "--serve",
+            ]);
             Sidecar::spawn(command, id)
         })
         .collect();

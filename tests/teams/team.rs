@@ -1,4 +1,4 @@
-//! Agents started independently (`admm-ta agent --team FILE --id I`), in a shuffled order with
+//! Agents started independently (`admm-ta agent --team FILE --robot I`), in a shuffled order with
 //! delays, as separate commands: they find each other, solve, and `admm-ta collect` gets the
 //! oracle's optimum. A missing agent fails the team with a line naming it, after the
 //! start-up deadline, and nothing is left in shared memory.
@@ -54,7 +54,7 @@ fn start(team: &Path, id: impl std::fmt::Display) -> Child {
             "agent",
             "--team",
             team.to_str().unwrap(),
-            "--id",
+            "--robot",
             &id.to_string(),
         ])
         .stdout(Stdio::piped())
@@ -155,7 +155,7 @@ fn independently_started_agents_reach_the_oracle_optimum() {
     }
 }
 
-/// A team whose cost file names its robots: the topology file and the agents' `--id` use the
+/// A team whose cost file names its robots: the topology file and the agents' `--robot` use the
 /// names, and a zenoh team's hosts list them by name.
 #[test]
 fn robots_go_by_the_cost_files_names_in_team_and_topology_files() {
@@ -196,7 +196,7 @@ fn robots_go_by_the_cost_files_names_in_team_and_topology_files() {
     assert!(team_shm_left(&run).is_empty());
     // A name the costs do not have: exit 2, one line, nothing started.
     let out = admm_ta()
-        .args(["agent", "--team", team.to_str().unwrap(), "--id", "uav9"])
+        .args(["agent", "--team", team.to_str().unwrap(), "--robot", "uav9"])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
@@ -310,7 +310,7 @@ fn bad_team_files_are_refused_with_one_line() {
         let path = dir.path().join("bad.toml");
         std::fs::write(&path, text).unwrap();
         let out = admm_ta()
-            .args(["agent", "--team", path.to_str().unwrap(), "--id", "0"])
+            .args(["agent", "--team", path.to_str().unwrap(), "--robot", "0"])
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
@@ -321,7 +321,7 @@ fn bad_team_files_are_refused_with_one_line() {
         assert_eq!(err.trim().lines().count(), 1, "{err}");
     }
     let out = admm_ta()
-        .args(["agent", "--team", "/nonexistent/team.toml", "--id", "0"])
+        .args(["agent", "--team", "/nonexistent/team.toml", "--robot", "0"])
         .output()
         .unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read team file"));
@@ -687,7 +687,7 @@ fn team_file_settings_are_refused_by_the_command_lines_rule_naming_file_and_key(
         std::fs::write(&path, format!("run = \"{run}\"\n{base}{keys}{zenoh_hosts}")).unwrap();
         let team = path.to_str().unwrap();
         let mut commands = vec![
-            vec!["agent", "--team", team, "--id", "0"],
+            vec!["agent", "--team", team, "--robot", "0"],
             vec!["collect", "--team", team],
         ];
         if cfg!(feature = "zenoh") {

@@ -2,7 +2,7 @@
 //!
 //! A [`Graph`] is an undirected simple graph on robots `0..n` with sorted neighbour lists.
 //! This crate builds graphs from generators ([`generate`]), from topology files
-//! ([`file`]), checks Assumption 1 of the paper (the graph is connected, see
+//! ([`mod@file`]), checks Assumption 1 of the paper (the graph is connected, see
 //! [`Graph::require_connected`]) and gives the seeded random numbers used across the project
 //! ([`rng`]). It knows nothing about agents or algorithms.
 //!

@@ -41,11 +41,14 @@ pub struct CostFile {
     pub forbidden: Vec<(usize, usize)>,
 }
 
+/// What a JSON cost file starts with: an object or a list.
+const JSON_STARTS: [char; 2] = ['\u{7b}', '['];
+
 /// Reads a cost file's text: JSON when it starts with `{` or `[`, else CSV with `delimiter`
 /// (`None`: detected from the first row).
 pub fn parse(text: &str, delimiter: Option<u8>) -> Result<CostFile, ProblemError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    if text.trim_start().starts_with(['{', '[']) {
+    if text.trim_start().starts_with(JSON_STARTS) {
         return parse_json(text);
     }
     let costs = parse_csv(text, delimiter)?;
@@ -63,42 +66,7 @@ struct Row {
 
 fn parse_csv(text: &str, delimiter: Option<u8>) -> Result<CostMatrix, ProblemError> {
     let delimiter = delimiter.unwrap_or_else(|| detect_delimiter(text));
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .delimiter(delimiter)
-        .comment(Some(b'#'))
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
-    let starts = line_starts(text);
-    let mut rows = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|e| {
-            let line = e.position().map_or(0, |p| line_at(text, &starts, p.byte()));
-            ProblemError::Format(format!("line {line}: {}", csv_reason(&e)))
-        })?;
-        let line = record
-            .position()
-            .map_or(0, |p| line_at(text, &starts, p.byte()));
-        let cells: Vec<String> = record.iter().map(str::to_string).collect();
-        // A blank line, or one of spaces only.
-        if cells.iter().all(String::is_empty) {
-            continue;
-        }
-        rows.push(Row { line, cells });
-    }
-    if rows.is_empty() {
-        return Err(ProblemError::Empty);
-    }
-    // An exporter's trailing delimiter: an empty last cell on every row.
-    if rows
-        .iter()
-        .all(|r| r.cells.len() > 1 && r.cells.last().is_some_and(String::is_empty))
-    {
-        for row in &mut rows {
-            row.cells.pop();
-        }
-    }
+    let mut rows = read_rows(text, delimiter)?;
     let header = is_header(&rows[0].cells).then(|| rows.remove(0));
     if rows.is_empty() {
         return Err(ProblemError::Empty);
@@ -138,24 +106,73 @@ fn parse_csv(text: &str, delimiter: Option<u8>) -> Result<CostMatrix, ProblemErr
     if tasks == 0 {
         return Err(ProblemError::Empty);
     }
-    let task_names = match header {
-        None => None,
-        Some(h) => {
-            let names: Vec<String> = h.cells.into_iter().skip(skip).collect();
-            if names.len() != tasks {
-                return Err(ProblemError::Format(format!(
-                    "line {}: the header names {} tasks but the rows have {tasks} costs",
-                    h.line,
-                    names.len()
-                )));
-            }
-            Some(names)
-        }
-    };
     CostMatrix::new(rows.len(), tasks, values)?.with_names(Names {
         robots: named_rows.then_some(robot_names),
-        tasks: task_names,
+        tasks: header_names(header, skip, tasks)?,
     })
+}
+
+/// The rows of a CSV text with `delimiter`, blank lines and comments left out, and an
+/// exporter's trailing delimiter (an empty last cell on every row) dropped; refused when
+/// empty.
+fn read_rows(text: &str, delimiter: u8) -> Result<Vec<Row>, ProblemError> {
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .delimiter(delimiter)
+        .comment(Some(b'#'))
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let starts = line_starts(text);
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| {
+            let line = e.position().map_or(0, |p| line_at(text, &starts, p.byte()));
+            ProblemError::Format(format!("line {line}: {}", csv_reason(&e)))
+        })?;
+        let line = record
+            .position()
+            .map_or(0, |p| line_at(text, &starts, p.byte()));
+        let cells: Vec<String> = record.iter().map(str::to_string).collect();
+        // A blank line, or one of spaces only.
+        if cells.iter().all(String::is_empty) {
+            continue;
+        }
+        rows.push(Row { line, cells });
+    }
+    if rows.is_empty() {
+        return Err(ProblemError::Empty);
+    }
+    if rows
+        .iter()
+        .all(|r| r.cells.len() > 1 && r.cells.last().is_some_and(String::is_empty))
+    {
+        for row in &mut rows {
+            row.cells.pop();
+        }
+    }
+    Ok(rows)
+}
+
+/// The task names of a `header` row (its first `skip` cells are the robot names' corner),
+/// which must name the rows' `tasks` columns.
+fn header_names(
+    header: Option<Row>,
+    skip: usize,
+    tasks: usize,
+) -> Result<Option<Vec<String>>, ProblemError> {
+    let Some(h) = header else {
+        return Ok(None);
+    };
+    let names: Vec<String> = h.cells.into_iter().skip(skip).collect();
+    if names.len() != tasks {
+        return Err(ProblemError::Format(format!(
+            "line {}: the header names {} tasks but the rows have {tasks} costs",
+            h.line,
+            names.len()
+        )));
+    }
+    Ok(Some(names))
 }
 
 /// Whether a first row is a header of task names: every cell a name (none a number, none

@@ -37,20 +37,20 @@
 //! A **battery violation** is a battery below 0 after an episode (the robot ran out).
 //!
 //! ```
-//! use admm_ta_agents::problem::surveillance::SurveillanceScenario;
-//! let scenario = SurveillanceScenario::default();
-//! let state = scenario.initial_state(0);
-//! let row = scenario.cost_row(0, &state);
-//! assert_eq!(row.len(), scenario.tasks());
+//! use admm_ta_agents::problem::surveillance::SurveillanceMission;
+//! let mission = SurveillanceMission::default();
+//! let state = mission.initial_state(0);
+//! let row = mission.cost_row(0, &state);
+//! assert_eq!(row.len(), mission.tasks());
 //! ```
 
 use nalgebra::{Point2, distance};
 use serde::{Deserialize, Serialize};
 
-/// A scenario (the TOML file's contents; every field has the documented default).
+/// A mission (the TOML file's contents; every field has the documented default).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct SurveillanceScenario {
+pub struct SurveillanceMission {
     pub robots: usize,
     /// Positions `[x, y]` of the surveillance stations.
     pub surveillance_stations: Vec<[f64; 2]>,
@@ -82,7 +82,7 @@ pub struct SurveillanceScenario {
     pub topology: String,
 }
 
-impl Default for SurveillanceScenario {
+impl Default for SurveillanceMission {
     fn default() -> Self {
         Self {
             robots: 10,
@@ -111,22 +111,22 @@ pub struct RobotState {
     pub battery: f64,
 }
 
-/// A scenario that cannot run.
+/// A mission that cannot run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum ScenarioError {
-    #[error("scenario file: {0}")]
+pub enum MissionError {
+    #[error("mission file: {0}")]
     Parse(String),
-    #[error("scenario: {0}")]
+    #[error("mission: {0}")]
     Invalid(String),
 }
 
-impl SurveillanceScenario {
-    /// Parses and validates a TOML scenario.
-    pub fn from_toml(text: &str) -> Result<Self, ScenarioError> {
-        let scenario: Self =
-            toml::from_str(text).map_err(|e| ScenarioError::Parse(e.message().to_string()))?;
-        scenario.validate()?;
-        Ok(scenario)
+impl SurveillanceMission {
+    /// Parses and validates a TOML mission.
+    pub fn from_toml(text: &str) -> Result<Self, MissionError> {
+        let mission: Self =
+            toml::from_str(text).map_err(|e| MissionError::Parse(e.message().to_string()))?;
+        mission.validate()?;
+        Ok(mission)
     }
 
     /// Stations: surveillance first, then charging.
@@ -149,9 +149,9 @@ impl SurveillanceScenario {
         Point2::new(x, y)
     }
 
-    /// Refuses scenarios that cannot run (Case 2 needs at least as many robots as stations).
-    pub fn validate(&self) -> Result<(), ScenarioError> {
-        let bad = |what: String| Err(ScenarioError::Invalid(what));
+    /// Refuses missions that cannot run (Case 2 needs at least as many robots as stations).
+    pub fn validate(&self) -> Result<(), MissionError> {
+        let bad = |what: String| Err(MissionError::Invalid(what));
         if self.surveillance_stations.is_empty() || self.charging_stations.is_empty() {
             return bad("needs at least one surveillance and one charging station".into());
         }
@@ -288,8 +288,8 @@ mod tests {
     use crate::problem::{AssignmentCase, CostMatrix};
 
     #[test]
-    fn the_default_scenario_keeps_every_battery_alive_under_the_optimal_assignment() {
-        let s = SurveillanceScenario::default();
+    fn the_default_mission_keeps_every_battery_alive_under_the_optimal_assignment() {
+        let s = SurveillanceMission::default();
         s.validate().unwrap();
         let mut states: Vec<RobotState> = (0..s.robots).map(|i| s.initial_state(i)).collect();
         for _ in 0..300 {
@@ -309,7 +309,7 @@ mod tests {
     }
 
     #[test]
-    fn bad_scenarios_are_refused_with_a_reason() {
+    fn bad_missions_are_refused_with_a_reason() {
         for (text, needle) in [
             ("robots = 3", "cannot cover"),
             ("charge_rate = 0.0", "recharge"),
@@ -318,12 +318,12 @@ mod tests {
             ("surveil_drain = -1.0", "surveil_drain"),
             ("charging_stations = []", "at least one"),
         ] {
-            let e = SurveillanceScenario::from_toml(text)
+            let e = SurveillanceMission::from_toml(text)
                 .unwrap_err()
                 .to_string();
             assert!(e.contains(needle), "{text}: {e}");
         }
-        let ok = SurveillanceScenario::from_toml("robots = 6\nreserve = 0.1").unwrap();
+        let ok = SurveillanceMission::from_toml("robots = 6\nreserve = 0.1").unwrap();
         assert_eq!(ok.robots, 6);
         assert_eq!(ok.tasks(), 4);
     }

@@ -8,7 +8,7 @@ use crate::plot::{Chart, Scale, Series};
 use admm_ta_agents::method::info::{Fig2Graphs, Role};
 use admm_ta_agents::methods::{Contender, Method};
 use admm_ta_runtime::options::{SolveOptions, StopRule};
-use admm_ta_runtime::transport::Transport;
+use admm_ta_transport::Transport;
 use serde::Serialize;
 
 /// One method at one team size on one graph family, over the trials.

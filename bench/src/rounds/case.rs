@@ -1,8 +1,8 @@
 //! What `admm-ta bench rounds` measures: the steps, payloads and barriers of a case, the
 //! cases of a sweep and the run's settings.
 
-use admm_ta_runtime::transport::Transport;
-use admm_ta_runtime::wait::WaitStrategy;
+use admm_ta_transport::Transport;
+use admm_ta_transport::wait::WaitStrategy;
 use serde::Serialize;
 use std::time::Duration;
 
@@ -224,146 +224,176 @@ pub const DEFAULT_TRANSPORTS: [Transport; 4] = [
 /// barrier on uds or zenoh) are left out.
 pub fn cases(config: &RoundsConfig) -> Vec<Case> {
     let s = &config.sweep;
-    let base = Case {
-        agents: 10,
-        topology: "complete".into(),
-        payload: PayloadShape { rows: 10, cols: 10 },
-        transport: Transport::Ipc,
-        wait: WaitStrategy::Auto,
-        global_barrier: false,
-        step: config.step,
-    };
-    let transports = s.transports.clone().unwrap_or(DEFAULT_TRANSPORTS.to_vec());
     let given = s.agents.is_some()
         || s.topologies.is_some()
         || s.payloads.is_some()
         || s.waits.is_some()
         || s.barriers.is_some();
-    // Each block: (agents, topologies, payloads, waits, barriers).
-    type Block = (
-        Vec<usize>,
-        Vec<String>,
-        Vec<PayloadShape>,
-        Vec<WaitStrategy>,
-        Vec<bool>,
-    );
-    let p = |r, c| PayloadShape { rows: r, cols: c };
-    let strings = |v: &[&str]| v.iter().map(|t| t.to_string()).collect::<Vec<_>>();
-    let blocks: Vec<Block> = if given {
-        vec![(
-            s.agents.clone().unwrap_or(vec![base.agents]),
-            s.topologies.clone().unwrap_or(vec![base.topology.clone()]),
-            s.payloads.clone().unwrap_or(vec![base.payload]),
-            s.waits.clone().unwrap_or(vec![base.wait]),
-            s.barriers
-                .as_ref()
-                .map_or(vec![false], |b| b.iter().map(|b| b.is_global()).collect()),
-        )]
+    let blocks = if given {
+        vec![given_block(s)]
     } else if config.quick {
-        vec![
-            (
-                vec![2, 10, 50],
-                strings(&["complete", "ring"]),
-                vec![base.payload],
-                vec![base.wait],
-                vec![false],
-            ),
-            (
-                vec![10],
-                strings(&["complete"]),
-                vec![p(1, 1), p(50, 50), p(200, 200)],
-                vec![base.wait],
-                vec![false],
-            ),
-            (
-                vec![4],
-                strings(&["complete"]),
-                vec![base.payload],
-                vec![
-                    WaitStrategy::Block,
-                    WaitStrategy::SpinThenBlock,
-                    WaitStrategy::Spin,
-                ],
-                vec![false],
-            ),
-            (
-                vec![10],
-                strings(&["complete"]),
-                vec![base.payload],
-                vec![base.wait],
-                vec![true],
-            ),
-        ]
+        quick_blocks()
     } else {
-        vec![
-            (
-                vec![2, 4, 10, 20, 50, 100],
-                strings(&["complete", "chain", "ring", "random:0.2"]),
-                vec![base.payload],
-                vec![base.wait],
-                vec![false],
-            ),
-            (
-                vec![4, 10],
-                strings(&["complete"]),
-                vec![p(1, 1), p(10, 10), p(50, 50), p(100, 100), p(200, 200)],
-                vec![base.wait],
-                vec![false],
-            ),
-            (
-                vec![2, 10],
-                strings(&["complete"]),
-                vec![base.payload],
-                vec![
-                    WaitStrategy::Block,
-                    WaitStrategy::SpinThenBlock,
-                    WaitStrategy::Spin,
-                ],
-                vec![false],
-            ),
-            (
-                vec![10, 50],
-                strings(&["complete"]),
-                vec![base.payload],
-                vec![base.wait],
-                vec![false, true],
-            ),
-        ]
+        full_blocks()
     };
+    let transports = s.transports.clone().unwrap_or(DEFAULT_TRANSPORTS.to_vec());
     let mut out: Vec<Case> = Vec::new();
-    for (agents, topologies, payloads, waits, barriers) in blocks {
-        for &n in &agents {
-            for topology in &topologies {
-                for &payload in &payloads {
-                    for &wait in &waits {
-                        for &global_barrier in &barriers {
-                            for &transport in &transports {
+    for block in blocks {
+        for case in block.cases(&transports, config.step) {
+            if !out.contains(&case) {
+                out.push(case);
+            }
+        }
+    }
+    out
+}
+
+/// The payload of a case the sweep does not vary it in (10 × 10).
+const BASE_PAYLOAD: PayloadShape = PayloadShape { rows: 10, cols: 10 };
+
+/// A block of the sweep: every combination of its values is a case (on every transport).
+/// Each block: (agents, topologies, payloads, waits, barriers).
+struct Block(
+    Vec<usize>,
+    Vec<String>,
+    Vec<PayloadShape>,
+    Vec<WaitStrategy>,
+    Vec<bool>,
+);
+
+impl Block {
+    /// The block's cases on `transports` (a global barrier only where one exists; the
+    /// primal step's payload is its team's n × n).
+    fn cases(&self, transports: &[Transport], step: StepKind) -> Vec<Case> {
+        let Block(agents, topologies, payloads, waits, barriers) = self;
+        let mut out = Vec::new();
+        for &n in agents {
+            for topology in topologies {
+                for &payload in payloads {
+                    for &wait in waits {
+                        for &global_barrier in barriers {
+                            for &transport in transports {
                                 if global_barrier && !transport.capabilities().global_barrier {
                                     continue;
                                 }
-                                let payload = if config.step == StepKind::Primal {
+                                let payload = if step == StepKind::Primal {
                                     p(n, n)
                                 } else {
                                     payload
                                 };
-                                let case = Case {
+                                out.push(Case {
                                     agents: n,
                                     topology: topology.clone(),
                                     payload,
                                     transport,
                                     wait,
                                     global_barrier,
-                                    step: config.step,
-                                };
-                                if !out.contains(&case) {
-                                    out.push(case);
-                                }
+                                    step,
+                                });
                             }
                         }
                     }
                 }
             }
         }
+        out
     }
-    out
+}
+
+fn p(rows: usize, cols: usize) -> PayloadShape {
+    PayloadShape { rows, cols }
+}
+
+fn strings(v: &[&str]) -> Vec<String> {
+    v.iter().map(|t| t.to_string()).collect()
+}
+
+/// The one block of the values the user gave (10 agents, complete graph, 10 × 10, auto wait,
+/// no global barrier for the rest).
+fn given_block(s: &SweepSpec) -> Block {
+    Block(
+        s.agents.clone().unwrap_or(vec![10]),
+        s.topologies.clone().unwrap_or(vec!["complete".into()]),
+        s.payloads.clone().unwrap_or(vec![BASE_PAYLOAD]),
+        s.waits.clone().unwrap_or(vec![WaitStrategy::Auto]),
+        s.barriers
+            .as_ref()
+            .map_or(vec![false], |b| b.iter().map(|b| b.is_global()).collect()),
+    )
+}
+
+/// `--quick`: team sizes, payloads, waits and the global barrier, a few points each.
+fn quick_blocks() -> Vec<Block> {
+    vec![
+        Block(
+            vec![2, 10, 50],
+            strings(&["complete", "ring"]),
+            vec![BASE_PAYLOAD],
+            vec![WaitStrategy::Auto],
+            vec![false],
+        ),
+        Block(
+            vec![10],
+            strings(&["complete"]),
+            vec![p(1, 1), p(50, 50), p(200, 200)],
+            vec![WaitStrategy::Auto],
+            vec![false],
+        ),
+        Block(
+            vec![4],
+            strings(&["complete"]),
+            vec![BASE_PAYLOAD],
+            vec![
+                WaitStrategy::Block,
+                WaitStrategy::SpinThenBlock,
+                WaitStrategy::Spin,
+            ],
+            vec![false],
+        ),
+        Block(
+            vec![10],
+            strings(&["complete"]),
+            vec![BASE_PAYLOAD],
+            vec![WaitStrategy::Auto],
+            vec![true],
+        ),
+    ]
+}
+
+/// The full sweep.
+fn full_blocks() -> Vec<Block> {
+    vec![
+        Block(
+            vec![2, 4, 10, 20, 50, 100],
+            strings(&["complete", "chain", "ring", "random:0.2"]),
+            vec![BASE_PAYLOAD],
+            vec![WaitStrategy::Auto],
+            vec![false],
+        ),
+        Block(
+            vec![4, 10],
+            strings(&["complete"]),
+            vec![p(1, 1), p(10, 10), p(50, 50), p(100, 100), p(200, 200)],
+            vec![WaitStrategy::Auto],
+            vec![false],
+        ),
+        Block(
+            vec![2, 10],
+            strings(&["complete"]),
+            vec![BASE_PAYLOAD],
+            vec![
+                WaitStrategy::Block,
+                WaitStrategy::SpinThenBlock,
+                WaitStrategy::Spin,
+            ],
+            vec![false],
+        ),
+        Block(
+            vec![10, 50],
+            strings(&["complete"]),
+            vec![BASE_PAYLOAD],
+            vec![WaitStrategy::Auto],
+            vec![false, true],
+        ),
+    ]
 }

@@ -24,7 +24,6 @@ use crate::rounds::case::{Case, RoundsConfig, StepKind, cases};
 use crate::rounds::report::{CaseFailure, CaseResult, RoundsReport};
 use admm_ta_agents::methods::probe::ProbeStep;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
-use admm_ta_runtime::error_text::one_line;
 use admm_ta_runtime::options::error::ConfigError;
 use admm_ta_runtime::options::run::RunOptions;
 use admm_ta_runtime::options::{SolveOptions, StopRule};
@@ -32,8 +31,11 @@ use admm_ta_runtime::probe_run::{ProbeRun, run_probe};
 use admm_ta_runtime::runner::RunError;
 use admm_ta_runtime::solve::error::SolveError;
 use admm_ta_runtime::solve::solve;
-use admm_ta_runtime::timeline::{RoundStamp, chrome_trace, critical_path};
-use admm_ta_topologies::TopologySpec;
+use admm_ta_topologies::{Graph, TopologySpec};
+use admm_ta_transport::error_text::one_line;
+use admm_ta_transport::latency::LatencySummary;
+use admm_ta_transport::timeline::{RoundStamp, chrome_trace, critical_path};
+use admm_ta_transport::usage::ThreadUsage;
 use std::path::Path;
 
 /// Why a case could not be measured.
@@ -62,6 +64,30 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
         .rounds
         .checked_add(config.warmup)
         .ok_or_else(|| MeasureError::Case("recorded plus warm-up rounds overflow".into()))?;
+    let measured = match case.step {
+        StepKind::Touch | StepKind::Average => probe(case, config, &graph, total_rounds)?,
+        StepKind::Primal => primal(case, config, &graph, total_rounds)?,
+    };
+    Ok(result_of(case, config, &graph, measured))
+}
+
+/// What a case's run measured: round latency, CPU use, start-up (ms), wall time and the
+/// agents' round stamps.
+type Measured = (
+    LatencySummary,
+    ThreadUsage,
+    Option<f64>,
+    std::time::Duration,
+    Vec<Vec<RoundStamp>>,
+);
+
+/// A probe step's case (touch or average the payload): rounds of exchange only.
+fn probe(
+    case: &Case,
+    config: &RoundsConfig,
+    graph: &Graph,
+    total_rounds: u64,
+) -> Result<Measured, MeasureError> {
     let options = RunOptions::builder()
         .transport(case.transport)
         .wait(case.wait)
@@ -71,62 +97,71 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
         .agent_program(config.agent_program.clone())
         .timeline(config.timeline)
         .build()?;
-    let (latency, usage, startup, wall, timeline) = match case.step {
-        StepKind::Touch | StepKind::Average => {
-            let step = if case.step == StepKind::Touch {
-                ProbeStep::Touch
-            } else {
-                ProbeStep::Average
-            };
-            let run = ProbeRun {
-                rounds: total_rounds,
-                ..ProbeRun::new(case.payload.values(), step, options)
-            };
-            let r = run_probe(&graph, &run)?;
-            (
-                r.latency,
-                r.usage,
-                r.startup.map(|d| d.as_secs_f64() * 1e3),
-                r.wall,
-                r.timeline,
-            )
-        }
-        StepKind::Primal => {
-            let n = case.agents;
-            let problem = TaskAssignmentProblem::new(
-                CostMatrix::uniform(n, n, 1).map_err(|e| bad(&e))?,
-                CaseChoice::Auto,
-            )
-            .map_err(|e| bad(&e))?;
-            let started = std::time::Instant::now();
-            let options = SolveOptions::builder()
-                .transport(case.transport)
-                .stop(StopRule::MaxIters)
-                .max_iters(total_rounds as usize)
-                .warmup_rounds(config.warmup)
-                .wait(case.wait)
-                .global_barrier(case.global_barrier)
-                .round_timeout(config.round_timeout)
-                .agent_program(config.agent_program.clone())
-                .fault_injection(false)
-                .timeline(config.timeline)
-                .build()?;
-            let report = solve(&problem, &graph, &options)?;
-            (
-                report.round_latency_us.unwrap_or_default(),
-                report.agent_usage.unwrap_or_default(),
-                report.startup_ms,
-                started.elapsed(),
-                report.timeline,
-            )
-        }
+    let step = if case.step == StepKind::Touch {
+        ProbeStep::Touch
+    } else {
+        ProbeStep::Average
     };
+    let run = ProbeRun {
+        rounds: total_rounds,
+        ..ProbeRun::new(case.payload.values(), step, options)
+    };
+    let r = run_probe(graph, &run)?;
+    Ok((
+        r.latency,
+        r.usage,
+        r.startup.map(|d| d.as_secs_f64() * 1e3),
+        r.wall,
+        r.timeline,
+    ))
+}
+
+/// The primal step's case: the primal method run to its round limit on a uniform n × n problem.
+fn primal(
+    case: &Case,
+    config: &RoundsConfig,
+    graph: &Graph,
+    total_rounds: u64,
+) -> Result<Measured, MeasureError> {
+    let bad = |e: &dyn std::fmt::Display| MeasureError::Case(e.to_string());
+    let n = case.agents;
+    let problem = TaskAssignmentProblem::new(
+        CostMatrix::uniform(n, n, 1).map_err(|e| bad(&e))?,
+        CaseChoice::Auto,
+    )
+    .map_err(|e| bad(&e))?;
+    let started = std::time::Instant::now();
+    let options = SolveOptions::builder()
+        .transport(case.transport)
+        .stop(StopRule::MaxIters)
+        .max_iters(total_rounds as usize)
+        .warmup_rounds(config.warmup)
+        .wait(case.wait)
+        .global_barrier(case.global_barrier)
+        .round_timeout(config.round_timeout)
+        .agent_program(config.agent_program.clone())
+        .fault_injection(false)
+        .timeline(config.timeline)
+        .build()?;
+    let report = solve(&problem, graph, &options)?;
+    Ok((
+        report.round_latency_us.unwrap_or_default(),
+        report.agent_usage.unwrap_or_default(),
+        report.startup_ms,
+        started.elapsed(),
+        report.timeline,
+    ))
+}
+
+/// The case's row: per-round figures from what its run measured.
+fn result_of(case: &Case, config: &RoundsConfig, graph: &Graph, measured: Measured) -> CaseResult {
+    let (latency, usage, startup, wall, timeline) = measured;
     let recorded = latency.round.count.max(1);
     let per_round = |v: u64| v as f64 / recorded as f64;
     // Samples an agent receives per round, on average: its degree.
     let mean_degree = (0..graph.robots()).map(|i| graph.degree(i)).sum::<usize>() as f64
         / graph.robots().max(1) as f64;
-    Ok(CaseResult {
+    CaseResult {
         case: case.clone(),
         payload_bytes: case.payload.values() * 8,
         recorded: latency.round.count,
@@ -150,7 +185,7 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
                 .iter()
                 .map(|t| t[(config.warmup as usize).min(t.len())..].to_vec())
                 .collect();
-            critical_path(&graph, &recorded)
+            critical_path(graph, &recorded)
         }),
         trace: None,
         timeline: if config.traces.is_some() {
@@ -158,7 +193,7 @@ pub fn measure(case: &Case, config: &RoundsConfig) -> Result<CaseResult, Measure
         } else {
             Vec::new()
         },
-    })
+    }
 }
 
 /// Writes `result`'s trace into `dir` (named by its case) and lets go of its stamps.

@@ -4,10 +4,10 @@
 use crate::experiment::{Experiment, OutputFile};
 use crate::plot::{Chart, Scale, Series};
 use crate::rounds::case::{Case, DEFAULT_TRANSPORTS, PayloadShape, StepKind};
-use admm_ta_runtime::latency::Percentiles;
-use admm_ta_runtime::timeline::{CriticalPath, RoundStamp};
-use admm_ta_runtime::transport::Transport;
-use admm_ta_runtime::wait::WaitStrategy;
+use admm_ta_transport::Transport;
+use admm_ta_transport::latency::Percentiles;
+use admm_ta_transport::timeline::{CriticalPath, RoundStamp};
+use admm_ta_transport::wait::WaitStrategy;
 use serde::Serialize;
 
 /// Percentiles of one quantity, in microseconds.

@@ -1,11 +1,11 @@
 //! Settings no run can honour, and the one check of a timeout.
 
 use crate::options::given::{Compact, FrontEnd, OptionId, OptionName, Setting, Value};
-use crate::transport::{Execution, Transport, ZenohNotBuilt};
 use admm_ta_agents::certify::stopping::StopRule;
 use admm_ta_agents::method::settings::{SettingError, SettingKind};
 use admm_ta_agents::method::team::{Refusal, RunOption};
 use admm_ta_agents::methods::Method;
+use admm_ta_transport::{Execution, Transport, ZenohNotBuilt};
 use std::time::Duration;
 
 /// Settings no run can honour. Errors name options by [`OptionId`]: `Display` spells them
@@ -118,60 +118,73 @@ impl ConfigError {
             Self::TraceNeedsCheck => {
                 "--trace needs --check: it follows the run against the centralized optimum".into()
             }
-            Self::Refused(refusal) => {
-                let option = match refusal.option {
-                    RunOption::AdaptiveRho => Setting::new(OptionId::AdaptiveRho, Value::On),
-                    RunOption::Stop(stop) => {
-                        Setting::new(OptionId::Stop, Value::Name(stop.name().into()))
-                    }
-                };
-                format!(
-                    "{} applies to {}: add {}",
-                    front.setting(&option),
-                    refusal.because,
-                    front.setting(&Setting::new(
-                        OptionName::Method(refusal.needs),
-                        Value::Name(refusal.value.into())
-                    ))
-                )
+            Self::Refused(refusal) => refused_text(refusal, front),
+            Self::NotForMethod { .. } | Self::NotForTransport { .. } | Self::NotForStop { .. } => {
+                self.not_for_text(front)
             }
+        }
+    }
+}
+
+impl ConfigError {
+    /// The message of an option given where it does not apply (a method, a transport or a
+    /// stop rule that reads none of it), in the terms of `front`.
+    fn not_for_text(&self, front: FrontEnd) -> String {
+        let (option, to, works_with) = match self {
             Self::NotForMethod {
                 option,
                 method,
                 applies,
-            } => format!(
-                "{} does not apply to {}: it works with {}",
-                front.setting(option),
-                front.setting(&Setting::new(
-                    OptionId::Method,
-                    Value::Name((*method).into())
-                )),
-                front.choices(OptionId::Method, applies)
+            } => (
+                option,
+                Setting::new(OptionId::Method, Value::Name((*method).into())),
+                front.choices(OptionId::Method, applies),
             ),
             Self::NotForTransport {
                 option,
                 transport,
                 applies,
-            } => format!(
-                "{} does not apply to {}: it works with {}",
-                front.setting(option),
-                front.setting(&Setting::new(
-                    OptionId::Transport,
-                    Value::Name((*transport).into())
-                )),
-                front.choices(OptionId::Transport, applies)
+            } => (
+                option,
+                Setting::new(OptionId::Transport, Value::Name((*transport).into())),
+                front.choices(OptionId::Transport, applies),
             ),
-            Self::NotForStop { option, stop } => format!(
-                "{} does not apply to {}: it counts the rounds of {}",
-                front.setting(option),
-                front.setting(&Setting::new(OptionId::Stop, Value::Name((*stop).into()))),
-                front.setting(&Setting::new(
-                    OptionId::Stop,
-                    Value::Name(StopRule::Agreement.name().into())
-                ))
-            ),
-        }
+            Self::NotForStop { option, stop } => {
+                return format!(
+                    "{} does not apply to {}: it counts the rounds of {}",
+                    front.setting(option),
+                    front.setting(&Setting::new(OptionId::Stop, Value::Name((*stop).into()))),
+                    front.setting(&Setting::new(
+                        OptionId::Stop,
+                        Value::Name(StopRule::Agreement.name().into())
+                    ))
+                );
+            }
+            other => return other.in_terms_of(front),
+        };
+        format!(
+            "{} does not apply to {}: it works with {works_with}",
+            front.setting(option),
+            front.setting(&to),
+        )
     }
+}
+
+/// The message of an option a method's variant refuses, in the terms of `front`.
+fn refused_text(refusal: &Refusal, front: FrontEnd) -> String {
+    let option = match refusal.option {
+        RunOption::AdaptiveRho => Setting::new(OptionId::AdaptiveRho, Value::On),
+        RunOption::Stop(stop) => Setting::new(OptionId::Stop, Value::Name(stop.name().into())),
+    };
+    format!(
+        "{} applies to {}: add {}",
+        front.setting(&option),
+        refusal.because,
+        front.setting(&Setting::new(
+            OptionName::Method(refusal.needs),
+            Value::Name(refusal.value.into())
+        ))
+    )
 }
 
 impl std::fmt::Display for ConfigError {

@@ -5,7 +5,7 @@
 //! with the errors of [`error::ConfigError`], which name options by [`given::OptionId`]: each
 //! front end renders them in its own terms (a flag, a team file's key). With
 //! [`SolveOptionsBuilder::refuse_unread`] (the command line, team files, `admm_ta::Solver`),
-//! `build` also refuses every option given that the run never reads ([`unread`]). Checks
+//! `build` also refuses every option given that the run never reads (`unread`). Checks
 //! that depend on the problem (sizes, memory, the ρ rule's value) are the solve's.
 //!
 //! Size: the two option sets, a setter and a getter per option, and the test of the
@@ -19,13 +19,13 @@ mod unread;
 use crate::options::error::ConfigError;
 use crate::options::given::{Given, OptionId};
 use crate::options::run::{RunOptions, RunOptionsBuilder};
-use crate::transport::{Execution, Transport};
-use crate::wait::WaitStrategy;
 pub use admm_ta_agents::certify::stopping::StopRule;
 use admm_ta_agents::method::settings::{GivenSettings, Setting, SettingSpec, SettingValue};
 use admm_ta_agents::method::team::MethodSetup;
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::ties::Perturbation;
+use admm_ta_transport::wait::WaitStrategy;
+use admm_ta_transport::{Execution, Transport};
 use serde::Serialize;
 use std::time::Duration;
 
@@ -376,7 +376,7 @@ impl SolveOptionsBuilder {
     }
 
     /// Refuse, in [`SolveOptionsBuilder::build`], every option given by a setter that this
-    /// method or transport never reads ([`unread`]'s rule: `rho` with market, a
+    /// method or transport never reads (`unread`'s rule: `rho` with market, a
     /// `stop_rounds` without the agreement stop, a round timeout on the lockstep
     /// simulation, …) instead of ignoring it. The command line, team files and
     /// `admm_ta::Solver` turn it on; it is off by default for sweeps that set one value

@@ -3,8 +3,8 @@
 
 use crate::options::error::{ConfigError, seconds};
 use crate::options::given::OptionId;
-use crate::transport::{Transport, ZenohNotBuilt};
-use crate::wait::WaitStrategy;
+use admm_ta_transport::wait::WaitStrategy;
+use admm_ta_transport::{Transport, ZenohNotBuilt};
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -101,7 +101,7 @@ impl RunOptions {
         self.agent_program.as_ref()
     }
 
-    /// Agent processes honour the `ADMM_TA_FAULT` test switch ([`crate::fault`]).
+    /// Agent processes honour the `ADMM_TA_FAULT` test switch ([`admm_ta_transport::fault`]).
     pub fn fault_injection(&self) -> bool {
         self.fault_injection
     }
@@ -111,7 +111,7 @@ impl RunOptions {
         self.warmup_rounds
     }
 
-    /// Every agent stamps its rounds into a timeline ([`crate::timeline`]).
+    /// Every agent stamps its rounds into a timeline ([`admm_ta_transport::timeline`]).
     pub fn timeline(&self) -> bool {
         self.timeline
     }
@@ -226,7 +226,7 @@ impl RunOptionsBuilder {
     }
 }
 
-/// How agent processes are started: `PROGRAM [ARGS…] agent --run ID --index I …`. The
+/// How agent processes are started: `PROGRAM [ARGS…] agent --run ID --robot I …`. The
 /// `admm-ta` binary needs no leading arguments; a front end that carries the command line
 /// in another program (the Python package: `python -c "..."`) gives them.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -6,12 +6,12 @@
 
 use crate::options::error::ConfigError;
 use crate::options::given::{Given, OptionId, OptionName, Setting, Value};
-use crate::transport::{Execution, Transport};
-use crate::wait::WaitStrategy;
 use admm_ta_agents::certify::stopping::StopRule;
 use admm_ta_agents::method::settings::GivenSettings;
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::ties::Perturbation;
+use admm_ta_transport::wait::WaitStrategy;
+use admm_ta_transport::{Execution, Transport};
 
 /// What a builder was given: the options it names and every setting's value.
 pub(super) struct Chosen<'a> {
@@ -160,9 +160,9 @@ fn for_transport(
 mod tests {
     use super::super::SolveOptions;
     use super::super::given::FrontEnd;
-    use crate::transport::Transport;
     use admm_ta_agents::certify::stopping::StopRule;
     use admm_ta_agents::methods::Method;
+    use admm_ta_transport::Transport;
 
     fn refused(b: super::super::SolveOptionsBuilder) -> String {
         b.refuse_unread(true).build().unwrap_err().to_string()
@@ -221,7 +221,10 @@ mod tests {
             "--trace does not apply to --transport threads: it works with --transport sim"
         );
         assert!(refused(b().round_timeout_secs(5.0)).starts_with("--round-timeout 5"));
-        assert!(refused(b().wait(crate::wait::WaitStrategy::Spin)).starts_with("--wait spin"));
+        assert!(
+            refused(b().wait(admm_ta_transport::wait::WaitStrategy::Spin))
+                .starts_with("--wait spin")
+        );
         assert!(
             refused(b().transport(Transport::Threads).startup_timeout_secs(5.0))
                 .starts_with("--startup-timeout 5 does not apply to --transport threads")

@@ -1,17 +1,17 @@
-//! The body of `admm-ta agent --run ID --index I --scenario FILE`: one agent process.
+//! The body of `admm-ta agent --run ID --robot I --scenario FILE`: one agent process.
 //!
 //! It rebuilds its agent from the scenario, connects its end of the run's transport
 //! ([`crate::process::connect`]), runs the shared
 //! round loop and writes its outcome as `result-I.json` into the run directory. It always
 //! returns (never `process::exit`), so iceoryx2's `Drop`s release its shared memory.
 
-use crate::endpoint::AgentEndpoint;
-use crate::exchange::ExchangeError;
-use crate::exchange::round_loop::{AgentOutcome, run_agent};
 use crate::process::connect::connect;
 use crate::process::member_error::MemberError;
 use crate::process::scenario::{Scenario, ScenarioWorkload};
-use crate::workload::episode::{EpisodeRecord, run_surveillance_agent};
+use crate::workload::surveillance::{EpisodeRecord, run_surveillance_agent};
+use admm_ta_transport::endpoint::AgentEndpoint;
+use admm_ta_transport::exchange::ExchangeError;
+use admm_ta_transport::exchange::round_loop::{AgentOutcome, run_agent};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -53,11 +53,12 @@ fn unix_ns() -> u128 {
 /// After a failed start-up: a stop request on the team's board (a termination signal to
 /// another process of the team) is this process's too.
 fn record_stop(scenario: &Scenario) {
-    if crate::signals::received().is_none()
-        && let Ok(board) = crate::board::Board::open(&scenario.board_shm, scenario.robots)
+    if admm_ta_transport::signals::received().is_none()
+        && let Ok(board) =
+            admm_ta_transport::board::Board::open(&scenario.board_shm, scenario.robots)
         && let Some((signal, _)) = board.stop_requested()
     {
-        crate::signals::record(signal);
+        admm_ta_transport::signals::record(signal);
     }
 }
 
@@ -69,7 +70,7 @@ pub fn run(
     scenario_path: &Path,
     scenario_digest: &str,
 ) -> Result<(), MemberError> {
-    let _signals = crate::signals::install();
+    let _signals = admm_ta_transport::signals::install();
     let _span = tracing::info_span!("agent", run = %run_id, agent = index).entered();
     // Not a symlink, ours, mode 0600, and what the launcher wrote (its digest).
     let bytes = crate::process::private_dir::read_verified(scenario_path, scenario_digest)
@@ -133,14 +134,15 @@ pub fn run_scenario(
     };
     let (outcome, episodes) = ran.map_err(|e| {
         tracing::warn!(error = %e, "stopped");
-        let board = crate::board::Board::open(&scenario.board_shm, scenario.robots).ok();
+        let board =
+            admm_ta_transport::board::Board::open(&scenario.board_shm, scenario.robots).ok();
         tell_the_team(&*endpoint, board.as_ref(), index, &e);
         MemberError::failed(e)
     })?;
     // Finished, not dead: a neighbour that scans the run's nodes while this one's node goes
     // away must not take it for a failure (the board of a team with one; Zenoh teams have
     // none).
-    if let Ok(board) = crate::board::Board::open(&scenario.board_shm, scenario.robots) {
+    if let Ok(board) = admm_ta_transport::board::Board::open(&scenario.board_shm, scenario.robots) {
         board.set_finished(index);
     }
     // Release the ports before reporting: once the launcher sees the result it may clean up.
@@ -179,18 +181,18 @@ pub fn run_scenario(
 /// itself, whoever got it. Any other error points the others at the agent to blame.
 pub(crate) fn tell_the_team(
     endpoint: &dyn AgentEndpoint,
-    board: Option<&crate::board::Board>,
+    board: Option<&admm_ta_transport::board::Board>,
     index: usize,
     error: &ExchangeError,
 ) {
     if let ExchangeError::Stopped { signal, .. } = *error {
-        if crate::signals::received().is_some() {
+        if admm_ta_transport::signals::received().is_some() {
             if let Some(board) = board {
                 let _ = board.request_stop(signal, Some(index));
             }
             endpoint.announce_stop(signal);
         }
-        crate::signals::record(signal);
+        admm_ta_transport::signals::record(signal);
     } else {
         endpoint.blame_for(error);
     }

@@ -1,19 +1,19 @@
 //! How an agent process connects its end of the run's transport, and what a run's transport
 //! needs before and beside its agents — whatever the transport: everything specific to one
-//! is behind its [`ProcessTransport`] (see [`crate::endpoint`]).
+//! is behind its [`ProcessTransport`] (see [`admm_ta_transport::endpoint`]).
 
-use crate::board::Board;
-use crate::endpoint::{
-    AgentEndpoint, ConnectError, ConnectRequest, ProcessTransport, Resource, RunRequest,
-    RunSupport, SupportError,
-};
-use crate::exchange::ExchangeError;
-use crate::fault::{FaultKind, fault_for};
 use crate::process::member_error::MemberError;
 use crate::process::scenario::{Scenario, ScenarioError};
 use crate::process::team_digest::TeamDigest;
-use crate::wait::WaitPolicy;
 use admm_ta_topologies::Graph;
+use admm_ta_transport::board::Board;
+use admm_ta_transport::endpoint::{
+    AgentEndpoint, ConnectError, ConnectRequest, ProcessTransport, Resource, RunRequest,
+    RunSupport, SupportError,
+};
+use admm_ta_transport::exchange::ExchangeError;
+use admm_ta_transport::fault::{FaultKind, fault_for};
+use admm_ta_transport::wait::WaitPolicy;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -43,12 +43,12 @@ pub(crate) fn connect(
     if let Some(fault) = any_fault.filter(|f| f.kind == FaultKind::NeverStart) {
         // Fault injection: this agent never connects (until a signal or its launcher ends).
         fault.strike();
-        while crate::signals::received().is_none() {
+        while admm_ta_transport::signals::received().is_none() {
             std::thread::sleep(Duration::from_millis(20));
         }
         return Err(MemberError::failed(recorded(ExchangeError::Stopped {
             agent: index,
-            signal: crate::signals::received().unwrap_or(libc::SIGTERM),
+            signal: admm_ta_transport::signals::received().unwrap_or(libc::SIGTERM),
         })));
     }
     let processes = processes_of(scenario)?;
@@ -97,7 +97,7 @@ pub(crate) fn connect(
 /// that it ends as if it had got the signal.
 fn recorded(error: ExchangeError) -> ExchangeError {
     if let ExchangeError::Stopped { signal, .. } = error {
-        crate::signals::record(signal);
+        admm_ta_transport::signals::record(signal);
     }
     error
 }
@@ -149,7 +149,7 @@ impl LauncherSupport {
         let resources = RunResources::create(scenario, run_dir)?;
         let support = match scenario.transport.processes() {
             Some(processes) => processes.start_support(&run_request(scenario, run_dir)?)?,
-            None => Box::new(crate::endpoint::NoSupport),
+            None => Box::new(admm_ta_transport::endpoint::NoSupport),
         };
         if let Some(config) = support.scenario_config() {
             scenario.transport_config = Some(config);

@@ -10,9 +10,6 @@
 //! is one line: who failed, how, at which round, and what happened to the others. Whatever
 //! happens, the run's namespace ([`RunNamespace`]) is removed when the launcher returns.
 
-use crate::board::{Board, BoardError};
-use crate::endpoint::SupportError;
-use crate::exchange::round_loop::AgentOutcome;
 use crate::options::run::AgentProgram;
 use crate::process::agent::{AgentReport, log_path, result_path};
 use crate::process::connect::LauncherSupport;
@@ -21,8 +18,11 @@ use crate::process::private_dir::{create_private_file, sha256_hex, write_private
 use crate::process::scenario::Scenario;
 use crate::process::supervise::{AgentFailure, RunGuard, Stopped, Supervised, failure, supervise};
 use crate::process::team_digest::TeamDigest;
-use crate::signals;
-use crate::workload::episode::EpisodeRecord;
+use crate::workload::surveillance::EpisodeRecord;
+use admm_ta_transport::board::{Board, BoardError};
+use admm_ta_transport::endpoint::SupportError;
+use admm_ta_transport::exchange::round_loop::AgentOutcome;
+use admm_ta_transport::signals;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -71,7 +71,7 @@ pub enum LaunchError {
     /// failed.
     #[error(
         "stopped by {}{}: {stopped} agent(s) stopped, {killed} killed, {}",
-        crate::signals::name(*signal),
+        admm_ta_transport::signals::name(*signal),
         by.map_or(String::new(), |a| format!(" to agent {a}")),
         if *leftovers == 0 { "run files removed".to_string() } else { format!("{leftovers} run file(s) left") }
     )]
@@ -250,7 +250,7 @@ fn spawn_agents(
     // With logs on, every agent writes its log lines to this process's standard error (a
     // copy kept close-on-exec here, made the agent's descriptor 3), its own standard error
     // staying its private log file.
-    let log_fd = crate::logging::filter().and_then(|_| {
+    let log_fd = admm_ta_transport::logging::filter().and_then(|_| {
         // SAFETY: duplicating our standard error to a close-on-exec descriptor.
         let fd = unsafe { libc::fcntl(2, libc::F_DUPFD_CLOEXEC, 10) };
         (fd >= 0).then_some(fd)
@@ -274,29 +274,29 @@ fn spawn_agents(
                     return Err(std::io::Error::other("the launcher is gone"));
                 }
                 if let Some(fd) = log_fd
-                    && libc::dup2(fd, crate::logging::CHILD_LOG_FD) < 0
+                    && libc::dup2(fd, admm_ta_transport::logging::CHILD_LOG_FD) < 0
                 {
                     return Err(std::io::Error::last_os_error());
                 }
                 Ok(())
             });
         }
-        if let (Some(filter), Some(_)) = (crate::logging::filter(), log_fd) {
+        if let (Some(filter), Some(_)) = (admm_ta_transport::logging::filter(), log_fd) {
             command.env("RUST_LOG", filter).env(
-                crate::logging::LOG_FD_ENV,
-                crate::logging::CHILD_LOG_FD.to_string(),
+                admm_ta_transport::logging::LOG_FD_ENV,
+                admm_ta_transport::logging::CHILD_LOG_FD.to_string(),
             );
         }
         #[cfg(feature = "fault-injection")]
         if !fault_injection {
-            command.env_remove(crate::fault::FAULT_ENV);
+            command.env_remove(admm_ta_transport::fault::FAULT_ENV);
         }
         #[cfg(not(feature = "fault-injection"))]
         let _ = fault_injection;
         let child = command
             .arg("agent")
             .args(["--run", &guard.namespace.id])
-            .args(["--index", &index.to_string()])
+            .args(["--robot", &index.to_string()])
             .arg("--scenario")
             .arg(&scenario.path)
             .args(["--scenario-digest", &scenario.digest])

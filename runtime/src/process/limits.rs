@@ -7,9 +7,9 @@
 //! the hard limit to, instead of an opaque iceoryx2 error half-way through start-up.
 //!
 //! The open files and threads an agent process needs are declared by its transport
-//! ([`crate::endpoint::ProcessTransport`]; each transport's module says how it counted them).
+//! ([`admm_ta_transport::endpoint::ProcessTransport`]; each transport's module says how it counted them).
 
-use crate::transport::Transport;
+use admm_ta_transport::Transport;
 
 /// Files no count covers (a margin for what the formulas do not see).
 const MARGIN: u64 = 16;

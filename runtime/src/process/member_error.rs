@@ -2,11 +2,11 @@
 //! its result: refused before it ran (its input, or a team it does not belong to) or failed
 //! while it ran. The command line maps the two to different exit codes (2 and 4), so
 //! scripts can tell a wrong team file from a fault; the cause keeps its own type (a
-//! [`crate::team::team_file::TeamFileError`], an [`crate::exchange::ExchangeError`], a
+//! [`crate::team::errors::TeamFileError`], an [`admm_ta_transport::exchange::ExchangeError`], a
 //! [`crate::process::team_digest::OtherTeam`], …) for a library user to inspect with
 //! [`MemberError::cause`] and `downcast_ref`.
 
-use crate::error_text::one_line;
+use admm_ta_transport::error_text::one_line;
 
 /// The typed cause of a [`MemberError`].
 pub type Cause = Box<dyn std::error::Error + Send + Sync + 'static>;

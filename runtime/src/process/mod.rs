@@ -1,6 +1,6 @@
 //! Process orchestration: everything about agents that run as OS processes, whatever
 //! transport carries their messages (each process transport is reached only through its
-//! [`crate::endpoint::ProcessTransport`]).
+//! [`admm_ta_transport::endpoint::ProcessTransport`]).
 //!
 //! * [`launcher`]: spawns, supervises and reaps the agent processes of a run;
 //! * [`supervise`]: the launcher's supervision of its agents (reaping, blame, grace period);

@@ -2,8 +2,8 @@
 //! concurrent runs and parallel tests never collide, and a cleanup that leaves nothing of
 //! the run behind — not even when an agent was killed and could not clean up itself.
 
-use crate::liveness::process_alive;
 use crate::process::private_dir::{self, PrivateDirError, create_unique_dir, write_private_file};
+use admm_ta_transport::liveness::process_alive;
 use std::path::{Path, PathBuf};
 
 /// Where POSIX shared memory lives on Linux.
@@ -49,7 +49,7 @@ impl RunNamespace {
             Err(why) => {
                 eprintln!(
                     "warning: {}; this run uses a private directory of its own",
-                    crate::error_text::one_line(&why)
+                    admm_ta_transport::error_text::one_line(&why)
                 );
                 let temp = std::env::temp_dir();
                 let (base, _) =

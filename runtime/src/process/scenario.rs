@@ -3,14 +3,10 @@
 //! problem, the graph, the method with its own settings (its settings type, serialised), the
 //! team's numbers and the run's names and limits.
 
-use crate::endpoint::RunPlace;
-use crate::exchange::round_loop::{AgentPlan, AgentStop};
 use crate::options::run::RunOptions;
-use crate::transport::Transport;
-use crate::wait::WaitStrategy;
 use crate::workload::Workload;
-use crate::workload::episode::EpisodeSettings;
 use crate::workload::plan::AgentFactory;
+use crate::workload::surveillance::EpisodeSettings;
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
 use admm_ta_agents::method::agent::MethodAgent;
@@ -19,6 +15,10 @@ use admm_ta_agents::methods::Method;
 use admm_ta_agents::methods::probe::{ProbeAgent, ProbeStep};
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix, TaskAssignmentProblem};
 use admm_ta_topologies::Graph;
+use admm_ta_transport::Transport;
+use admm_ta_transport::endpoint::RunPlace;
+use admm_ta_transport::exchange::round_loop::{AgentPlan, AgentStop};
+use admm_ta_transport::wait::WaitStrategy;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -32,7 +32,7 @@ pub enum ScenarioWorkload {
     Method,
     /// A benchmark probe ([`ProbeAgent`]) with a payload of `payload_len` values.
     Probe { payload_len: usize, step: ProbeStep },
-    /// Repeated surveillance episodes ([`crate::episodes`]).
+    /// Repeated surveillance episodes ([`crate::surveillance`]).
     Episodes(Box<EpisodeSettings>),
 }
 
@@ -87,7 +87,7 @@ pub struct Scenario {
     /// Rounds before latency is recorded.
     #[serde(default)]
     pub warmup_rounds: u64,
-    /// Every agent stamps its rounds ([`crate::timeline`]).
+    /// Every agent stamps its rounds ([`admm_ta_transport::timeline`]).
     #[serde(default)]
     pub timeline: bool,
     /// What the transport put here for its agents (a Zenoh run's router links), as its own

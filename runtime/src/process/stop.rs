@@ -4,9 +4,9 @@
 //! says whether a signal stopped it, `/proc` says whether one is stopped (SIGSTOP), and the
 //! other agents' last lines say who saw the failure best.
 
-use crate::board::Board;
-use crate::liveness::process_state;
-use crate::signals;
+use admm_ta_transport::board::Board;
+use admm_ta_transport::liveness::process_state;
+use admm_ta_transport::signals;
 use std::process::Child;
 use std::time::Duration;
 
@@ -86,7 +86,7 @@ pub(crate) fn stopped_by_signal(how: &str) -> Option<i32> {
 /// what went wrong (not "stopped … because agent …"), else `culprit` itself (its exit says
 /// how it ended). A `stopped` culprit (SIGSTOP) says nothing: it is never its own reporter
 /// while another agent failed, and an agent that timed out waiting for it (the line of
-/// [`crate::exchange::ExchangeError::Timeout`]) comes first, before agents that timed out on
+/// [`admm_ta_transport::exchange::ExchangeError::Timeout`]) comes first, before agents that timed out on
 /// a neighbour that was itself waiting.
 pub(crate) fn reporter(culprit: usize, lines: &[(usize, String)], stopped: bool) -> usize {
     let others = || {

@@ -3,13 +3,13 @@
 //! board's mark or the transport's announcement), the others given a grace period and then
 //! killed; a stop request stops the team. What it saw becomes the launcher's error.
 
-use crate::board::Board;
 use crate::process::agent::log_path;
 use crate::process::connect::{LauncherSupport, cleanup_dead, uses_board};
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::process::stop::{reporter, stop_children, stopped_agent, stopped_by_signal};
-use crate::signals;
+use admm_ta_transport::board::Board;
+use admm_ta_transport::signals;
 use std::path::Path;
 use std::process::{Child, ExitStatus};
 use std::time::Duration;

@@ -7,8 +7,8 @@
 //! that differs is refused by name before round 0, naming the first part that differs
 //! (the board keeps a short digest of each part).
 
-use crate::board::{Board, DIGEST_WORDS};
 use crate::process::scenario::Scenario;
+use admm_ta_transport::board::{Board, DIGEST_WORDS};
 use sha2::{Digest, Sha256};
 
 /// The parts of a team, in the order they are compared, and the scenario fields in each;

@@ -1,10 +1,10 @@
 //! Why a solve cannot start or complete.
 
-use crate::error_text::one_line;
 use crate::options::error::ConfigError;
 use crate::runner::RunError;
 use crate::workload::plan::BadRho;
 use admm_ta_agents::certify::local_stop::LocalStopError;
+use admm_ta_transport::error_text::one_line;
 
 /// Why the survivors of a failure could not re-solve (`--on-failure continue`).
 #[derive(Debug, thiserror::Error)]
@@ -38,7 +38,7 @@ pub enum SolveError {
     Internal(String),
     #[error("the topology has {graph} robots but the costs have {problem}")]
     SizeMismatch { graph: usize, problem: usize },
-    /// The method's memory estimate ([`admm_ta_agents::methods::Memory`]) is above the limit:
+    /// The method's memory estimate ([`admm_ta_agents::method::info::Memory`]) is above the limit:
     /// named by the user's shape (`robots × tasks`), with the shape the method would solve
     /// when it differs (`solved_as`: a problem with fewer robots than tasks is solved
     /// transposed, one agent per task).

@@ -4,13 +4,13 @@
 
 use crate::options::{SolveOptions, StopRule};
 use crate::runner::LockstepWatch;
-use crate::sim::{LockstepSim, RoundView};
 use crate::solve::trace::{Affine, Tracer, decides_by_readout, relaxed_objective, within_0_1pct};
 use admm_ta_agents::agent::ConsensusAgent;
 use admm_ta_agents::certify::oracle::OptimalAssignment;
 use admm_ta_agents::certify::stopping::{AgreementStop, AgreementStreak, TeamStopRule};
 use admm_ta_agents::method::agent::MethodAgent;
 use admm_ta_agents::problem::TaskAssignmentProblem;
+use admm_ta_transport::sim::process::{LockstepSim, RoundView};
 
 /// Rounds after which an agreement is first certified, and the spacing of later checks
 /// (each check is one `m × n` assignment problem per robot).

@@ -1,45 +1,44 @@
 //! One end-to-end solve: build the agents, run them, round, repair, check.
 //!
 //! * [`error`]: why a solve fails; [`report`]: what it reports;
-//! * `trace`: the oracle tracer of a checked solve;
+//! * `trace`: the oracle tracer of a checked solve; `memory`: the refusal of a solve too
+//!   large for the machine;
 //! * `lockstep`: what a solve watches of a lockstep run (the tracer, the central stop
 //!   rules).
 
 pub mod error;
 pub(crate) mod lockstep;
+mod memory;
 pub mod report;
 pub(crate) mod trace;
 pub(crate) mod user;
 
-use crate::exchange::header::RoundHeader;
-use crate::exchange::round_loop::AgentStop;
-use crate::latency::LatencySummary;
 use crate::options::{OnFailure, SolveOptions, StopRule};
 use crate::process::launcher::LaunchError;
 use crate::runner::{RunError, TeamRun, run_team_watched};
 use crate::solve::error::{CannotContinue, SolveError};
 use crate::solve::lockstep::SolveWatch;
+pub use crate::solve::memory::MEMORY_LIMIT_BYTES;
+use crate::solve::memory::check_size;
 use crate::solve::report::{Degraded, SolveReport};
 use crate::solve::trace::{Affine, Tracer, decides_by_readout};
-use crate::transport::Execution;
-use crate::usage::ThreadUsage;
 use crate::workload::Workload;
-use crate::workload::plan::prepare;
+use crate::workload::plan::{Plan, prepare};
 use admm_ta_agents::certify::local_stop::LocalCertifiedStop;
 use admm_ta_agents::certify::oracle::{self, OptimalAssignment};
 use admm_ta_agents::certify::rounding;
 use admm_ta_agents::method::info::Numbers;
-use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::ties;
 use admm_ta_agents::problem::{
     AssignmentCase, CaseChoice, CostMatrix, IDLE, TaskAssignmentProblem,
 };
 use admm_ta_topologies::Graph;
+use admm_ta_transport::Execution;
+use admm_ta_transport::exchange::header::RoundHeader;
+use admm_ta_transport::exchange::round_loop::AgentStop;
+use admm_ta_transport::latency::LatencySummary;
+use admm_ta_transport::usage::ThreadUsage;
 use std::time::Instant;
-
-/// A solve whose method needs more memory than this (by its registry entry's estimate:
-/// agent state plus round buffers, or the centralized solver's) is refused up front.
-pub const MEMORY_LIMIT_BYTES: f64 = 8.0 * (1u64 << 30) as f64;
 
 /// Solves `problem` on `graph` as `options` say; with [`OnFailure::Continue`], a failed
 /// agent process is dropped and the survivors re-solve without it. The agents solve the
@@ -239,102 +238,21 @@ fn solve_user(
     Ok(report)
 }
 
-/// Refuses a solve whose method would need more than [`MEMORY_LIMIT_BYTES`] on the
-/// `solved` shape (`robots × tasks` of the problem it runs), plus `extra` bytes (the team's
-/// graph); the error names the user's shape `user`.
-fn refuse_beyond_memory(
-    method: Method,
-    user: (usize, usize),
-    solved: (usize, usize),
-    extra: f64,
-) -> Result<(), SolveError> {
-    let memory = &method.info().memory;
-    let bytes = (memory.bytes)(solved.0, solved.1) + extra;
-    if bytes > MEMORY_LIMIT_BYTES {
-        return Err(SolveError::TooLarge {
-            robots: user.0,
-            tasks: user.1,
-            method: method.name(),
-            solved_as: (solved != user).then_some(solved),
-            gib: bytes / (1u64 << 30) as f64,
-            of: memory.of,
-            because: memory.because,
-        });
-    }
-    Ok(())
-}
-
-/// The memory check of a solve, done on the user's problem before anything large is
-/// built: a team that solves the user's own numbers (the distributed Hungarian method) on the
-/// user's shape; the centralized solver and a team on the normalised shape they solve (the
-/// tasks are the agents when `n < m` is transposed), a team with the edges of the graph it
-/// then runs on (counted, not built: each pair of hosts that are the same or neighbours
-/// links every task of one with every task of the other).
-fn check_size(
-    problem: &TaskAssignmentProblem,
-    graph: &Graph,
-    method: Method,
-) -> Result<(), SolveError> {
-    let user = (problem.robots(), problem.tasks());
-    let team = method.team().is_some();
-    if team && method.info().numbers == Numbers::Exact {
-        return refuse_beyond_memory(method, user, user, 0.0);
-    }
-    let internal = problem.internal();
-    let solved = (internal.robots(), internal.tasks());
-    if !team {
-        return refuse_beyond_memory(method, user, solved, 0.0);
-    }
-    let (agents, hosts) = (internal.robots(), graph.robots());
-    let mut edges = 0.0;
-    if agents != hosts && problem.robots() == hosts {
-        // Agent `a` runs on host `a mod hosts`.
-        let per_host = |h: usize| ((agents + hosts - 1 - h) / hosts) as f64;
-        for h in 0..hosts {
-            let c = per_host(h);
-            edges += c * (c - 1.0) / 2.0;
-            for &g in graph.neighbours(h).iter().filter(|&&g| g > h) {
-                edges += c * per_host(g);
-            }
-        }
-    }
-    // Two adjacency entries per edge, and the edge list they are built from.
-    refuse_beyond_memory(method, user, solved, 32.0 * edges)
-}
-
-fn solve_once(
-    problem: &TaskAssignmentProblem,
+/// The team of `plan` (or, with none, the centralized solver) on `problem`: what it yields,
+/// with the `tracer` the watch kept.
+fn run_solve<'p>(
+    problem: &'p TaskAssignmentProblem,
     graph: &Graph,
     options: &SolveOptions,
-    optimum: Option<OptimalAssignment>,
+    plan: Option<&Plan<'_>>,
+    tracer: &mut Option<Tracer<'p>>,
+    optimum: &Option<OptimalAssignment>,
     affine: Affine,
-) -> Result<SolveReport, SolveError> {
-    let (n, m) = (problem.robots(), problem.tasks());
-    let setup = options.method_setup();
-    if setup.is_some() && graph.robots() != n {
-        return Err(SolveError::SizeMismatch {
-            graph: graph.robots(),
-            problem: n,
-        });
-    }
-    // The user's problem passed [`check_size`] on the shape solved here.
-    // A team method's plan (ρ, tolerance, agents); `None`: the centralized solver.
-    let plan = match setup {
-        Some(setup) => Some(prepare(problem, graph, options, setup)?),
-        None => None,
-    };
-    let started = Instant::now();
-    let mut tracer = optimum
-        .as_ref()
-        .filter(|_| options.check() || options.stop() == StopRule::Oracle)
-        .map(|o| Tracer::new(problem, o, affine));
-    if let Some(t) = tracer.as_mut() {
-        t.record = options.trace();
-        t.readout_decisions = decides_by_readout(options);
-    }
-    let run = match &plan {
+) -> Result<RunResult, SolveError> {
+    let n = problem.robots();
+    Ok(match plan {
         None => {
-            tracer = None;
+            *tracer = None;
             let optimum = match optimum.clone() {
                 Some(optimum) => optimum,
                 None => oracle::solve(problem).map_err(|e| SolveError::Internal(e.to_string()))?,
@@ -369,11 +287,62 @@ fn solve_once(
                 options.run(),
                 Some(&mut watch),
             )?;
-            tracer = watch.tracer;
+            *tracer = watch.tracer;
             let distributed = options.transport().capabilities().execution != Execution::Lockstep;
             RunResult::of_team(team, distributed)
         }
+    })
+}
+
+/// The oracle tracer of a solve that checks its answer or stops at the oracle's criterion.
+fn tracer_of<'p>(
+    problem: &'p TaskAssignmentProblem,
+    options: &SolveOptions,
+    optimum: Option<&OptimalAssignment>,
+    affine: Affine,
+) -> Option<Tracer<'p>> {
+    let mut tracer = optimum
+        .filter(|_| options.check() || options.stop() == StopRule::Oracle)
+        .map(|o| Tracer::new(problem, o, affine));
+    if let Some(t) = tracer.as_mut() {
+        t.record = options.trace();
+        t.readout_decisions = decides_by_readout(options);
+    }
+    tracer
+}
+
+fn solve_once(
+    problem: &TaskAssignmentProblem,
+    graph: &Graph,
+    options: &SolveOptions,
+    optimum: Option<OptimalAssignment>,
+    affine: Affine,
+) -> Result<SolveReport, SolveError> {
+    let (n, m) = (problem.robots(), problem.tasks());
+    let setup = options.method_setup();
+    if setup.is_some() && graph.robots() != n {
+        return Err(SolveError::SizeMismatch {
+            graph: graph.robots(),
+            problem: n,
+        });
+    }
+    // The user's problem passed [`check_size`] on the shape solved here.
+    // A team method's plan (ρ, tolerance, agents); `None`: the centralized solver.
+    let plan = match setup {
+        Some(setup) => Some(prepare(problem, graph, options, setup)?),
+        None => None,
     };
+    let started = Instant::now();
+    let mut tracer = tracer_of(problem, options, optimum.as_ref(), affine);
+    let run = run_solve(
+        problem,
+        graph,
+        options,
+        plan.as_ref(),
+        &mut tracer,
+        &optimum,
+        affine,
+    )?;
     let wall_time_ms = started.elapsed().as_secs_f64() * 1e3;
     let (message_bytes, messages_per_agent) = match &plan {
         None => (0, 0),
@@ -433,7 +402,7 @@ fn solve_once(
         critical_path: options
             .run()
             .timeline()
-            .then(|| crate::timeline::critical_path(graph, &run.timeline)),
+            .then(|| admm_ta_transport::timeline::critical_path(graph, &run.timeline)),
         timeline: run.timeline,
         check,
     })
@@ -451,7 +420,7 @@ struct RunResult {
     startup_ms: Option<f64>,
     run_id: Option<String>,
     iterate_digests: Vec<u64>,
-    timeline: Vec<Vec<crate::timeline::RoundStamp>>,
+    timeline: Vec<Vec<admm_ta_transport::timeline::RoundStamp>>,
 }
 
 impl RunResult {

@@ -1,11 +1,11 @@
 //! What a solve reports.
 
-use crate::latency::LatencySummary;
 use crate::options::StopRule;
-use crate::transport::Transport;
-use crate::usage::ThreadUsage;
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::{AssignmentCase, IDLE};
+use admm_ta_transport::Transport;
+use admm_ta_transport::latency::LatencySummary;
+use admm_ta_transport::usage::ThreadUsage;
 use serde::{Serialize, Serializer};
 
 /// A failed robot and how the survivors went on (`--on-failure continue`).
@@ -125,10 +125,10 @@ pub struct SolveReport {
     pub iterate_digests: Vec<u64>,
     /// Every agent's round stamps (`timeline` on; `timeline::chrome_trace` renders them).
     #[serde(skip)]
-    pub timeline: Vec<Vec<crate::timeline::RoundStamp>>,
+    pub timeline: Vec<Vec<admm_ta_transport::timeline::RoundStamp>>,
     /// Whom the team waited for, round by round (`timeline` on).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub critical_path: Option<crate::timeline::CriticalPath>,
+    pub critical_path: Option<admm_ta_transport::timeline::CriticalPath>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub check: Option<OracleCheck>,
     /// Set when a robot failed and the survivors re-solved without it: `cost` and `check`

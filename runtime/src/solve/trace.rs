@@ -2,12 +2,12 @@
 //! (the paper's 0.1 % criterion, the round from which the assignment is optimal).
 
 use crate::options::SolveOptions;
-use crate::sim::RoundView;
 use crate::solve::report::{OracleCheck, TracePoint};
 use admm_ta_agents::certify::oracle::OptimalAssignment;
 use admm_ta_agents::certify::rounding;
 use admm_ta_agents::method::team::Decisions;
 use admm_ta_agents::problem::TaskAssignmentProblem;
+use admm_ta_transport::sim::process::RoundView;
 
 /// The robots' decisions are their readouts of the team's assignment (the fast primal
 /// variant's), not the argmax of their own relaxed columns: as the method declares.

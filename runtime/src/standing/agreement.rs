@@ -72,7 +72,7 @@ pub trait Flooded {
 
 /// How a robot takes part in an episode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Presence {
+pub enum Participation {
     /// It gave a row of `len` costs.
     Row { len: usize },
     /// Its program gave no row in time.
@@ -103,7 +103,7 @@ impl Opening {
         robots: usize,
         tasks: usize,
         index: usize,
-        presence: Presence,
+        part: Participation,
         scale: TeamScale,
     ) -> Self {
         let mut own = Self {
@@ -113,8 +113,8 @@ impl Opening {
             bits: vec![0; opening_bits(robots, tasks).div_ceil(BITS_PER_WORD)],
         };
         let status = 2 * tasks + ROBOT_BITS * index;
-        match presence {
-            Presence::Row { len } => {
+        match part {
+            Participation::Row { len } => {
                 for j in 0..len.min(tasks) {
                     own.set(j);
                 }
@@ -122,9 +122,9 @@ impl Opening {
                     own.set(tasks + j);
                 }
             }
-            Presence::Missing => own.set(status),
-            Presence::Unavailable => own.set(status + 1),
-            Presence::Leaving => own.set(status + 2),
+            Participation::Missing => own.set(status),
+            Participation::Unavailable => own.set(status + 1),
+            Participation::Leaving => own.set(status + 2),
         }
         own
     }
@@ -388,19 +388,19 @@ mod tests {
         let (n, m) = (60, 7);
         let own: Vec<Opening> = (0..n)
             .map(|i| {
-                let presence = match i {
-                    41 => Presence::Leaving,
-                    17 | 23 => Presence::Unavailable,
-                    _ if i % 7 == 3 => Presence::Missing,
-                    _ => Presence::Row {
+                let part = match i {
+                    41 => Participation::Leaving,
+                    17 | 23 => Participation::Unavailable,
+                    _ if i % 7 == 3 => Participation::Missing,
+                    _ => Participation::Row {
                         len: if i == 5 { 4 } else { 6 },
                     },
                 };
-                let scale = match presence {
-                    Presence::Row { .. } => TeamScale::of_row(&[Some(i as f64)], false),
+                let scale = match part {
+                    Participation::Row { .. } => TeamScale::of_row(&[Some(i as f64)], false),
                     _ => TeamScale::EMPTY,
                 };
-                Opening::own(n, m, i, presence, scale)
+                Opening::own(n, m, i, part, scale)
             })
             .collect();
         let mut words = vec![0.0; opening_words(n, m)];
@@ -416,12 +416,12 @@ mod tests {
         assert!(merged.joining().is_empty());
         assert_eq!(merged.lengths(), Some((4, 6)));
         assert!(!merged.moved());
-        let mut moved = Opening::own(n, m, 59, Presence::Row { len: 6 }, TeamScale::EMPTY);
+        let mut moved = Opening::own(n, m, 59, Participation::Row { len: 6 }, TeamScale::EMPTY);
         moved.set_moved();
         moved.write(&mut words);
         merged.merge(&words);
         assert!(merged.moved() && merged.missing().len() == 8);
-        let mut joins = Opening::own(n, m, 2, Presence::Row { len: 6 }, TeamScale::EMPTY);
+        let mut joins = Opening::own(n, m, 2, Participation::Row { len: 6 }, TeamScale::EMPTY);
         joins.set_joining(59);
         joins.write(&mut words);
         merged.merge(&words);
@@ -429,7 +429,7 @@ mod tests {
         assert_eq!(merged.missing().len(), 8);
         assert_eq!((merged.scale.lo, merged.scale.hi), (0.0, 58.0));
         assert_eq!(merged.scale.step, 1.0);
-        let alone = Opening::own(3, 2, 1, Presence::Missing, TeamScale::EMPTY);
+        let alone = Opening::own(3, 2, 1, Participation::Missing, TeamScale::EMPTY);
         assert_eq!(alone.lengths(), None);
         assert_eq!(
             opening_words(2, 2),

@@ -2,12 +2,10 @@
 //! agreement (with who leaves and who asks to join), the method on the part of the roster
 //! that takes part, the closing agreement; and the sync that starts every roster.
 
-use crate::exchange::round_loop::{AgentPlan, AgentStop, RoundLoop};
-use crate::exchange::{Exchange, ExchangeError};
 use crate::options::OnFailure;
 use crate::options::SolveOptions;
 use crate::process::scenario::Scenario;
-use crate::standing::agreement::{Closing, Flooded, Opening, Presence, Sync};
+use crate::standing::agreement::{Closing, Flooded, Opening, Participation, Sync};
 use crate::standing::outcome::{Outcome, nothing_to_solve};
 use crate::standing::roster::{LeaveRule, Roster, change};
 use crate::team::team_file::Team;
@@ -19,6 +17,8 @@ use admm_ta_agents::problem::private::TeamScale;
 use admm_ta_agents::problem::ties;
 use admm_ta_agents::problem::{AssignmentCase, CostMatrix, ProblemError, TaskAssignmentProblem};
 use admm_ta_topologies::Graph;
+use admm_ta_transport::exchange::round_loop::{AgentPlan, AgentStop, RoundLoop};
+use admm_ta_transport::exchange::{Exchange, ExchangeError};
 use std::time::{Duration, Instant};
 
 /// Why an episode failed: the exchange, or (a bug: the part's shape is checked before)
@@ -280,12 +280,12 @@ impl Episodes {
         &mut self,
         exchange: &mut dyn Exchange,
         row: Option<&[Option<f64>]>,
-        presence: Presence,
+        part: Participation,
         joiners: &[usize],
     ) -> Result<Opening, ExchangeError> {
         let s = &self.settings;
         let scale = row.map_or(TeamScale::EMPTY, |r| TeamScale::of_row(r, s.maximize));
-        let mut opening = Opening::own(s.robots, s.tasks, s.id, presence, scale);
+        let mut opening = Opening::own(s.robots, s.tasks, s.id, part, scale);
         if let (Some(row), Some((last, last_scale))) = (row, &self.last)
             && moved_far(row, last, last_scale)
         {
@@ -343,10 +343,10 @@ impl Episodes {
         &mut self,
         exchange: &mut dyn Exchange,
         row: Option<&[Option<f64>]>,
-        presence: Presence,
+        part: Participation,
         joiners: &[usize],
     ) -> Result<Outcome, EpisodeError> {
-        let opening = self.open(exchange, row, presence, joiners)?;
+        let opening = self.open(exchange, row, part, joiners)?;
         let change = change(
             &self.settings.graph,
             &self.roster,

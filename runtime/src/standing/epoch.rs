@@ -11,9 +11,6 @@
 //! with this robot in it appears — and only then connects the transport, whose own start-up
 //! rendezvous then completes at once.
 
-use crate::board::Board;
-use crate::endpoint::AgentEndpoint;
-use crate::exchange::{Exchange, ExchangeError};
 use crate::process::agent::tell_the_team;
 use crate::process::connect::connect;
 use crate::process::member_error::MemberError;
@@ -22,8 +19,11 @@ use crate::process::scenario::Scenario;
 use crate::standing::episode::{Episodes, Settings};
 use crate::standing::plane::TeamPlane;
 use crate::standing::roster::{EpochId, Roster};
-use crate::team::member::Membership;
+use crate::team::membership::Membership;
 use crate::team::team_file::Team;
+use admm_ta_transport::board::Board;
+use admm_ta_transport::endpoint::AgentEndpoint;
+use admm_ta_transport::exchange::{Exchange, ExchangeError};
 use std::time::{Duration, Instant};
 
 /// What a robot of a standing team keeps for its whole life in the team.
@@ -88,7 +88,11 @@ impl std::fmt::Display for Forming {
             Self::NeverCame(missing) => {
                 write!(f, "robot(s) {missing:?} did not come before the deadline")
             }
-            Self::Stopped(signal) => write!(f, "stopped by {}", crate::signals::name(*signal)),
+            Self::Stopped(signal) => write!(
+                f,
+                "stopped by {}",
+                admm_ta_transport::signals::name(*signal)
+            ),
             Self::Failed(e) => write!(f, "{}", e.text()),
         }
     }
@@ -131,7 +135,9 @@ fn await_roster(ctx: &Context, id: &EpochId, deadline: Instant) -> Result<(), Fo
     let mut poll = Duration::from_millis(1);
     let mut next_look = Instant::now() + SUPERSEDED_EVERY;
     loop {
-        if let Some(signal) = crate::signals::received().or_else(|| plane.stop_requested()) {
+        if let Some(signal) =
+            admm_ta_transport::signals::received().or_else(|| plane.stop_requested())
+        {
             return Err(Forming::Stopped(signal));
         }
         let present = plane.in_epoch(id);

@@ -19,11 +19,11 @@
 //! * `epoch`: one roster as one robot holds it (its namespace, its run of the transport);
 //! * [`roster`]: who takes part, and the rules every robot applies alike to change it;
 //! * `plane`: where the robots see each other across rosters (the team's board on one
-//!   machine, Zenoh tokens across machines);
-//! * [`serve`]: `admm-ta agent --team FILE --id I --serve`, the same over JSON lines on
+//!   machine; `zenoh_plane`: Zenoh tokens across machines);
+//! * [`serve`]: `admm-ta agent --team FILE --robot I --serve`, the same over JSON lines on
 //!   standard input and output, for robot programs in any language;
 //! * [`answer`]: what a robot gets back per episode, and the rows it cannot give;
-//! * [`threads`]: a standing team in one process, a thread per robot (benchmarks,
+//! * [`one_process`]: a standing team in one process, a thread per robot (benchmarks,
 //!   simulations; its robots do not come and go);
 //! * [`agreement`]: what the team floods around an episode and how it merges.
 
@@ -32,11 +32,12 @@ pub mod answer;
 mod episode;
 mod epoch;
 pub mod member;
+pub mod one_process;
 mod outcome;
 pub(crate) mod plane;
 pub mod roster;
 pub mod serve;
-pub mod threads;
+pub(crate) mod zenoh_plane;
 
 pub use answer::{Answer, LeaveRefused, RowError};
 pub use member::TeamMember;

@@ -1,19 +1,19 @@
 //! Where the robots of a standing team see each other across its rosters: who is in the
 //! team, who asks to join, who vanished, which rosters are forming, and a stop request to
 //! everybody. Two places implement it: on one machine ([`BoardPlane`]) the team's board in
-//! shared memory and its directory; across machines (`crate::team::zenoh_plane`, feature
+//! shared memory and its directory; across machines (`crate::standing::zenoh_plane`, feature
 //! `zenoh`) Zenoh liveliness tokens.
 //!
 //! What the robots agree on never travels here: a roster changes only as the robots of the
 //! old roster agreed in an episode's flood ([`crate::standing::roster`]), or, after a robot
 //! vanished, as each of them sees it here — and they meet only on the same roster.
 
-use crate::board::Board;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::standing::roster::{EpochId, Roster};
 use crate::team::errors::JoinError;
-use crate::team::member::{Joining, Membership};
+use crate::team::membership::{Joining, Membership};
+use admm_ta_transport::board::Board;
 use std::path::Path;
 use std::time::Instant;
 
@@ -93,7 +93,7 @@ impl BoardPlane {
         deadline: Instant,
     ) -> Result<Self, JoinError> {
         let membership =
-            Membership::join_as(scenario, namespace, &[id], deadline, Joining::Presence)?;
+            Membership::join_as(scenario, namespace, &[id], deadline, Joining::Standing)?;
         membership.board().set_slot_state(id, ASKS_TO_JOIN);
         Ok(Self {
             membership: Some(membership),
@@ -219,7 +219,7 @@ impl TeamPlane for BoardPlane {
                 std::fs::read_to_string(dir.join(format!("{IN_FILE}{r}")))
                     .ok()
                     .and_then(|pid| pid.trim().parse::<u32>().ok())
-                    .is_some_and(crate::liveness::process_alive)
+                    .is_some_and(admm_ta_transport::liveness::process_alive)
             })
             .collect()
     }

@@ -1,4 +1,4 @@
-//! The sidecar protocol: `admm-ta agent --team FILE --id I --serve` runs robot `I` of a
+//! The sidecar protocol: `admm-ta agent --team FILE --robot I --serve` runs robot `I` of a
 //! private team ([`crate::standing`]) for a robot program in any language, one JSON object
 //! per line each way.
 //!
@@ -253,7 +253,7 @@ pub fn read_row(path: &Path, maximize: bool) -> Result<Vec<Option<f64>>, RowFile
 /// Robot `id` of the private team in `team_path` for one episode with the row in
 /// `row_path` ([`read_row`]): it joins, gives its row, and leaves with the others.
 pub fn one_episode(team_path: &Path, id: usize, row_path: &Path) -> Result<Answer, MemberError> {
-    let _signals = crate::signals::install();
+    let _signals = admm_ta_transport::signals::install();
     let team = crate::team::team_file::Team::read(team_path).map_err(MemberError::refused)?;
     let row = read_row(row_path, team.file.maximize).map_err(MemberError::refused)?;
     let mut member = TeamMember::join(team_path, id)?;
@@ -377,7 +377,7 @@ pub fn serve(
     output: &mut dyn Write,
 ) -> Result<ServeEnd, MemberError> {
     // Termination signals stop the team cleanly, between episodes too.
-    let _signals = crate::signals::install();
+    let _signals = admm_ta_transport::signals::install();
     let mut member = TeamMember::join(team_path, id)?;
     tracing::info!(
         robot = id,

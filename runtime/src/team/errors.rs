@@ -3,20 +3,20 @@
 //! ([`JoinError`]) and collecting the agents' results ([`CollectError`]). Each keeps its
 //! cause as its source; the text is rendered at the edge (the command line, an agent's log).
 
-use crate::endpoint::SupportError;
-use crate::latency::BucketsMismatch;
 use crate::options::error::ConfigError;
 use crate::options::given::FrontEnd;
 use crate::process::namespace::{BadTeamName, TeamNamespaceError};
 use crate::process::private_dir::PrivateDirError;
 use crate::process::team_digest::OtherTeam;
 use crate::workload::plan::BadRho;
-use crate::zenoh_net::ZenohError;
-use crate::zenoh_net::links::NotAnEndpoint;
 use admm_ta_agents::certify::local_stop::LocalStopError;
 use admm_ta_agents::numerics::lsap::LsapError;
 use admm_ta_agents::problem::ProblemError;
 use admm_ta_topologies::{RobotNameError, TopologyError};
+use admm_ta_transport::endpoint::SupportError;
+use admm_ta_transport::latency::BucketsMismatch;
+use admm_ta_transport::zenoh_net::error::ZenohError;
+use admm_ta_transport::zenoh_net::links::NotAnEndpoint;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -75,8 +75,8 @@ pub enum TeamFileError {
         #[source]
         source: Box<RobotNameError>,
     },
-    /// `agent --id NAME` names a robot the costs do not name.
-    #[error("--id")]
+    /// `agent --robot NAME` names a robot the costs do not name.
+    #[error("--robot")]
     Id(#[source] Box<RobotNameError>),
     #[error("topology {} has {found} robots, the team {robots}", path.display())]
     TopologyRobots {
@@ -194,7 +194,7 @@ pub enum JoinError {
         waited: Duration,
         neighbours: Vec<usize>,
     },
-    #[error("--id {id} is out of range for a team of {robots} robots")]
+    #[error("--robot {id} is out of range for a team of {robots} robots")]
     NoSuchAgent { id: usize, robots: usize },
     #[error("cannot create {}", path.display())]
     Results {
@@ -213,7 +213,7 @@ pub enum JoinError {
     #[error(transparent)]
     Namespace(#[from] TeamNamespaceError),
     #[error(transparent)]
-    Board(#[from] crate::board::BoardError),
+    Board(#[from] admm_ta_transport::board::BoardError),
     #[error(transparent)]
     OtherTeam(#[from] OtherTeam),
     #[error("agent {slot} of this team is already running (pid {pid}): one process per agent")]
@@ -292,7 +292,7 @@ pub enum HostError {
     MalformedDigest(String),
     #[error(
         "host {host}: stopped by {}: {stopped} agent(s) stopped, {leaving} still leaving",
-        crate::signals::name(*signal)
+        admm_ta_transport::signals::name(*signal)
     )]
     Stopped {
         host: String,

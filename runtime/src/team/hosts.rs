@@ -3,10 +3,10 @@
 
 use crate::process::namespace::RunNamespace;
 use crate::team::errors::{HostsError, TeamFileError};
-use crate::transport::Transport;
-use crate::zenoh_net::links::check_endpoint;
 use admm_ta_agents::problem::{cost_file, read_cost_text};
 use admm_ta_topologies::RobotRef;
+use admm_ta_transport::Transport;
+use admm_ta_transport::zenoh_net::links::check_endpoint;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

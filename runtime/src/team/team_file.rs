@@ -1,5 +1,5 @@
-//! The team file of agents started independently (`admm-ta agent --team FILE --id I`, see
-//! [`crate::team::member`]): its format, its checks, and what every agent derives from it
+//! The team file of agents started independently (`admm-ta agent --team FILE --robot I`, see
+//! [`crate::team::membership`]): its format, its checks, and what every agent derives from it
 //! alike — the problem, the graph, the settings, the hosts of a team across machines.
 //!
 //! ```toml
@@ -17,7 +17,7 @@
 //! ```
 //!
 //! A team across several machines names its hosts and how they talk (see
-//! [`crate::zenoh_net`]): `transport = "zenoh"` (every agent a Zenoh client of its host's
+//! [`admm_ta_transport::zenoh_net`]): `transport = "zenoh"` (every agent a Zenoh client of its host's
 //! router) or `"mixed"` (iceoryx2 among the agents of a host, Zenoh between hosts through
 //! each host's bridge). Every host runs `admm-ta host --team FILE --name NAME` next to its
 //! agents (needs a build with `--features zenoh`):
@@ -36,7 +36,7 @@
 //!
 //! When the cost file names its robots (a first column of names), a host's `agents` may list
 //! them by name (`agents = ["uav1", "uav2", 2]`), a topology file may name them in its edges,
-//! and `admm-ta agent --id uav1` starts a robot by name.
+//! and `admm-ta agent --robot uav1` starts a robot by name.
 
 use crate::options::error::ConfigError;
 use crate::options::{SolveOptions, StopRule};
@@ -44,12 +44,12 @@ use crate::process::namespace::RunNamespace;
 use crate::team::errors::{PrivateTeamError, TeamFileError};
 pub use crate::team::hosts::{Deployment, HostEntry};
 use crate::team::hosts::{check_hosts, cost_robot_names, number_host_agents};
-use crate::zenoh_net::links::ZenohLinks;
 use admm_ta_agents::method::settings::{GivenSettings, SettingValue};
 use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_agents::problem::{cost_file, forbidden, read_cost_text};
 use admm_ta_topologies::{Graph, RobotRef, TopologySpec, file as topology_file};
+use admm_ta_transport::zenoh_net::links::ZenohLinks;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -259,7 +259,7 @@ impl Team {
     }
 
     /// The number of the robot `robot` refers to: an index as it is, a name looked up in
-    /// the cost file's robot names (`admm-ta agent --id uav3`).
+    /// the cost file's robot names (`admm-ta agent --robot uav3`).
     pub fn robot(&self, robot: &RobotRef) -> Result<usize, TeamFileError> {
         match robot {
             RobotRef::Index(i) => Ok(*i),

@@ -1,13 +1,13 @@
 //! The timeline of a team of independently started agents (the team file's `timeline`),
 //! written by `collect`: the agents' stamps merged into one Chrome trace and the critical
 //! path; a team across hosts first has every host's stamps shifted onto the first host's
-//! clock ([`crate::timeline::clocks`]), and the trace and the result say by how much.
+//! clock ([`admm_ta_transport::timeline::clocks`]), and the trace and the result say by how much.
 
 use crate::team::errors::CollectError;
 use crate::team::team_file::Team;
-use crate::timeline::clocks::{self, HostClock};
-use crate::timeline::{self, CriticalPath, RoundStamp};
 use admm_ta_topologies::Graph;
+use admm_ta_transport::timeline::clocks::{self, HostClock};
+use admm_ta_transport::timeline::{self, CriticalPath, RoundStamp};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 

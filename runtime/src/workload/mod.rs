@@ -1,18 +1,18 @@
 //! What a team's agents are built from and what they compute.
 //!
 //! * [`plan`]: a solve's agents — ρ, γ, tolerance, perturbation and settings, computed once;
-//! * [`episode`]: the surveillance robots' repeated assignments.
+//! * [`surveillance`]: the surveillance robots' repeated assignments.
 //!
 //! [`Workload`] names what a team computes, for the team runner ([`crate::runner`]) and the
 //! scenario of agent processes alike.
 
-pub mod episode;
 pub mod plan;
+pub mod surveillance;
 
-use crate::exchange::round_loop::AgentStop;
-use crate::workload::episode::EpisodeSettings;
 use crate::workload::plan::Plan;
+use crate::workload::surveillance::EpisodeSettings;
 use admm_ta_agents::methods::probe::ProbeStep;
+use admm_ta_transport::exchange::round_loop::AgentStop;
 
 /// What a team's agents compute.
 #[derive(Clone, Copy)]

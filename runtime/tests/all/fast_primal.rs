@@ -11,10 +11,10 @@ use admm_ta_agents::methods::primal::{PrimalAgent, PrimalParams, PrimalVariant, 
 use admm_ta_agents::problem::cost_model::geometric;
 use admm_ta_agents::problem::{AssignmentCase, CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::SolveOptions;
-use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::solve::solve;
 use admm_ta_topologies::TopologySpec;
 use admm_ta_topologies::rng::SeededRng;
+use admm_ta_transport::sim::process::LockstepSim;
 
 /// The cost models of the sweep, `robots × tasks` from `seed`.
 fn costs(model: usize, robots: usize, tasks: usize, seed: u64) -> CostMatrix {

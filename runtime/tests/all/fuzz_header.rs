@@ -2,7 +2,7 @@
 //! any header, length and state gets a verdict, never a panic, and only a message of the
 //! right length, from the right sender, for this round or (once) the next is accepted.
 
-use admm_ta_runtime::exchange::header::{MessageFault, Placement, RoundHeader, check_message};
+use admm_ta_transport::exchange::header::{MessageFault, Placement, RoundHeader, check_message};
 use proptest::prelude::*;
 
 proptest! {

@@ -9,9 +9,9 @@ use admm_ta_agents::methods::primal::{
 use admm_ta_agents::methods::rho::default_rho;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_runtime::options::{SolveOptions, StopRule};
-use admm_ta_runtime::sim::LockstepSim;
 use admm_ta_runtime::solve::solve;
 use admm_ta_topologies::{Graph, TopologySpec, generate};
+use admm_ta_transport::sim::process::LockstepSim;
 
 /// One agent of the paper's primal variant per robot, with its own costs.
 fn agents(

@@ -6,7 +6,7 @@ use crate::command_line::exit::{Outcome, usage_bail};
 use crate::command_line::output::outln;
 use crate::runtime::process::agent;
 use crate::runtime::standing::serve;
-use crate::runtime::team::member;
+use crate::runtime::team::membership;
 use crate::runtime::team::team_file::Team;
 use crate::topologies::RobotRef;
 use anyhow::{Context, Result};
@@ -29,7 +29,7 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
     let (index, result) = match args {
         AgentArgs {
             team: Some(team),
-            id: Some(robot),
+            robot: Some(robot),
             serve: true,
             ..
         } => {
@@ -40,7 +40,7 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
         }
         AgentArgs {
             team: Some(team),
-            id: Some(robot),
+            robot: Some(robot),
             row: Some(row),
             ..
         } => {
@@ -61,11 +61,11 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
         }
         AgentArgs {
             team: Some(team),
-            id: Some(robot),
+            robot: Some(robot),
             ..
         } => {
             let id = robot_number(&team, robot)?;
-            let report = member::run_member(&team, id);
+            let report = membership::run_member(&team, id);
             if let Ok(r) = &report {
                 if !r.outcome.converged {
                     outcome = Outcome::Uncertified;
@@ -84,15 +84,21 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
         }
         AgentArgs {
             team: None,
-            id: None,
+            robot: Some(robot),
             run: Some(run),
-            index: Some(index),
             scenario: Some(scenario),
             scenario_digest: Some(digest),
             serve: false,
             row: None,
-        } => (index, agent::run(&run, index, &scenario, &digest)),
-        _ => usage_bail!("agent needs --team FILE --id I (or --run, --index and --scenario)"),
+        } => {
+            let RobotRef::Index(index) = robot else {
+                usage_bail!(
+                    "--robot: an agent of a launcher's run is given its number, not a name"
+                );
+            };
+            (index, agent::run(&run, index, &scenario, &digest))
+        }
+        _ => usage_bail!("agent needs --team FILE --robot I (or --run, --robot and --scenario)"),
     };
     result.map(|()| outcome).map_err(|e| {
         // Exchange errors already start with "agent N:".

@@ -7,7 +7,7 @@ use crate::command_line::commands::experiment::report_written;
 use crate::command_line::commands::shared::{agent_program, progress_bar, writable_dir};
 use crate::command_line::exit::{RunsFailed, UsageError, usage_bail};
 use crate::command_line::output::{out, outln, progress_row};
-use crate::runtime::transport::{Capabilities, Execution, Transport};
+use crate::transport::{Capabilities, Execution, Transport};
 use admm_ta_bench::experiment::{Experiment, write};
 use admm_ta_bench::rounds;
 use admm_ta_bench::rounds::case::{RoundsConfig, SweepSpec, cases};
@@ -19,8 +19,35 @@ use anyhow::{Context, Result};
 /// microseconds each already take minutes per case.
 const MAX_ROUNDS: u64 = 10_000_000;
 
+/// Whether a transport's agents run concurrently (round latency means nothing otherwise).
+fn concurrent(c: Capabilities) -> bool {
+    c.execution != Execution::Lockstep
+}
+
 pub fn run(bench: Bench) -> Result<()> {
-    let Bench::Rounds(RoundsArgs {
+    let Bench::Rounds(args) = bench;
+    let (out, json, timeline_overhead) = (args.out.clone(), args.json, args.timeline_overhead);
+    let config = config_of(args)?;
+    let cases = cases(&config);
+    if cases.is_empty() {
+        usage_bail!(
+            "no case to measure (a global barrier needs --transports {})",
+            Transport::names_where(|c| c.global_barrier && concurrent(c), "or")
+        );
+    }
+    let bar = progress_bar(
+        cases.len() as u64,
+        "{bar:30} {pos}/{len} cases, {elapsed} elapsed, ~{eta} left  {msg}",
+    );
+    if timeline_overhead {
+        return measure_overhead(&config, &bar);
+    }
+    sweep(&config, &bar, &out, json)
+}
+
+/// The sweep's settings from its arguments, each checked: bad ones exit 2 before a case runs.
+fn config_of(args: RoundsArgs) -> Result<RoundsConfig> {
+    let RoundsArgs {
         quick,
         agents,
         topologies,
@@ -33,10 +60,10 @@ pub fn run(bench: Bench) -> Result<()> {
         warmup,
         repeat,
         out,
-        json,
+        json: _,
         timeline,
-        timeline_overhead,
-    }) = bench;
+        timeline_overhead: _,
+    } = args;
     if agents.as_ref().is_some_and(|a| a.contains(&0)) {
         usage_bail!("--agents: every team needs at least 1 agent");
     }
@@ -64,7 +91,6 @@ pub fn run(bench: Bench) -> Result<()> {
                 .collect::<Result<Vec<_>, _>>()
         })
         .transpose()?;
-    let concurrent = |c: Capabilities| c.execution != Execution::Lockstep;
     if transports
         .as_ref()
         .is_some_and(|t| t.iter().any(|t| !concurrent(t.capabilities())))
@@ -104,41 +130,42 @@ pub fn run(bench: Bench) -> Result<()> {
         config.traces = Some(dir.clone());
     }
     config.agent_program = Some(agent_program()?);
-    let cases = cases(&config);
-    if cases.is_empty() {
-        usage_bail!(
-            "no case to measure (a global barrier needs --transports {})",
-            Transport::names_where(|c| c.global_barrier && concurrent(c), "or")
-        );
-    }
-    let bar = progress_bar(
-        cases.len() as u64,
-        "{bar:30} {pos}/{len} cases, {elapsed} elapsed, ~{eta} left  {msg}",
-    );
-    if timeline_overhead {
-        outln!(
-            "--timeline on and off in turn, {} repetition(s) of {} recorded rounds after {} of warm-up, step {}; round latency in µs (medians)
+    Ok(config)
+}
+
+/// `--timeline-overhead`: every case with the timeline on and off in turn.
+fn measure_overhead(config: &RoundsConfig, bar: &indicatif::ProgressBar) -> Result<()> {
+    outln!(
+        "--timeline on and off in turn, {} repetition(s) of {} recorded rounds after {} of warm-up, step {}; round latency in µs (medians)
 ",
-            config.repeat,
-            config.rounds,
-            config.warmup,
-            config.step.name()
-        );
-        outln!("{}", overhead::HEADER);
-        let rows = overhead::timeline_overhead(&config, &mut |case, row| {
-            bar.inc(1);
-            bar.suspend(|| match row {
-                Ok(r) => progress_row(&r.render()),
-                Err(e) => progress_row(&format!("{} failed: {e} |", case.columns())),
-            });
+        config.repeat,
+        config.rounds,
+        config.warmup,
+        config.step.name()
+    );
+    outln!("{}", overhead::HEADER);
+    let rows = overhead::timeline_overhead(config, &mut |case, row| {
+        bar.inc(1);
+        bar.suspend(|| match row {
+            Ok(r) => progress_row(&r.render()),
+            Err(e) => progress_row(&format!("{} failed: {e} |", case.columns())),
         });
-        bar.finish_and_clear();
-        let failed = rows.iter().filter(|r| r.is_err()).count();
-        if failed > 0 {
-            return Err(RunsFailed(format!("{failed} of {} cases failed", rows.len())).into());
-        }
-        return Ok(());
+    });
+    bar.finish_and_clear();
+    let failed = rows.iter().filter(|r| r.is_err()).count();
+    if failed > 0 {
+        return Err(RunsFailed(format!("{failed} of {} cases failed", rows.len())).into());
     }
+    Ok(())
+}
+
+/// The sweep: its rows as they come, then its table or JSON and its files.
+fn sweep(
+    config: &RoundsConfig,
+    bar: &indicatif::ProgressBar,
+    out: &std::path::Path,
+    json: bool,
+) -> Result<()> {
     if !json {
         outln!(
             "{} recorded rounds per case after {} of warm-up, step {}; latencies in µs over all agents' rounds
@@ -149,7 +176,7 @@ pub fn run(bench: Bench) -> Result<()> {
         );
         outln!("{}", TABLE_HEADER);
     }
-    let report = rounds::run(&config, &mut |case, result| {
+    let report = rounds::run(config, &mut |case, result| {
         bar.inc(1);
         bar.set_message(format!(
             "{} agents {} {} {}",
@@ -167,7 +194,7 @@ pub fn run(bench: Bench) -> Result<()> {
         });
     });
     bar.finish_and_clear();
-    let written = write(&report, &out)?;
+    let written = write(&report, out)?;
     if json {
         outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {

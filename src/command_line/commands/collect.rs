@@ -3,7 +3,7 @@
 use crate::command_line::cli::CollectArgs;
 use crate::command_line::exit::{NotOptimal, Outcome};
 use crate::command_line::output::outln;
-use crate::runtime::team::member;
+use crate::runtime::team::collect;
 use anyhow::Result;
 
 /// Prints the team's assignment. Ends as `solve` does: with `--check` the centralized
@@ -12,7 +12,7 @@ use anyhow::Result;
 /// ends with 0, as `solve` does, while its text and JSON say it is not certified optimal.
 pub fn run(args: CollectArgs) -> Result<Outcome> {
     // A bad team file, missing results or results of another team: bad input (2).
-    let result = member::collect(&args.team, args.check)?;
+    let result = collect::collect(&args.team, args.check)?;
     if args.json {
         outln!("{}", serde_json::to_string(&result)?);
     } else {

@@ -7,12 +7,12 @@ use anyhow::Result;
 
 #[cfg(feature = "zenoh")]
 pub fn run(args: HostArgs) -> Result<()> {
-    let report = crate::runtime::team::host::run_host(&args.team, &args.name)?;
+    let report = crate::runtime::host::run_host(&args.team, &args.name)?;
     outln!("{}", serde_json::to_string(&report)?);
     Ok(())
 }
 
 #[cfg(not(feature = "zenoh"))]
 pub fn run(_args: HostArgs) -> Result<()> {
-    anyhow::bail!(crate::runtime::transport::ZenohNotBuilt)
+    anyhow::bail!(crate::transport::ZenohNotBuilt)
 }

@@ -56,7 +56,7 @@ pub struct StressArgs {
 type Outcome = (Duration, Option<String>);
 
 pub fn run(args: StressArgs) -> Result<()> {
-    if args.transport.capabilities().execution != crate::runtime::transport::Execution::Processes {
+    if args.transport.capabilities().execution != crate::transport::Execution::Processes {
         usage_bail!(
             "stress runs teams of agent processes: use --transport shm, ipc, uds or zenoh (not {})",
             args.transport
@@ -67,7 +67,7 @@ pub fn run(args: StressArgs) -> Result<()> {
     }
     // For the whole test, not only while a run's launcher lives: a signal between two runs
     // stops it too.
-    let _signals = crate::runtime::signals::install();
+    let _signals = crate::transport::signals::install();
     if args.seed.checked_add(args.runs as u64 - 1).is_none() {
         usage_bail!(
             "--seed {} + --runs {} passes the largest seed, {}",
@@ -88,6 +88,20 @@ pub fn run(args: StressArgs) -> Result<()> {
     if args.quiet {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
+    let (outcomes, wall) = run_all(&args, tasks, &spec, &program, &bar);
+    bar.finish_and_clear();
+    summarize(&args, outcomes, wall)
+}
+
+/// The runs, `--concurrency` at a time until all ran or a signal came: each run's outcome by
+/// its number, and the wall time.
+fn run_all(
+    args: &StressArgs,
+    tasks: usize,
+    spec: &crate::TopologySpec,
+    program: &crate::runtime::options::run::AgentProgram,
+    bar: &indicatif::ProgressBar,
+) -> (Vec<(usize, Outcome)>, Duration) {
     let next = AtomicUsize::new(0);
     let failed = AtomicUsize::new(0);
     let outcomes: Mutex<Vec<(usize, Outcome)>> = Mutex::new(Vec::with_capacity(args.runs));
@@ -98,11 +112,11 @@ pub fn run(args: StressArgs) -> Result<()> {
                 loop {
                     let k = next.fetch_add(1, Ordering::Relaxed);
                     // A termination signal stops the stress test between runs too.
-                    if k >= args.runs || crate::runtime::signals::received().is_some() {
+                    if k >= args.runs || crate::transport::signals::received().is_some() {
                         return;
                     }
                     let t0 = Instant::now();
-                    let error = one_run(&args, tasks, &spec, &program, k).err();
+                    let error = one_run(args, tasks, spec, program, k).err();
                     if error.is_some() {
                         failed.fetch_add(1, Ordering::Relaxed);
                     }
@@ -117,12 +131,26 @@ pub fn run(args: StressArgs) -> Result<()> {
         }
     });
     let wall = started.elapsed();
-    bar.finish_and_clear();
-    let mut outcomes = outcomes.into_inner().unwrap_or_else(|e| e.into_inner());
+    (
+        outcomes.into_inner().unwrap_or_else(|e| e.into_inner()),
+        wall,
+    )
+}
+
+/// Prints the failures, what was left behind and the summary line; fails unless every run
+/// succeeded and left nothing.
+fn summarize(args: &StressArgs, mut outcomes: Vec<(usize, Outcome)>, wall: Duration) -> Result<()> {
     outcomes.sort_by_key(|(k, _)| *k);
     let mut times: Vec<Duration> = outcomes.iter().map(|(_, (t, _))| *t).collect();
     times.sort();
-    let quantile = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize];
+    // No run at all when a signal came first.
+    let quantile = |q: f64| {
+        let last = times.len().saturating_sub(1);
+        times
+            .get((last as f64 * q).round() as usize)
+            .copied()
+            .unwrap_or_default()
+    };
     let failures: Vec<(usize, &String)> = outcomes
         .iter()
         .filter_map(|(k, (_, e))| e.as_ref().map(|e| (*k, e)))
@@ -148,10 +176,10 @@ pub fn run(args: StressArgs) -> Result<()> {
         quantile(0.99),
         times.last().copied().unwrap_or_default(),
     );
-    if let Some(signal) = crate::runtime::signals::received() {
+    if let Some(signal) = crate::transport::signals::received() {
         bail!(
             "stopped by {} after {} of {} runs",
-            crate::runtime::signals::name(signal),
+            crate::transport::signals::name(signal),
             outcomes.len(),
             args.runs
         );

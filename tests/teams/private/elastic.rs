@@ -429,7 +429,7 @@ fn a_killed_robot_costs_at_most_one_episode(transport: &str) {
             "agent",
             "--team",
             rogue.to_str().unwrap(),
-            "--id",
+            "--robot",
             "2",
             "--serve",
         ])

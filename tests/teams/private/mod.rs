@@ -74,7 +74,7 @@ impl Sidecar {
     pub(super) fn start_with(team: &Path, id: usize, env: &[(&str, &str)]) -> Self {
         let mut command = admm_ta();
         command
-            .args(["agent", "--team", team.to_str().unwrap(), "--id"])
+            .args(["agent", "--team", team.to_str().unwrap(), "--robot"])
             .arg(id.to_string())
             .arg("--serve")
             .envs(env.iter().copied());

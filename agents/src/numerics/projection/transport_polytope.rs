@@ -229,7 +229,7 @@ impl TransportPolytopeProjector {
         }
     }
 
-    /// Tries the closed-form projection of [`super::interior`] first (iterates that stay
+    /// Tries the closed-form projection of `super::interior` first (iterates that stay
     /// inside the polytope, as in the fast primal variant); off by default.
     pub fn set_interior_fast_path(&mut self, on: bool) {
         self.interior = on.then(|| InteriorProjection::new(self.tasks, self.robots));
@@ -316,16 +316,24 @@ impl TransportPolytopeProjector {
 
     /// Fills `du`, `dv` with the regularised semismooth Newton direction (module docs).
     fn newton_direction(&mut self, z: MatRef<'_, f64>) {
-        let (m, n) = (self.tasks, self.robots);
-        let p = &self.current;
         // μ tracks the residual (fast local convergence) but stays well above the rounding
         // error of the Schur complement, whose diagonal is a difference of O(m) terms.
-        let mu = p.residual.clamp(MIN_REGULARISATION, 1.0);
+        let mu = self.current.residual.clamp(MIN_REGULARISATION, 1.0);
+        self.mark_free(z);
+        self.solve_schur(mu);
+        self.off_block_steps(z, mu);
+    }
+
+    /// The rows of the Newton block (not pinned, with free entries) and, per column, its
+    /// free rows.
+    #[inline]
+    fn mark_free(&mut self, z: MatRef<'_, f64>) {
+        let (m, n) = (self.tasks, self.robots);
+        let p = &self.current;
         for r in 0..m {
             let pinned = self.case == AssignmentCase::Two && p.u[r] >= 0.0 && p.grad_u[r] > 0.0;
             self.in_newton_block[r] = !pinned && p.row_free[r] > 0;
         }
-        // Free rows of the Newton block, per column.
         let mut next = 0;
         for c in 0..n {
             self.free_start[c] = next;
@@ -339,7 +347,15 @@ impl TransportPolytopeProjector {
             }
         }
         self.free_start[n] = next;
-        // Schur complement S = diag(r) + μ − F diag(1/(c + μ)) Fᵀ, rhs = g_u − F (g_v/(c + μ)).
+    }
+
+    /// The rows' step `du` on the Newton block: the Schur complement
+    /// `S = diag(r) + μ − F diag(1/(c + μ)) Fᵀ` solved for `rhs = g_u − F (g_v/(c + μ))`
+    /// by a regularised Cholesky factorisation (a scaled gradient should it fail).
+    #[inline]
+    fn solve_schur(&mut self, mu: f64) {
+        let (m, n) = (self.tasks, self.robots);
+        let p = &self.current;
         let schur = &mut self.schur;
         schur.fill(0.0);
         for r in 0..m {
@@ -385,15 +401,20 @@ impl TransportPolytopeProjector {
         }
         if factored.is_err() || self.du.iter().any(|d| !d.is_finite()) {
             // Cannot happen for an SPD Schur complement; fall back to a scaled gradient.
-            {
-                for r in 0..m {
-                    if self.in_newton_block[r] {
-                        self.du[r] = p.grad_u[r] / (p.row_free[r] as f64 + mu);
-                    }
+            for r in 0..m {
+                if self.in_newton_block[r] {
+                    self.du[r] = p.grad_u[r] / (p.row_free[r] as f64 + mu);
                 }
             }
         }
-        // Rows outside the Newton block: fixed (pinned) or an exact 1-D step.
+    }
+
+    /// The steps outside the Newton block: rows fixed (pinned) or an exact 1-D step; columns
+    /// by back-substitution, or an exact 1-D step when nothing in them is free.
+    #[inline]
+    fn off_block_steps(&mut self, z: MatRef<'_, f64>, mu: f64) {
+        let (m, n) = (self.tasks, self.robots);
+        let p = &self.current;
         for r in 0..m {
             if self.in_newton_block[r] || p.row_free[r] > 0 {
                 continue;
@@ -406,7 +427,6 @@ impl TransportPolytopeProjector {
             }
             self.du[r] = root - p.u[r];
         }
-        // Columns: back-substitution, or an exact 1-D step when nothing in them is free.
         for c in 0..n {
             if p.col_free[c] > 0 {
                 let rows = &self.free_rows[self.free_start[c]..self.free_start[c + 1]];

@@ -3,9 +3,8 @@
 //! Its episodes, its leave and its checks between episodes are here; how it gets to a
 //! roster (joining, moving on, forming one again after a crash) is in `rosters`.
 
-use crate::exchange::ExchangeError;
 use crate::process::member_error::MemberError;
-use crate::standing::agreement::{Presence, RosterNews};
+use crate::standing::agreement::{Participation, RosterNews};
 use crate::standing::answer::{Answer, LeaveRefused, RowError};
 use crate::standing::episode::{EpisodeError, Settings};
 use crate::standing::epoch::{Context, Epoch};
@@ -13,8 +12,9 @@ use crate::standing::outcome::Outcome;
 use crate::standing::plane::{BoardPlane, TeamPlane};
 use crate::standing::roster::EpochId;
 use crate::team::errors::{PrivateTeamError, TeamFileError};
-use crate::team::member::member_of;
+use crate::team::membership::member_of;
 use crate::team::team_file::Team;
+use admm_ta_transport::exchange::ExchangeError;
 mod rosters;
 
 use std::path::Path;
@@ -128,7 +128,7 @@ fn open_plane(
     deadline: Instant,
 ) -> Result<Box<dyn TeamPlane>, MemberError> {
     if team.file.transport.across_hosts() {
-        return crate::team::zenoh_plane::open(team, scenario, id, deadline);
+        return crate::standing::zenoh_plane::open(team, scenario, id, deadline);
     }
     let plane =
         BoardPlane::open(scenario, namespace, id, deadline).map_err(MemberError::refused)?;
@@ -145,7 +145,7 @@ impl TeamMember {
     /// team stops cleanly: the call returns the stop and every robot of the team stops);
     /// between calls the process's own handlers apply.
     pub fn join(team_path: &Path, id: usize) -> Result<Self, MemberError> {
-        let _signals = crate::signals::install();
+        let _signals = admm_ta_transport::signals::install();
         let started = Instant::now();
         let team = Team::read(team_path).map_err(MemberError::refused)?;
         if !team.is_private() {
@@ -241,20 +241,20 @@ impl TeamMember {
     /// it ([`RowError`], inside [`MemberError::Refused`]).
     pub fn assign(&mut self, row: &[Option<f64>]) -> Result<Answer, MemberError> {
         self.check_row(row).map_err(MemberError::refused)?;
-        self.episode_with(Some(row), Presence::Row { len: row.len() })
+        self.episode_with(Some(row), Participation::Row { len: row.len() })
     }
 
     /// One episode without a row (the robot's program had none in time): every robot's
     /// answer names this one in `missing`; the team solves nothing (`on_failure = "abort"`,
     /// the default) or solves without it while it relays (`"continue"`).
     pub fn abstain(&mut self) -> Result<Answer, MemberError> {
-        self.episode_with(None, Presence::Missing)
+        self.episode_with(None, Participation::Missing)
     }
 
     /// One episode in which this robot takes no task: it relays for its neighbours, and the
     /// others share the tasks (every robot's answer names it in `unavailable`).
     pub fn unavailable(&mut self) -> Result<Answer, MemberError> {
-        self.episode_with(None, Presence::Unavailable)
+        self.episode_with(None, Participation::Unavailable)
     }
 
     /// Leaves the team: it relays in one more episode, in which the others learn it (their
@@ -266,7 +266,7 @@ impl TeamMember {
         let me = self.id();
         while self.standing == Standing::In {
             let roster = self.roster();
-            let answer = self.episode_with(None, Presence::Leaving)?;
+            let answer = self.episode_with(None, Participation::Leaving)?;
             if answer.leave_refused.contains(&me) {
                 let others: Vec<usize> = roster.into_iter().filter(|&r| r != me).collect();
                 return Err(MemberError::refused(LeaveRefused {
@@ -292,7 +292,7 @@ impl TeamMember {
         if self.standing != Standing::In {
             return Ok(());
         }
-        if let Some(signal) = crate::signals::received() {
+        if let Some(signal) = admm_ta_transport::signals::received() {
             return Err(self.stop(signal));
         }
         if let Some(signal) = self.ctx.plane.stop_requested() {
@@ -312,7 +312,7 @@ impl TeamMember {
             }
         }
         if self.broken.is_some() {
-            let _signals = crate::signals::install();
+            let _signals = admm_ta_transport::signals::install();
             self.ready()?;
         }
         Ok(())
@@ -348,7 +348,7 @@ impl TeamMember {
 
     /// Stops the whole team because this process got termination signal `signal`.
     pub fn stop(&mut self, signal: i32) -> MemberError {
-        crate::signals::record(signal);
+        admm_ta_transport::signals::record(signal);
         self.ctx.plane.request_stop(signal, self.id());
         let stopped = ExchangeError::Stopped {
             agent: self.id(),
@@ -363,7 +363,7 @@ impl TeamMember {
 
     /// Another robot got termination signal `signal`: this one ends as if it had.
     fn stopped(&mut self, signal: i32) -> MemberError {
-        crate::signals::record(signal);
+        admm_ta_transport::signals::record(signal);
         self.standing = Standing::Failed;
         MemberError::failed(ExchangeError::Stopped {
             agent: self.id(),
@@ -386,12 +386,12 @@ impl TeamMember {
     fn episode_with(
         &mut self,
         row: Option<&[Option<f64>]>,
-        presence: Presence,
+        part: Participation,
     ) -> Result<Answer, MemberError> {
         self.usable().map_err(MemberError::refused)?;
         let began = Instant::now();
         // A termination signal while the episode runs stops the team cleanly.
-        let _signals = crate::signals::install();
+        let _signals = admm_ta_transport::signals::install();
         loop {
             self.ready()?;
             let pending = self.episode;
@@ -399,7 +399,7 @@ impl TeamMember {
             let joiners = self.ctx.plane.joiners();
             let epoch = self.epoch.as_mut().expect("ready");
             let (exchange, episodes) = epoch.parts();
-            match episodes.run(exchange, row, presence, &joiners) {
+            match episodes.run(exchange, row, part, &joiners) {
                 Ok(outcome) => return Ok(self.finish(outcome, row, began)),
                 Err(EpisodeError::Exchange(e)) => {
                     epoch.blame(me, &e);

@@ -4,13 +4,13 @@
 //! a roster failed.
 
 use super::{Broken, Standing, TeamMember};
-use crate::exchange::ExchangeError;
 use crate::process::member_error::MemberError;
 use crate::standing::agreement::{RosterNews, Sync};
 use crate::standing::epoch::{Epoch, Forming, latest_epoch};
 use crate::standing::plane::TeamPlane;
 use crate::standing::roster::{Change, CutOff, EpochId, Roster, after_loss};
 use crate::team::errors::JoinError;
+use admm_ta_transport::exchange::ExchangeError;
 use std::time::{Duration, Instant};
 
 /// How long a robot waits for a vanished robot to show as gone before it takes a failure
@@ -107,7 +107,7 @@ impl TeamMember {
 
     /// A formed, synced roster to run the next episode on: recovers a broken one.
     pub(super) fn ready(&mut self) -> Result<(), MemberError> {
-        if let Some(signal) = crate::signals::received() {
+        if let Some(signal) = admm_ta_transport::signals::received() {
             return Err(self.stop(signal));
         }
         while self.broken.is_some() || self.epoch.is_none() {
@@ -189,7 +189,7 @@ impl TeamMember {
     /// An error when the team must stop: a termination signal to this process, or a stop
     /// request of another robot.
     fn still_running(&mut self) -> Result<(), MemberError> {
-        if let Some(signal) = crate::signals::received() {
+        if let Some(signal) = admm_ta_transport::signals::received() {
             return Err(self.stop(signal));
         }
         match self.ctx.plane.stop_requested() {
