@@ -58,7 +58,7 @@ class Robot:
         self.robot = robot
         self.started = time.monotonic()
         self.process = subprocess.Popen(
-            [binary, "agent", "--team", team, "--id", str(robot), "--serve"],
+            [binary, "agent", "--team", team, "--robot", str(robot), "--serve"],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, bufsize=1)
 
     def send(self, row):

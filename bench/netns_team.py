@@ -7,7 +7,7 @@
 Makes `--hosts` network namespaces on a bridge (veth pairs, addresses 10.232.0.K/24, no
 route anywhere else), and for each run writes a team file (random costs from the run's seed,
 the primal method, the agents split evenly over the hosts), starts in every namespace
-`admm-ta host --team T --name hK` and its agents (`admm-ta agent --team T --id I`), waits,
+`admm-ta host --team T --name hK` and its agents (`admm-ta agent --team T --robot I`), waits,
 and runs `admm-ta collect --check --json`. Prints one line per run (certified and optimal,
 wall time from the first process started to the last one ended, round p50/p99 from the
 agents' merged latencies, start-up from the first process started to the last agent
@@ -95,7 +95,7 @@ def one_run(args, hosts, k):
             for a in range(first, first + per[h]):
                 agent_env = dict(os.environ, RUST_LOG=args.agent_log) if args.agent_log else None
                 procs.append(("agent", a, subprocess.Popen(
-                    exe + ["agent", "--team", team, "--id", str(a)],
+                    exe + ["agent", "--team", team, "--robot", str(a)],
                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                     env=agent_env)))
             first += per[h]

@@ -53,7 +53,7 @@ class Team:
                     f'round_timeout = 30.0\nepisode_timeout = 60.0\nstartup_timeout = 60.0\n'
                     + "".join(line + "\n" for line in extra))
         self.sidecars = [
-            subprocess.Popen([binary, "agent", "--team", self.team, "--id", str(i), "--serve"],
+            subprocess.Popen([binary, "agent", "--team", self.team, "--robot", str(i), "--serve"],
                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
                              bufsize=1)
             for i in range(robots)

@@ -4,7 +4,7 @@
 The robot knows only its own costs: its distance to each task, and which tasks its battery
 cannot reach (null: forbidden). It starts its own agent as a sidecar,
 
-    admm-ta agent --team TEAM --id I --serve
+    admm-ta agent --team TEAM --robot I --serve
 
 writes one JSON line per episode to it ({"costs": [...]}) and reads its task back
 ({"episode": k, "task": j, "certified": true, ...}). After each episode it drives to its
@@ -59,7 +59,7 @@ def main():
     x, y, battery = me.random(), me.random(), 1.0
 
     sidecar = subprocess.Popen(
-        [args.admm_ta, "agent", "--team", args.team, "--id", str(args.id), "--serve"],
+        [args.admm_ta, "agent", "--team", args.team, "--robot", str(args.id), "--serve"],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, bufsize=1)
     answers = open(args.answers, "a", encoding="utf-8") if args.answers else None
 

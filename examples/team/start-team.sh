@@ -8,7 +8,7 @@ admm_ta="${1:-$here/../../target/release/admm-ta}"
 team="$here/team.toml"
 pids=()
 for id in $(seq 0 9 | shuf); do
-    "$admm_ta" agent --team "$team" --id "$id" > "$here/agent-$id.out" 2>&1 &
+    "$admm_ta" agent --team "$team" --robot "$id" > "$here/agent-$id.out" 2>&1 &
     pids+=($!)
     sleep "0.0$((RANDOM % 10))"
 done

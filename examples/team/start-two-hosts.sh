@@ -13,7 +13,7 @@ start_host() { # NAME FIRST LAST: the host's router/bridge and its agents, one p
         "$admm_ta" host --team "$team" --name "$name" > "$here/host-$name.out" 2>&1 &
         pids=($!)
         for id in $(seq "$5" "$6"); do
-            "$admm_ta" agent --team "$team" --id "$id" > "$here/agent-$id.out" 2>&1 &
+            "$admm_ta" agent --team "$team" --robot "$id" > "$here/agent-$id.out" 2>&1 &
             pids+=($!)
         done
         status=0

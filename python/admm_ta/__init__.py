@@ -26,7 +26,8 @@ import sys as _sys
 from . import _core
 from ._core import LeaveRefused, linear_sum_assignment
 from ._errors import NotCertifiedError, NotOptimalError, SolveError
-from ._solve import SolveResult, solve
+from ._result import SolveResult
+from ._solve import solve
 from ._team import TeamMember
 
 __all__ = [

@@ -13,7 +13,7 @@ TYPE_CHECKING = False
 if TYPE_CHECKING:
     from typing import Optional
 
-    from ._solve import SolveResult
+    from ._result import SolveResult
 
 
 class SolveError(RuntimeError):

@@ -1,4 +1,5 @@
-"""The decentralized solve: ``admm-ta solve`` as a function."""
+"""The decentralized solve: `admm_ta.solve`'s keyword arguments as the library's solve request
+(the options of ``admm-ta solve``, by name), its report as a :class:`SolveResult`."""
 
 from __future__ import annotations
 
@@ -9,122 +10,10 @@ TYPE_CHECKING = False
 
 from . import _core
 from ._errors import NotCertifiedError, NotOptimalError, SolveError
+from ._result import SolveResult
 
 if TYPE_CHECKING:
-    from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
-
-
-class SolveResult:
-    """The report of a solve: the command line's JSON report (``to_dict()``, same fields)
-    with the common fields as attributes.
-
-    ``assignment[i]`` is robot ``i``'s task, or ``None`` for an idle robot.
-    """
-
-    __slots__ = ("_report",)
-
-    def __init__(self, report: Mapping[str, Any]):
-        self._report = dict(report)
-
-    def to_dict(self) -> Dict[str, Any]:
-        """The report as the command line's ``--json`` prints it (a copy)."""
-        import json
-
-        copy: Dict[str, Any] = json.loads(json.dumps(self._report))
-        return copy
-
-    @property
-    def assignment(self) -> List[Optional[int]]:
-        """Robot ``i``'s task, ``None`` for an idle robot."""
-        return list(self._report["assignment"])
-
-    @property
-    def cost(self) -> float:
-        """The assignment's total cost (its profit with ``maximize=True``)."""
-        return float(self._report["cost"])
-
-    @property
-    def certified(self) -> bool:
-        """Whether the team certified its assignment optimal (the decentralized stop)."""
-        return bool(self._report["certified"])
-
-    @property
-    def converged(self) -> bool:
-        """Whether the run stopped by its stop rule (not by the round limit)."""
-        return bool(self._report["converged"])
-
-    @property
-    def rounds(self) -> int:
-        """Rounds the team ran."""
-        return int(self._report["iterations"])
-
-    @property
-    def stop(self) -> str:
-        """The stop rule (``local``: the decentralized certified stop)."""
-        return str(self._report["stop"])
-
-    @property
-    def method(self) -> str:
-        return str(self._report["method"])
-
-    @property
-    def transport(self) -> str:
-        return str(self._report["transport"])
-
-    @property
-    def bytes_per_agent(self) -> int:
-        """Bytes each agent sent to finish."""
-        return int(self._report["bytes_per_agent"])
-
-    @property
-    def wall_time_ms(self) -> float:
-        return float(self._report["wall_time_ms"])
-
-    @property
-    def round_latency_us(self) -> Optional[Dict[str, Dict[str, float]]]:
-        """Round latency percentiles in µs (``round``, ``wait``, ``compute``, ``publish``,
-        ``barrier``: each with ``p50``, ``p90``, ``p99``, ``p999``, ``max``, ``mean``,
-        ``count``), or ``None`` where rounds are not measured (the lockstep simulation)."""
-        latency = self._report.get("round_latency_us")
-        if latency is None:
-            return None
-        return {part: dict(values) for part, values in latency.items()}
-
-    @property
-    def critical_path(self) -> Optional[Dict[str, Any]]:
-        """With ``timeline="FILE"``: whom the team waited for (``rounds``: per round the agent
-        most agents waited for; ``top``: the agents most waited for and the share of round
-        time spent waiting for each; ``waiting_share``); else ``None``."""
-        path = self._report.get("critical_path")
-        return None if path is None else dict(path)
-
-    @property
-    def optimal(self) -> Optional[bool]:
-        """``check=True``: whether the centralized optimum agrees; else ``None``."""
-        check = self._report.get("check")
-        return None if check is None else bool(check["optimal"])
-
-    def __repr__(self) -> str:
-        return (
-            f"SolveResult(assignment={self.assignment}, cost={self.cost!r}, "
-            f"certified={self.certified}, rounds={self.rounds}, method={self.method!r}, "
-            f"transport={self.transport!r})"
-        )
-
-
-def _flag(name: str, value: Any) -> List[str]:
-    """``name=value`` as command-line words: ``True`` is the bare flag, ``False`` and
-    ``None`` leave it out, a list or tuple is comma-joined."""
-    flag = "--" + name.replace("_", "-")
-    if value is None or value is False:
-        return []
-    if value is True:
-        return [flag]
-    if isinstance(value, (list, tuple)):
-        return [flag, ",".join(str(v) for v in value)]
-    if isinstance(value, os.PathLike):
-        return [flag, os.fspath(value)]
-    return [flag, str(value)]
+    from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 
 def _rows(cost: Any) -> Optional[int]:
@@ -237,31 +126,26 @@ def solve(
     >>> r.certified and r.round_latency_us["round"]["count"] > 0
     True
     """
-    argv: List[str] = ["--json"]
-    argv += _flag("method", method)
-    argv += _flag("transport", transport)
-    argv += _flag("maximize", maximize)
-    argv += _flag("check", check)
-    for name, value in options.items():
-        if name in ("json", "costs"):
+    for name in ("json", "costs"):
+        if name in options:
             raise ValueError(f"unexpected option '{name}': give the costs as `cost`")
-        argv += _flag(name, value)
+    given: Dict[str, Any] = dict(options)
+    given.update(method=method, transport=transport, maximize=maximize, check=check)
     matrix = None
+    costs_file = None
     robots: Optional[int] = options.get("robots")
     if isinstance(cost, (str, os.PathLike)):
-        argv += ["--costs", os.fspath(cost)]
+        costs_file = os.fspath(cost)
     elif cost is not None:
         matrix = cost
         robots = _rows(cost)
     graph = None
     if isinstance(topology, (str, os.PathLike)):
-        argv += ["--topology", os.fspath(topology)]
+        given["topology"] = os.fspath(topology)
     else:
         graph = _graph(topology, robots)
-    import json
-
-    code, report, message = _core.solve(argv, matrix, graph)
-    result = None if report is None else SolveResult(json.loads(report))
+    code, report, message = _core.solve(matrix, costs_file, graph, given)
+    result = None if report is None else SolveResult(report)
     if code == 0 and result is not None:
         return result
     if code in (2, 3):

@@ -40,7 +40,7 @@ class Sidecar:
     def __init__(self, team, robot, env=None):
         self.robot = robot
         self.process = subprocess.Popen(
-            [sys.executable, "-c", AGENT, "agent", "--team", str(team), "--id", str(robot), "--serve"],
+            [sys.executable, "-c", AGENT, "agent", "--team", str(team), "--robot", str(robot), "--serve"],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,

@@ -124,6 +124,12 @@ def test_cost_files(tmp_path):
         ({"cost": [[1, 2]], "round_timeout": 5}, "sim"),
         ({"cost": [[1, 2]], "transport": "zenoh"}, "zenoh"),
         ({"cost": [[1, 2]], "costs": "x.csv"}, "cost"),
+        ({"robots": 4}, "--tasks"),
+        ({"cost": [[1, 2]], "max_iters": "many"}, "--max-iters"),
+        ({"cost": [[1, 2]], "trace": True}, "--check"),
+        ({"cost": [[1, 2]], "stop": "whenever"}, "whenever"),
+        ({"cost": [[1, 2]], "dual_variant": "paper"}, "--method"),
+        ({"cost": [[1, 2]], "global_barrier": "yes"}, "--global-barrier"),
     ],
 )
 def test_bad_input_raises_value_error_with_the_command_line_s_message(kwargs, needle):
@@ -194,3 +200,14 @@ def test_a_timeline_and_the_critical_path(tmp_path):
     events = json.loads(trace.read_text())["traceEvents"]
     assert {e["pid"] for e in events} == set(range(6))
     assert admm_ta.solve([[1, 2], [2, 1]]).critical_path is None
+
+
+def test_the_report_is_read_from_the_library_not_from_text():
+    """`solve` hands the library its options and reads the report's fields: the result
+    wraps the extension's report object, and `to_dict()` is a fresh copy every call."""
+    result = admm_ta.solve(np.eye(3), transport="threads", check=True, seed=4)
+    assert type(result._report).__name__ == "Report"
+    first, second = result.to_dict(), result.to_dict()
+    assert first == second and first is not second
+    assert first["assignment"] == result.assignment and first["check"]["optimal"] is True
+    assert isinstance(first["round_latency_us"]["round"]["count"], int)

@@ -28,3 +28,32 @@ def test_the_package_type_checks_strictly():
 
 def test_the_package_is_marked_typed():
     assert os.path.exists(os.path.join(PACKAGE, "py.typed"))
+
+
+def test_no_import_circle_in_the_package():
+    """No module of the package imports another that imports it back (annotations-only
+    imports included), directly or around a circle."""
+    import ast
+
+    graph = {}
+    for name in os.listdir(PACKAGE):
+        if not name.endswith(".py"):
+            continue
+        module = name[:-3]
+        tree = ast.parse(open(os.path.join(PACKAGE, name)).read())
+        deps = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.level == 1:
+                if node.module:
+                    deps.add(node.module.split(".")[0])
+                else:
+                    deps.update(alias.name for alias in node.names)
+        graph[module] = deps & {n[:-3] for n in os.listdir(PACKAGE) if n.endswith(".py")}
+
+    def visit(module, path):
+        assert module not in path, "import circle: " + " -> ".join(path + [module])
+        for dep in graph.get(module, ()):
+            visit(dep, path + [module])
+
+    for module in graph:
+        visit(module, [])
