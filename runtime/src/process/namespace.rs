@@ -359,12 +359,15 @@ mod tests {
     #[test]
     fn runs_of_dead_launchers_are_swept_by_the_next_run() {
         let dead = RunNamespace::create().unwrap();
-        // No process has pid 0x7fff_fff0 (beyond Linux's pid_max).
-        std::fs::write(dead.dir.join(LAUNCHER_PID), "2147483632").unwrap();
+        // Its shared memory first: once the pid file says its launcher is dead, another
+        // test's `create` may sweep the run at any moment (an object written after that
+        // sweep would stay).
         let shm = PathBuf::from(SHM_DIR).join(format!("{}board", dead.prefix));
         if PathBuf::from(SHM_DIR).is_dir() {
             std::fs::write(&shm, b"x").unwrap();
         }
+        // No process has pid 0x7fff_fff0 (beyond Linux's pid_max).
+        std::fs::write(dead.dir.join(LAUNCHER_PID), "2147483632").unwrap();
         let live = RunNamespace::create().unwrap();
         // Another test's `create` may be sweeping the dead run at the same moment: this
         // sweep then skips it (its pid file already gone) while the other finishes.
