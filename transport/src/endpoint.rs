@@ -205,6 +205,12 @@ pub trait RunSupport {
     fn announce_failure(&self, agent: usize) {
         let _ = agent;
     }
+
+    /// An environment variable the support set for this process alone: the launcher
+    /// removes it from the agents it starts.
+    fn unset_for_agents(&self) -> Option<&'static str> {
+        None
+    }
 }
 
 /// Support of a transport that needs none.
@@ -242,6 +248,14 @@ pub trait ProcessTransport: Sync {
     /// Threads an agent process runs.
     fn threads_per_agent(&self) -> u64 {
         1
+    }
+
+    /// Bytes a second everything the team sends passes through at least, where one relay
+    /// (a router) carries every message of a run (`None`: agents reach each other directly).
+    /// A team whose round this relay cannot carry within half its round deadline is refused
+    /// before it starts.
+    fn relay_bytes_per_second(&self) -> Option<f64> {
+        None
     }
 
     /// The agents use the run's shared board: they check the team's digest on it before

@@ -2,7 +2,7 @@
 //! message between hosts, so it runs ahead of its agents where the system allows it) and the
 //! size of its router's receive runtime.
 
-use admm_ta_transport::zenoh_net::session::size_router_runtime;
+use admm_ta_transport::zenoh_net::session::{single_threaded, size_router_runtime};
 
 /// Nice steps a host runs ahead of its agents, where the system allows it.
 const PRIORITY_BOOST: i32 = 10;
@@ -36,16 +36,6 @@ pub(super) fn prepare_host_process(router_links: usize) -> Prepared {
         Ok(nice) => Prepared::Ahead(nice),
         Err(e) => Prepared::NotRaised(e),
     }
-}
-
-/// Whether this process runs a single thread (Linux's `/proc/self/status`).
-fn single_threaded() -> bool {
-    std::fs::read_to_string("/proc/self/status").is_ok_and(|status| {
-        status
-            .lines()
-            .find_map(|l| l.strip_prefix("Threads:"))
-            .is_some_and(|n| n.trim() == "1")
-    })
 }
 
 /// Raises the calling thread's scheduling priority by up to [`PRIORITY_BOOST`] nice steps

@@ -171,6 +171,11 @@ impl LauncherSupport {
     pub(crate) fn announce_failure(&self, agent: usize) {
         self.support.announce_failure(agent);
     }
+
+    /// An environment variable set for this process's support alone, not for its agents.
+    pub(crate) fn unset_for_agents(&self) -> Option<&'static str> {
+        self.support.unset_for_agents()
+    }
 }
 
 /// Whether `scenario`'s agents record their rounds on the run's board.

@@ -199,11 +199,21 @@ struct ScenarioFile {
 /// Phase 1: checks the limits before anything is created, then makes the run's namespace,
 /// board, transport root and support, fills in the scenario's names and writes it.
 fn prepare(scenario: &mut Scenario) -> Result<(RunGuard, ScenarioFile), LaunchError> {
-    let max_degree = scenario
-        .graph()
-        .map(|g| (0..g.robots()).map(|i| g.degree(i)).max().unwrap_or(0))
-        .unwrap_or(scenario.robots.saturating_sub(1));
+    let degrees: Vec<usize> = match scenario.graph() {
+        Ok(g) => (0..g.robots()).map(|i| g.degree(i)).collect(),
+        Err(_) => vec![scenario.robots.saturating_sub(1); scenario.robots],
+    };
+    let max_degree = degrees.iter().copied().max().unwrap_or(0);
     crate::process::limits::check(scenario.transport, scenario.robots, max_degree)?;
+    let header = admm_ta_transport::exchange::header::RoundHeader::WORDS;
+    crate::process::limits::check_relay(
+        scenario.transport,
+        crate::process::limits::RoundLoad {
+            messages: degrees.iter().sum::<usize>() as u64,
+            message_bytes: ((header + scenario.payload_len()) * 8) as u64,
+            round_timeout: Duration::from_millis(scenario.round_timeout_ms),
+        },
+    )?;
     let namespace = RunNamespace::create().map_err(LaunchError::RunDirectory)?;
     let mut guard = RunGuard {
         namespace: namespace.clone(),
@@ -286,6 +296,9 @@ fn spawn_agents(
                 admm_ta_transport::logging::LOG_FD_ENV,
                 admm_ta_transport::logging::CHILD_LOG_FD.to_string(),
             );
+        }
+        if let Some(variable) = guard.support.as_ref().and_then(|s| s.unset_for_agents()) {
+            command.env_remove(variable);
         }
         #[cfg(feature = "fault-injection")]
         if !fault_injection {

@@ -34,6 +34,7 @@ use crate::fault::Fault;
 use crate::wait::WaitPolicy;
 use crate::zenoh_net::error::ZenohError;
 use crate::zenoh_net::links::ZenohLinks;
+use crate::zenoh_net::relay::RELAY_BYTES_PER_SECOND;
 use crate::zenoh_net::session::{
     self, Role, alive_agents, alive_keys, announce_failure, missing_hosts, watch_failures,
     watch_stops,
@@ -71,6 +72,21 @@ const RESEND_AFTER: Duration = Duration::from_millis(50);
 const RESEND_ROUNDS: u64 = 2;
 
 const RESEND_AT_MOST_EVERY: Duration = Duration::from_secs(1);
+
+/// The first resend waits at least this many times the time the team's round takes to
+/// relay (issue 49: with a fixed 50 ms every agent of a 200-agent team of 320 kB messages
+/// re-sent a dozen times in its first rounds, and those rounds took 16–22 s instead of 1.5).
+const RESEND_PATIENCE: f64 = 5.0;
+
+/// When a gather of the first rounds sends again: after [`RESEND_AFTER`], or after
+/// [`RESEND_PATIENCE`] times what the routers need to relay one round of the team whose
+/// agents have `degrees` neighbours and send messages of `message_words` values, if longer.
+fn resend_after(degrees: &[usize], message_words: usize) -> Duration {
+    let team_bytes = degrees.iter().sum::<usize>() as f64 * (message_words * 8) as f64;
+    RESEND_AFTER.max(Duration::from_secs_f64(
+        RESEND_PATIENCE * team_bytes / RELAY_BYTES_PER_SECOND,
+    ))
+}
 
 /// After a timeout, how long an agent waits for the network to say who is gone before it
 /// names the neighbour it waited for: a Zenoh lease (10 s) and a little more. A neighbour
@@ -140,8 +156,10 @@ pub struct ZenohExchange {
     /// The own last two messages as sent, by round parity, to send again (a `ZBytes` clone
     /// shares the buffer: putting it again copies nothing).
     sent: [(Option<u64>, ZBytes); 2],
-    /// Messages sent again.
+    /// Messages sent again, and how long a gather of the first rounds waits before it
+    /// sends again ([`resend_after`]).
     resent: u64,
+    resend_after: Duration,
     /// The round last gathered, and the fault to inject (tests, [`crate::fault`]).
     gathered: u64,
     fault: Option<Fault>,
@@ -411,6 +429,7 @@ impl ZenohExchange {
             outbox: vec![0.0; message_words],
             sent: [(None, ZBytes::new()), (None, ZBytes::new())],
             resent: 0,
+            resend_after: resend_after(&endpoint.degrees, message_words),
             gathered: 0,
             fault: endpoint.fault,
             seen: 0,
@@ -676,7 +695,8 @@ impl ZenohExchange {
             .map_err(|e| transport(self.index, format!("publishing round {round} failed: {e}")))
     }
 
-    /// Sends the own messages of rounds `round − 1` and `round` again (see [`RESEND_AFTER`]).
+    /// Sends the own messages of rounds `round − 1` and `round` again (see [`RESEND_AFTER`] and
+    /// [`resend_after`]).
     fn resend(&mut self, round: u64) -> Result<(), ExchangeError> {
         for r in [round.checked_sub(1), Some(round)].into_iter().flatten() {
             if self.sent[(r % 2) as usize].0 == Some(r) {
@@ -693,8 +713,8 @@ impl Drop for ZenohExchange {
         if self.resent > 0 {
             // In the agent's log: a sign of start-up races or a lossy network.
             eprintln!(
-                "agent {}: sent {} message(s) again after waiting {RESEND_AFTER:?} or more",
-                self.index, self.resent
+                "agent {}: sent {} message(s) again after waiting {:?} or more",
+                self.index, self.resent, self.resend_after
             );
         }
         // Flushes what is queued and tells the peers we left (our token vanishes).
@@ -737,11 +757,12 @@ impl Exchange for ZenohExchange {
         }
         // Later rounds never resend: their wait is the deadline's alone.
         let mut resend_at = if round < RESEND_ROUNDS {
-            started + RESEND_AFTER
+            started + self.resend_after
         } else {
             deadline
         };
-        let mut resend_every = RESEND_AFTER;
+        let mut resend_every = self.resend_after;
+        let at_most_every = RESEND_AT_MOST_EVERY.max(self.resend_after);
         let held = self.policy.wait_until(
             self,
             deadline,
@@ -749,7 +770,7 @@ impl Exchange for ZenohExchange {
             |s, deadline| {
                 if round < RESEND_ROUNDS && Instant::now() >= resend_at {
                     s.resend(round)?;
-                    resend_every = (resend_every * 2).min(RESEND_AT_MOST_EVERY);
+                    resend_every = (resend_every * 2).min(at_most_every);
                     resend_at = Instant::now() + resend_every;
                 }
                 s.sleep(deadline.min(resend_at), round)
@@ -804,5 +825,23 @@ impl Exchange for ZenohExchange {
             self.index,
             "the Zenoh transport has no global barrier (use ipc or threads)",
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small team re-sends after 50 ms as before; a team whose round is 1.28 GB waits
+    /// five times the 1.28 s its router needs to relay it.
+    #[test]
+    fn the_first_resend_waits_for_what_the_round_takes_to_relay() {
+        let ring = vec![2; 10];
+        assert_eq!(resend_after(&ring, RoundHeader::WORDS + 100), RESEND_AFTER);
+        let big = vec![20; 200];
+        let waited = resend_after(&big, RoundHeader::WORDS + 200 * 200);
+        let relayed = 4000.0 * ((RoundHeader::WORDS + 40_000) * 8) as f64 / 1e9;
+        assert!((waited.as_secs_f64() - RESEND_PATIENCE * relayed).abs() < 1e-6);
+        assert!(waited > Duration::from_secs(6));
     }
 }

@@ -13,9 +13,10 @@
 //!
 //! * [`process`] (always built): how the process orchestration runs it (the launcher's
 //!   loopback router, the agents' connection and blame, failures announced on Zenoh).
+//! * [`relay`] (always built): the rate a router relays, which bounds a team's round.
 //!
 //! The hosts of a multi-host team and the mixed mode's bridge (iceoryx2 within a host, Zenoh
-//! between hosts) use both transports, so they live above them, in the runtime (`admm_ta_runtime::team`).
+//! between hosts) use both transports, so they live above them, in the runtime (`admm_ta_runtime::host`).
 //!
 //! Built without the `zenoh` feature, every Zenoh entry point fails with
 //! [`ZenohNotBuilt`](error::ZenohNotBuilt).
@@ -23,6 +24,7 @@
 pub mod error;
 pub mod links;
 pub mod process;
+pub mod relay;
 
 #[cfg(feature = "zenoh")]
 pub mod exchange;

@@ -28,9 +28,17 @@ impl ProcessTransport for ZenohProcesses {
         false
     }
 
+    /// Every message goes through the run's router.
+    fn relay_bytes_per_second(&self) -> Option<f64> {
+        Some(super::relay::RELAY_BYTES_PER_SECOND)
+    }
+
     #[cfg(feature = "zenoh")]
     fn start_support(&self, run: &RunRequest) -> Result<Box<dyn RunSupport>, SupportError> {
-        Ok(Box::new(built::LoopbackRouter::start(&run.run_id)?))
+        Ok(Box::new(built::LoopbackRouter::start(
+            &run.run_id,
+            run.degrees.len(),
+        )?))
     }
 
     #[cfg(not(feature = "zenoh"))]
@@ -87,7 +95,7 @@ mod built {
     use crate::zenoh_net::exchange::ZenohExchange;
     use crate::zenoh_net::links::ZenohLinks;
     use crate::zenoh_net::router::HostRouter;
-    use crate::zenoh_net::session::watch_failures;
+    use crate::zenoh_net::session::{self, watch_failures};
     use std::sync::Arc;
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::time::{Duration, Instant};
@@ -98,12 +106,30 @@ mod built {
         links: ZenohLinks,
         /// The first agent announced as failed, `usize::MAX` if none.
         first: Arc<AtomicUsize>,
+        /// This process sized its Zenoh runtime for the router (not for its agents).
+        sized: bool,
         _subscriber: zenoh::pubsub::Subscriber<()>,
     }
 
     impl LoopbackRouter {
-        pub(super) fn start(run_id: &str) -> Result<Self, SupportError> {
+        /// The router of a run of `agents` agents, each one link to it.
+        ///
+        /// Its receive runtime gets a worker per link where this process may still set
+        /// its environment ([`session::size_router_runtime_if_alone`]): a router forwards
+        /// on the receiving link's worker, and a push into a congested agent's link blocks
+        /// that worker. With Zenoh's two workers, 200 agents of 320 kB messages blocked both
+        /// and the router read no link for 10 s: it expired the agents' leases, their
+        /// tokens vanished and their reconnected sessions' messages were misrouted
+        /// (issue 49).
+        pub(super) fn start(run_id: &str, agents: usize) -> Result<Self, SupportError> {
             let failed = |e| SupportError::new(RouterFailed(e));
+            let sized = session::size_router_runtime_if_alone(agents);
+            if !sized {
+                tracing::debug!(
+                    agents,
+                    "the run's Zenoh router keeps the process's receive runtime (ZENOH_RUNTIME set, or other threads run)"
+                );
+            }
             let router = HostRouter::open_on_loopback().map_err(failed)?;
             let links = ZenohLinks {
                 key_prefix: format!("admm-ta/run/{run_id}"),
@@ -124,6 +150,7 @@ mod built {
                 router,
                 links,
                 first,
+                sized,
                 _subscriber: subscriber,
             })
         }
@@ -151,6 +178,10 @@ mod built {
 
         fn announce_failure(&self, agent: usize) {
             self.router.announce_failure(&self.links, agent);
+        }
+
+        fn unset_for_agents(&self) -> Option<&'static str> {
+            self.sized.then_some(session::RUNTIME_VARIABLE)
         }
     }
 

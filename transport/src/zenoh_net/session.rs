@@ -27,6 +27,18 @@ pub enum Role {
 /// Batches (64 kB each) of a link's data queue (Zenoh allows 1…16, default 2).
 const TX_QUEUE_BATCHES: usize = 16;
 
+/// How long a push with blocking congestion control may wait for room in a link's queue
+/// before Zenoh closes the link (Zenoh's default: 5 s), in microseconds: a round's default
+/// deadline. A closed link is not a slow one: its client reconnects with a new session
+/// whose key-expression ids the router no longer maps to the old ones ("Received Data for
+/// unknown expr_id"), and round messages were routed to other agents' subscriptions (issue
+/// 49: 200 agents with 320 kB messages through one router on 2 cores — the router could not
+/// push a round's burst into a starved agent's link within 5 s, closed it, and agents saw
+/// "the message on neighbour 95's service claims to come from agent 54", a payload of 0
+/// values, or a neighbour's token vanish). A congested link now only slows the round; the
+/// round's deadline, not Zenoh, decides when a team is too slow.
+const BLOCK_BEFORE_CLOSE_US: u64 = 30_000_000;
+
 /// Handshakes a router accepts at once: more than a team has agents.
 const ROUTER_ACCEPT_PENDING: usize = 4096;
 
@@ -63,6 +75,11 @@ pub fn config(role: &Role, listen: &[String], connect: &[String]) -> Result<Conf
         &mut config,
         "transport/link/tx/queue/size/data",
         &TX_QUEUE_BATCHES.to_string(),
+    )?;
+    set(
+        &mut config,
+        "transport/link/tx/queue/congestion_control/block/wait_before_close",
+        &BLOCK_BEFORE_CLOSE_US.to_string(),
     )?;
     match role {
         Role::Agent { within } => {
@@ -117,7 +134,7 @@ fn router_rx_workers(links: usize) -> usize {
 /// Changes the process's environment: nothing else may read or write it at the same time —
 /// call it before the process starts any other thread.
 pub unsafe fn size_router_runtime(links: usize) {
-    const VARIABLE: &str = "ZENOH_RUNTIME";
+    const VARIABLE: &str = RUNTIME_VARIABLE;
     match std::env::var_os(VARIABLE) {
         None => {
             let setting = format!("(rx: (worker_threads: {}))", router_rx_workers(links));
@@ -132,6 +149,37 @@ pub unsafe fn size_router_runtime(links: usize) {
         Some(_) => {}
     }
 }
+
+/// Whether this process runs a single thread (Linux's `/proc/self/status`): the only time
+/// changing its environment is sound.
+pub fn single_threaded() -> bool {
+    std::fs::read_to_string("/proc/self/status").is_ok_and(|status| {
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix("Threads:"))
+            .is_some_and(|n| n.trim() == "1")
+    })
+}
+
+/// Sizes Zenoh's receive runtime for a router holding `links` links
+/// ([`size_router_runtime`]) if this process still runs a single thread and Zenoh's
+/// runtimes were not configured by the user; returns whether it did (then the variable is
+/// this process's own, not its children's: see [`RUNTIME_VARIABLE`]). A process that already
+/// runs other threads (a program embedding the library) keeps Zenoh's two workers.
+pub fn size_router_runtime_if_alone(links: usize) -> bool {
+    if std::env::var_os(RUNTIME_VARIABLE).is_some() || !single_threaded() {
+        return false;
+    }
+    // SAFETY: this process runs one thread (checked above), so nothing else reads or writes
+    // the environment meanwhile.
+    unsafe { size_router_runtime(links) };
+    true
+}
+
+/// Zenoh's runtime configuration variable: a process that set it for its own router removes
+/// it from the agents it starts (each agent is one client with one link; sized for a router,
+/// every agent would start a receive worker per link of the team).
+pub const RUNTIME_VARIABLE: &str = "ZENOH_RUNTIME";
 
 /// How long closing a session is waited for: what is queued is flushed and the others are
 /// told within it; a link to a host that was cut off is not waited for (Zenoh's own close
