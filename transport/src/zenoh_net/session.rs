@@ -163,16 +163,24 @@ pub fn single_threaded() -> bool {
 
 /// Sizes Zenoh's receive runtime for a router holding `links` links
 /// ([`size_router_runtime`]) if this process still runs a single thread and Zenoh's
-/// runtimes were not configured by the user; returns whether it did (then the variable is
-/// this process's own, not its children's: see [`RUNTIME_VARIABLE`]). A process that already
+/// runtimes were not configured by the user; returns whether this process set the variable,
+/// now or for an earlier router (then it is this process's own, not its children's: see
+/// [`RUNTIME_VARIABLE`]). A process that already
 /// runs other threads (a program embedding the library) keeps Zenoh's two workers.
 pub fn size_router_runtime_if_alone(links: usize) -> bool {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    /// This process set the variable (for its first router; Zenoh reads it once).
+    static SET_HERE: AtomicBool = AtomicBool::new(false);
+    if SET_HERE.load(Ordering::Acquire) {
+        return true;
+    }
     if std::env::var_os(RUNTIME_VARIABLE).is_some() || !single_threaded() {
         return false;
     }
     // SAFETY: this process runs one thread (checked above), so nothing else reads or writes
     // the environment meanwhile.
     unsafe { size_router_runtime(links) };
+    SET_HERE.store(true, Ordering::Release);
     true
 }
 
