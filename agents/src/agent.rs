@@ -107,10 +107,12 @@ pub fn check_length(payload: &[f64], expected: usize) -> Result<(), PayloadError
 /// Why an agent takes no new costs.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum NewCostsError {
-    #[error("repeated assignments with new costs run the primal method only")]
+    #[error("the method takes no new costs between episodes")]
     Unsupported,
     #[error("{got} costs for a robot with another number of tasks")]
     WrongLength { got: usize },
+    #[error("every task is forbidden to the robot")]
+    NoAllowedTask,
 }
 
 /// One robot's algorithm.
@@ -160,8 +162,10 @@ pub trait AgentAlgorithm: ConsensusAgent + Send + std::any::Any {
     /// penalty ignore it.
     fn set_rho(&mut self, _rho: f64) {}
 
-    /// New own costs for the next episode of a repeated assignment, warm-started from the
-    /// current iterates or (`warm = false`) from zero.
+    /// New own costs for the next episode of a repeated assignment (one per task of the
+    /// agent's problem; `+∞` marks a forbidden pair for the methods that keep them apart,
+    /// the others take the normalisation's penalty), warm-started from the current iterates
+    /// or (`warm = false`) from zero.
     fn set_costs(&mut self, _costs: &[f64], _warm: bool) -> Result<(), NewCostsError> {
         Err(NewCostsError::Unsupported)
     }

@@ -5,17 +5,35 @@
 //! messages keep that size. In an episode where only the robots `R` take tasks (the others
 //! relay: they keep exchanging so that the graph stays connected, with no costs of their
 //! own) and only the tasks `T` exist, every robot runs the method on the `|T| × |R|`
-//! problem: [`MaskedAgent`] reads that block of each neighbour's `m × n` message, steps its
-//! inner agent on it and writes its block back (zeros elsewhere). This needs a method whose
-//! message is the team's assignment matrix, column-major tasks × robots
-//! ([`crate::method::team::TeamMethod::MASKABLE`]).
+//! problem inside the team's messages, as its method lays them out ([`PartLayout`],
+//! [`crate::method::team::TeamMethod::parts`]):
 //!
-//! A relay runs the same inner agent with zero costs (it stands at the first robot's place,
-//! adding nothing to that robot's cost column): the certificate's `Σ_i G_i = C` still holds
-//! over the robots that take part, and the stop protocol counts the relay like any robot.
+//! * [`PartLayout::Block`] (the primal method, whose message is the team's assignment
+//!   matrix, column-major tasks × robots): [`MaskedAgent`] reads the part's block of each
+//!   neighbour's `m × n` message, steps its inner agent on it and writes its block back
+//!   (zeros elsewhere). A relay runs the same inner agent with zero costs (it stands at the
+//!   first robot's place, adding nothing to that robot's cost column): the certificate's
+//!   `Σ_i G_i = C` still holds over the robots that take part, and the stop protocol counts
+//!   the relay like any robot.
+//! * [`PartLayout::Prefix`] (the fast dual methods, whose message is prices and a
+//!   certificate, of a length that grows with the robots and the tasks): the inner agent's
+//!   message of the part is the first values of the team's message (zeros after it), read
+//!   in place. A relay is the method's own ([`crate::method::team::TeamBuilder::relay`]):
+//!   it takes part in the consensus on prices with no column of its own.
 
-use crate::agent::{ConsensusAgent, Inbox, NewCostsError, StepReport};
+use crate::agent::{ConsensusAgent, Inbox, NewCostsError, PayloadError, StepReport, check_length};
 use crate::method::agent::MethodAgent;
+
+/// How a method's message of a part sits in the team's message.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PartLayout {
+    /// The message is the team's `m × n` assignment matrix (column-major tasks × robots):
+    /// the part's block, in place.
+    Block,
+    /// The part's own message (never longer than the whole team's: the method's payload
+    /// grows with robots and tasks) as the first values of the team's.
+    Prefix,
+}
 
 /// Which robots take part and which tasks exist (both sorted, both non-empty).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -46,13 +64,30 @@ impl Inbox for Blocks<'_> {
     }
 }
 
+/// The first `len` values of the neighbours' messages, for the inner agent (no copy).
+struct Prefixes<'a> {
+    inbox: &'a dyn Inbox,
+    len: usize,
+}
+
+impl Inbox for Prefixes<'_> {
+    fn len(&self) -> usize {
+        self.inbox.len()
+    }
+    fn payload(&self, k: usize) -> &[f64] {
+        &self.inbox.payload(k)[..self.len]
+    }
+}
+
 /// A robot of an `n`-robot, `m`-task team running its method on a [`Part`].
 pub struct MaskedAgent {
     inner: MethodAgent,
     tasks: usize,
-    robots: usize,
+    layout: PartLayout,
+    /// Values of the team's round message.
+    message_len: usize,
     part: Part,
-    /// The whole team: messages pass straight through.
+    /// The inner agent's message is the team's: messages pass straight through.
     whole: bool,
     /// The robot's place among `part.robots`, `None` for a relay.
     place: Option<usize>,
@@ -62,20 +97,24 @@ pub struct MaskedAgent {
 }
 
 impl MaskedAgent {
-    /// `inner` (an agent of the `|part.tasks| × |part.robots|` problem, at `place`, or a relay
-    /// at place 0 with zero costs) inside messages of an `n`-robot, `m`-task team; `degree`
-    /// neighbours.
+    /// `inner` (an agent of the `|part.tasks| × |part.robots|` problem at `place`, or a
+    /// relay) inside `message_len`-value messages of an `n`-robot, `m`-task team laid out
+    /// as `layout` says; `degree` neighbours.
     pub fn new(
         inner: MethodAgent,
-        tasks: usize,
-        robots: usize,
+        team: (usize, usize),
+        message_len: usize,
+        layout: PartLayout,
         part: Part,
-        place: Option<usize>,
-        degree: usize,
+        (place, degree): (Option<usize>, usize),
     ) -> Self {
+        let (robots, tasks) = team;
+        let inner_len = inner.payload_len();
+        assert!(inner_len <= message_len, "a part's message fits the team's");
+        let whole = inner_len == message_len
+            && (layout == PartLayout::Prefix || part == Part::whole(robots, tasks));
         let block = part.tasks.len() * part.robots.len();
-        let whole = part == Part::whole(robots, tasks);
-        let (blocks, out) = if whole {
+        let (blocks, out) = if whole || layout == PartLayout::Prefix {
             (Vec::new(), Vec::new())
         } else {
             (vec![vec![0.0; block]; degree], vec![0.0; block])
@@ -83,7 +122,8 @@ impl MaskedAgent {
         Self {
             inner,
             tasks,
-            robots,
+            layout,
+            message_len,
             part,
             whole,
             place,
@@ -134,12 +174,39 @@ impl MaskedAgent {
 
 impl ConsensusAgent for MaskedAgent {
     fn payload_len(&self) -> usize {
-        self.tasks * self.robots
+        self.message_len
+    }
+
+    /// The inner agent's checks on its part of the message; finite numbers elsewhere.
+    fn check_payload(&self, payload: &[f64]) -> Result<(), PayloadError> {
+        if self.whole {
+            return self.inner.check_payload(payload);
+        }
+        check_length(payload, self.message_len)?;
+        let inner = match self.layout {
+            PartLayout::Prefix => self.inner.payload_len(),
+            PartLayout::Block => 0,
+        };
+        if inner > 0 {
+            self.inner.check_payload(&payload[..inner])?;
+        }
+        match payload[inner..].iter().position(|v| !v.is_finite()) {
+            Some(k) => Err(PayloadError::NotFinite {
+                index: inner + k,
+                value: payload[inner + k],
+            }),
+            None => Ok(()),
+        }
     }
 
     fn write_initial_payload(&self, out: &mut [f64]) {
         if self.whole {
             return self.inner.write_initial_payload(out);
+        }
+        if self.layout == PartLayout::Prefix {
+            let (mine, rest) = out.split_at_mut(self.inner.payload_len());
+            rest.fill(0.0);
+            return self.inner.write_initial_payload(mine);
         }
         let mut block = vec![0.0; self.part.tasks.len() * self.part.robots.len()];
         self.inner.write_initial_payload(&mut block);
@@ -149,6 +216,12 @@ impl ConsensusAgent for MaskedAgent {
     fn step(&mut self, inbox: &dyn Inbox, out: &mut [f64]) -> StepReport {
         if self.whole {
             return self.inner.step(inbox, out);
+        }
+        if self.layout == PartLayout::Prefix {
+            let len = self.inner.payload_len();
+            let (mine, rest) = out.split_at_mut(len);
+            rest.fill(0.0);
+            return self.inner.step(&Prefixes { inbox, len }, mine);
         }
         for (k, block) in self.blocks.iter_mut().enumerate() {
             Self::read_block(&self.part, self.tasks, inbox.payload(k), block);
@@ -225,11 +298,11 @@ mod tests {
         };
         let mut masked = MaskedAgent::new(
             agent(3, 2, 1, vec![0.3, 0.7]),
-            m,
-            n,
+            (n, m),
+            n * m,
+            PartLayout::Block,
             part.clone(),
-            Some(1),
-            n - 1,
+            (Some(1), n - 1),
         );
         let mut plain = agent(3, 2, 1, vec![0.3, 0.7]);
         let neighbour = |seed: f64| -> Vec<f64> {
@@ -263,16 +336,65 @@ mod tests {
         // The whole team passes straight through.
         let mut whole = MaskedAgent::new(
             agent(n, m, 2, vec![0.1, 0.5, 0.9]),
-            m,
-            n,
+            (n, m),
+            n * m,
+            PartLayout::Block,
             Part::whole(n, m),
-            Some(2),
-            n - 1,
+            (Some(2), n - 1),
         );
         let mut direct = agent(n, m, 2, vec![0.1, 0.5, 0.9]);
         let (mut a, mut b) = (vec![0.0; n * m], vec![0.0; n * m]);
         whole.step(&inbox, &mut a);
         direct.step(&inbox, &mut b);
         assert_eq!(a, b);
+    }
+
+    /// A prefix part: the inner agent reads the first values of its neighbours' messages and
+    /// writes its own there, zeros after them; a longer value that is not finite is refused.
+    #[test]
+    fn a_prefix_part_carries_the_inner_message_first() {
+        use crate::agent::AgentAlgorithm;
+        use crate::methods::dual::{DualParams, DualUpdate, FastDualAgent};
+        let params = DualParams {
+            rho: 0.5,
+            update: DualUpdate::Exact,
+            diameter: 1,
+            tolerance: 1e-9,
+        };
+        let make = || {
+            let agent = FastDualAgent::new(
+                0,
+                &[0.2, 0.9],
+                vec![true; 2],
+                2,
+                AssignmentCase::One,
+                1,
+                params,
+            );
+            Box::new(agent) as Box<dyn AgentAlgorithm>
+        };
+        let inner_len = make().payload_len();
+        let len = inner_len + 4;
+        let part = Part::whole(2, 2);
+        let mut masked = MaskedAgent::new(
+            MethodAgent::new(make()),
+            (2, 2),
+            len,
+            PartLayout::Prefix,
+            part,
+            (Some(0), 1),
+        );
+        let mut plain = MethodAgent::new(make());
+        let mut neighbour = vec![0.0; len];
+        neighbour[0] = 0.3;
+        let (mut out, mut expected) = (vec![7.0; len], vec![0.0; inner_len]);
+        masked.step(&vec![neighbour.as_slice()], &mut out);
+        plain.step(&vec![&neighbour[..inner_len]], &mut expected);
+        assert_eq!(&out[..inner_len], &expected[..]);
+        assert!(out[inner_len..].iter().all(|&v| v == 0.0));
+        assert_eq!(masked.check_payload(&out), Ok(()));
+        out[len - 1] = f64::NAN;
+        assert!(masked.check_payload(&out).is_err());
+        assert!(masked.check_payload(&out[..inner_len]).is_err());
     }
 }

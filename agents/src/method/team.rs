@@ -7,6 +7,7 @@
 use crate::agent::AgentAlgorithm;
 use crate::certify::local_stop::{CHECK_AFTER, CHECK_EVERY};
 use crate::certify::stopping::StopRule;
+use crate::method::masked::PartLayout;
 use crate::method::settings::{GivenSettings, MethodSettings, SettingError, SettingSpec};
 use crate::methods::rho::RhoSchedule;
 use crate::problem::{AssignmentCase, CostMatrix, TaskAssignmentProblem};
@@ -48,6 +49,15 @@ pub struct AgentInit {
 /// Builds every robot's agent of one team, with whatever the team shares.
 pub trait TeamBuilder: Send + Sync {
     fn agent(&self, init: AgentInit) -> Box<dyn AgentAlgorithm>;
+
+    /// An agent that relays for the team (a standing team's robot that takes no task in an
+    /// episode, [`crate::method::masked`]): it exchanges like the others and adds nothing
+    /// to the team's costs. `init` is the first robot's (its costs are not used). By default
+    /// that robot's agent, to be given zero costs ([`PartLayout::Block`]'s relay).
+    fn relay(&self, init: AgentInit) -> Box<dyn AgentAlgorithm> {
+        let costs = vec![0.0; init.costs.len()];
+        self.agent(AgentInit { costs, ..init })
+    }
 }
 
 /// How the robots of a method decide their own task, for observers of a lockstep run (the
@@ -86,16 +96,6 @@ pub trait TeamMethod: Sync + 'static {
     /// Whether it has a penalty ρ (`--rho` and `--adaptive-rho` apply to it).
     const PENALTY: bool;
 
-    /// Whether its agents take new own costs between episodes
-    /// ([`crate::agent::AgentAlgorithm::set_costs`]): a standing team, and a team whose
-    /// robots keep their costs private, need it.
-    const NEW_COSTS: bool = false;
-
-    /// Whether its round message is the team's `m × n` assignment matrix (column-major
-    /// tasks × robots), so that a team may run it on part of its robots and tasks
-    /// ([`crate::method::masked`]).
-    const MASKABLE: bool = false;
-
     /// Values of the payload exchanged every round with these settings, for
     /// `(robots, tasks)`.
     fn payload_len(&self, settings: &Self::Settings, robots: usize, tasks: usize) -> usize;
@@ -131,6 +131,15 @@ pub trait TeamMethod: Sync + 'static {
         Decisions::OwnColumn
     }
 
+    /// Whether a standing team whose robots keep their costs private may run it with these
+    /// settings, and how its message of part of the team sits in the team's
+    /// ([`crate::method::masked`]): its agents take new own costs between episodes
+    /// ([`crate::agent::AgentAlgorithm::set_costs`]) and relay
+    /// ([`TeamBuilder::relay`]). `None`: it may not.
+    fn parts(&self, _settings: &Self::Settings) -> Option<PartLayout> {
+        None
+    }
+
     /// The builder of `team`'s agents.
     fn team<'a>(
         &'static self,
@@ -144,10 +153,8 @@ pub trait AnyTeamMethod: Sync {
     /// Its own settings.
     fn settings(&self) -> &'static [SettingSpec];
     fn penalty(&self) -> bool;
-    /// Its agents take new own costs between episodes ([`TeamMethod::NEW_COSTS`]).
-    fn new_costs(&self) -> bool;
-    /// Its message is the team's assignment matrix ([`TeamMethod::MASKABLE`]).
-    fn maskable(&self) -> bool;
+    /// A private standing team may run it with its default settings ([`TeamMethod::parts`]).
+    fn parts(&self) -> Option<PartLayout>;
     /// Values of the payload with the method's default settings.
     fn payload_len(&self, robots: usize, tasks: usize) -> usize;
     /// The method with the `given` settings (each must be one of its own), checked.
@@ -173,6 +180,8 @@ pub trait MethodSetup: std::fmt::Debug + Send + Sync {
     fn refuse(&self, adaptive_rho: bool, stop: StopRule) -> Result<(), Refusal>;
     fn stop_cadence(&self) -> (u64, u32);
     fn decisions(&self) -> Decisions;
+    /// A private standing team may run it with these settings ([`TeamMethod::parts`]).
+    fn parts(&self) -> Option<PartLayout>;
     fn team<'a>(&self, team: TeamContext<'a>) -> Box<dyn TeamBuilder + 'a>;
 }
 
@@ -212,6 +221,9 @@ impl<M: TeamMethod> MethodSetup for Setup<M> {
     fn decisions(&self) -> Decisions {
         self.method.decisions(&self.settings)
     }
+    fn parts(&self) -> Option<PartLayout> {
+        self.method.parts(&self.settings)
+    }
     fn team<'a>(&self, team: TeamContext<'a>) -> Box<dyn TeamBuilder + 'a> {
         self.method.team(&self.settings, team)
     }
@@ -224,11 +236,8 @@ impl<M: TeamMethod> AnyTeamMethod for M {
     fn penalty(&self) -> bool {
         M::PENALTY
     }
-    fn new_costs(&self) -> bool {
-        M::NEW_COSTS
-    }
-    fn maskable(&self) -> bool {
-        M::MASKABLE
+    fn parts(&self) -> Option<PartLayout> {
+        TeamMethod::parts(self, &M::Settings::default())
     }
     fn payload_len(&self, robots: usize, tasks: usize) -> usize {
         TeamMethod::payload_len(self, &M::Settings::default(), robots, tasks)

@@ -103,16 +103,10 @@ impl Method {
         self.info().penalty()
     }
 
-    /// Whether its agents take new own costs between episodes (a standing team, private
-    /// costs).
-    pub fn new_costs(self) -> bool {
-        self.team().is_some_and(|t| t.new_costs())
-    }
-
-    /// Whether a team may run it on part of its robots and tasks (its message is the team's
-    /// assignment matrix).
-    pub fn maskable(self) -> bool {
-        self.team().is_some_and(|t| t.maskable())
+    /// Whether a standing team whose robots keep their costs private may run it with its
+    /// default settings, and how ([`crate::method::team::TeamMethod::parts`]).
+    pub fn parts(self) -> Option<crate::method::masked::PartLayout> {
+        self.team().and_then(|t| t.parts())
     }
 
     /// Length of the payload exchanged every round (0: no messages).

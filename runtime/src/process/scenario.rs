@@ -104,6 +104,11 @@ pub struct Scenario {
     /// digest leaves it out.
     #[serde(default)]
     pub roster: Option<Vec<usize>>,
+    /// Values of every round message when they are more than the method's payload (a
+    /// private standing team: its agreements need room, and an episode's part of the team
+    /// runs inside the team's messages); `None`: the payload.
+    #[serde(default)]
+    pub message_len: Option<usize>,
 }
 
 /// A scenario that cannot be used.
@@ -171,6 +176,7 @@ impl Scenario {
             transport_config: None,
             local_agents: None,
             roster: None,
+            message_len: None,
         };
         let bits = |values: &[f64]| values.iter().map(|v| v.to_bits()).collect();
         match workload {
@@ -312,6 +318,9 @@ impl Scenario {
 
     /// Values of every round message's payload.
     pub fn payload_len(&self) -> usize {
+        if let Some(len) = self.message_len {
+            return len;
+        }
         match self.workload {
             // The payload may depend on the settings (the dual methods' variants).
             ScenarioWorkload::Method | ScenarioWorkload::Episodes(_) => match self.method_setup() {

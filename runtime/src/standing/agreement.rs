@@ -32,6 +32,13 @@ pub fn opening_words(robots: usize, tasks: usize) -> usize {
     TeamScale::WORDS + opening_bits(robots, tasks).div_ceil(BITS_PER_WORD)
 }
 
+/// Values of a private standing team's round message: its method's `payload` for the whole
+/// team, and room for the opening agreement and for the closing's cost and task of every
+/// robot.
+pub fn message_len(payload: usize, robots: usize, tasks: usize) -> usize {
+    payload.max(opening_words(robots, tasks)).max(2 * robots)
+}
+
 fn opening_bits(robots: usize, tasks: usize) -> usize {
     2 * tasks + ROBOT_BITS * robots + 1
 }

@@ -37,6 +37,8 @@ pub(super) enum EpisodeError {
     Costs(#[from] NewCostsError),
     #[error("the team's method has no agents")]
     NoAgents,
+    #[error("the team's method does not run on part of a team")]
+    NoParts,
 }
 
 /// `times` side rounds in which every robot sends `value` and merges its neighbours'
@@ -267,10 +269,13 @@ impl Episodes {
         // Its own neighbours, whatever its place among the robots that take part.
         let (n, id) = (self.settings.robots, self.settings.id);
         let degree = self.graph.degree(id);
-        let inner = plan.agents.agent_with_degree(place.unwrap_or(0), degree);
+        let layout = plan.agents.setup.parts().ok_or(EpisodeError::NoParts)?;
+        let inner = plan.agents.agent_with_degree(place, degree);
         let stop = LocalCertifiedStop::new(plan.diameter, n, plan.tolerance)?
             .with_cadence(plan.stop_cadence);
-        let agent = MaskedAgent::new(inner, self.settings.tasks, n, part.clone(), place, degree);
+        let team = (n, self.settings.tasks);
+        let (len, part) = (self.message.len(), part.clone());
+        let agent = MaskedAgent::new(inner, team, len, layout, part, (place, degree));
         Ok((agent, stop))
     }
 

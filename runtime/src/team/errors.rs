@@ -106,22 +106,13 @@ pub enum PrivateTeamError {
     )]
     NeedsTasks,
     #[error(
-        "method {method} cannot keep costs private: its agents take no new costs (use method = \"primal\")"
+        "method {method} cannot keep costs private with these settings: its agents take no new costs or cannot relay (use method = \"primal\", or \"dual\" or \"inexact-dual\" with their fast variant)"
     )]
     Method { method: &'static str },
     #[error(
         "a private team's forbidden pairs are part of each robot's row (null for a forbidden task), not a file"
     )]
     ForbiddenFile,
-    #[error(
-        "a private team of {robots} robot(s) × {tasks} task(s) has {payload} values in a round message, and its agreement needs {needed}: give it more tasks (or robots)"
-    )]
-    TooSmall {
-        robots: usize,
-        tasks: usize,
-        payload: usize,
-        needed: usize,
-    },
     #[error("{key} is a private team's key (costs = \"private\")")]
     NotPrivateKey { key: &'static str },
     #[error(

@@ -18,6 +18,7 @@ use crate::process::member_error::MemberError;
 use crate::process::namespace::RunNamespace;
 use crate::process::scenario::Scenario;
 use crate::process::team_digest::TeamDigest;
+use crate::standing::agreement::message_len;
 use crate::team::errors::{JoinError, PrivateTeamError, TeamFileError};
 use crate::team::team_file::{HostEntry, Team};
 use crate::workload::Workload;
@@ -80,7 +81,7 @@ pub(crate) fn team_scenario(team: &Team) -> Result<Scenario, TeamFileError> {
     let plan = prepare(problem.internal(), &graph, &options, setup)?;
     let stop = LocalCertifiedStop::new(plan.diameter, problem.robots(), plan.tolerance)?
         .with_cadence(plan.stop_cadence);
-    let scenario = Scenario::new(
+    let mut scenario = Scenario::new(
         Workload::Solve {
             plan: &plan,
             stop: &AgentStop::Local(stop),
@@ -89,6 +90,10 @@ pub(crate) fn team_scenario(team: &Team) -> Result<Scenario, TeamFileError> {
         &graph,
         options.run(),
     );
+    if team.is_private() {
+        let payload = scenario.payload_len();
+        scenario.message_len = Some(message_len(payload, problem.robots(), problem.tasks()));
+    }
     Ok(scenario)
 }
 

@@ -181,13 +181,14 @@ impl Team {
         RunNamespace::check_team_name(&file.run)?;
         check_hosts(&file.run, file.robots, file.transport, &file.hosts)?;
         let team = Self { file, base };
-        team.check_private()?;
         // The settings' checks, named by the file's keys.
-        team.solve_options()
+        let options = team
+            .solve_options()
             .map_err(|error| TeamFileError::Settings {
                 path: path.to_path_buf(),
                 error,
             })?;
+        team.check_private(&options)?;
         Ok(team)
     }
 
@@ -201,8 +202,8 @@ impl Team {
         self.file.costs == "private"
     }
 
-    /// Refuses a private team that cannot run, with the reason.
-    fn check_private(&self) -> Result<(), TeamFileError> {
+    /// Refuses a private team that cannot run (with its `options`), with the reason.
+    fn check_private(&self, options: &SolveOptions) -> Result<(), TeamFileError> {
         if !self.is_private() {
             let f = &self.file;
             let set = [
@@ -220,26 +221,17 @@ impl Team {
         }
         let f = &self.file;
         let refuse = |e| Err(TeamFileError::Private(e));
-        let Some(tasks) = f.tasks else {
+        if f.tasks.is_none() {
             return refuse(PrivateTeamError::NeedsTasks);
-        };
-        if !(f.method.new_costs() && f.method.maskable()) {
+        }
+        let parts = options.method_setup().and_then(|setup| setup.parts());
+        if parts.is_none() {
             return refuse(PrivateTeamError::Method {
                 method: f.method.name(),
             });
         }
         if f.forbidden.is_some() {
             return refuse(PrivateTeamError::ForbiddenFile);
-        }
-        let payload = f.method.payload_len(f.robots, tasks);
-        let needed = crate::standing::agreement::opening_words(f.robots, tasks);
-        if payload < needed {
-            return refuse(PrivateTeamError::TooSmall {
-                robots: f.robots,
-                tasks,
-                payload,
-                needed,
-            });
         }
         let timeout = self.episode_timeout();
         if !(timeout > 0.0 && timeout.is_finite()) {

@@ -58,22 +58,27 @@ impl<'a> AgentFactory<'a> {
 
     /// Robot `i`'s agent, with its own (optionally perturbed) costs.
     pub fn agent(&self, i: usize) -> MethodAgent {
-        self.agent_with_degree(i, self.graph.degree(i))
+        self.agent_with_degree(Some(i), self.graph.degree(i))
     }
 
-    /// Robot `i`'s agent with `degree` neighbours: a standing team's robot that runs
-    /// robot `i`'s part of an episode's problem from another place of the graph (or relays
-    /// from it).
-    pub fn agent_with_degree(&self, i: usize, degree: usize) -> MethodAgent {
-        let costs = ties::perturbed_row(self.problem.costs(), i, self.epsilon, self.seed);
-        MethodAgent::new(self.team.agent(AgentInit {
-            index: i,
+    /// Robot `i`'s agent with `degree` neighbours (a standing team's robot that runs robot
+    /// `i`'s part of an episode's problem from another place of the graph), or (`i`
+    /// `None`) one that relays there ([`TeamBuilder::relay`]).
+    pub fn agent_with_degree(&self, i: Option<usize>, degree: usize) -> MethodAgent {
+        let index = i.unwrap_or(0);
+        let costs = ties::perturbed_row(self.problem.costs(), index, self.epsilon, self.seed);
+        let init = AgentInit {
+            index,
             costs,
             robots: self.problem.robots(),
             case: self.problem.case(),
             degree,
-        }))
-        .with_schedule(self.schedule)
+        };
+        let agent = match i {
+            Some(_) => self.team.agent(init),
+            None => self.team.relay(init),
+        };
+        MethodAgent::new(agent).with_schedule(self.schedule)
     }
 
     /// Every robot's agent.

@@ -14,6 +14,7 @@
 //! * `elastic`: robots that leave, join and crash while the team goes on, on every
 //!   transport a standing team runs on.
 
+mod dual;
 mod elastic;
 mod episodes;
 mod faults;

@@ -48,7 +48,9 @@
 //! Size: one agent — its equations, both x-updates and the step share its private state;
 //! about 150 lines are its unit tests.
 
-use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, PayloadError, PayloadPart, StepReport};
+use crate::agent::{
+    AgentAlgorithm, ConsensusAgent, Inbox, NewCostsError, PayloadError, PayloadPart, StepReport,
+};
 use crate::methods::dual::agent::{DualParams, DualUpdate};
 use crate::methods::dual::column;
 use crate::methods::dual::coupled_box::solve_simplex_box;
@@ -101,7 +103,13 @@ pub struct FastDualAgent {
     snapshot: Snapshot,
     task: usize,
     slack: f64,
+    /// Steps since the agent's ρ schedule started.
     steps: u64,
+    /// Steps since its costs were last set (the certificate's round numbers).
+    episode_steps: u64,
+    /// It relays for the team: no column of its own (`x ≡ 0`), no share of the task rows'
+    /// right-hand side, no claim ([`FastDualAgent::relay`]).
+    relay: bool,
 }
 
 impl FastDualAgent {
@@ -159,7 +167,73 @@ impl FastDualAgent {
             task: first,
             slack: f64::INFINITY,
             steps: 0,
+            episode_steps: 0,
+            relay: false,
         }
+    }
+
+    /// An agent that relays for a team of `robots` robots and `tasks` tasks (a standing
+    /// team's robot that takes no task in an episode): it takes part in the consensus on
+    /// the task prices and floods the certificate with no column, no share of the task
+    /// rows and no claim of its own, so that `Σ_i x_i` and the right-hand sides stay those
+    /// of the robots that take part; its slack is 0 once the certificate holds.
+    pub fn relay(
+        robots: usize,
+        tasks: usize,
+        case: AssignmentCase,
+        degree: usize,
+        params: DualParams,
+    ) -> Self {
+        let mut agent = Self::new(
+            0,
+            &vec![0.0; tasks],
+            vec![true; tasks],
+            robots,
+            case,
+            degree,
+            params,
+        );
+        agent.relay = true;
+        agent.costs.fill(0.0);
+        agent
+    }
+
+    /// New own costs (`+∞` or a penalty for a forbidden pair as the team's normalisation
+    /// gives them; a relay's are not used): the certificate starts again; the prices, the
+    /// consensus sums and the column stay (`warm`) or start from zero with the ρ schedule.
+    fn take_costs(&mut self, costs: &[f64], warm: bool) -> Result<(), NewCostsError> {
+        if costs.len() != self.tasks {
+            return Err(NewCostsError::WrongLength { got: costs.len() });
+        }
+        if !self.relay {
+            for (allowed, cost) in self.allowed.iter_mut().zip(costs) {
+                *allowed = cost.is_finite();
+            }
+            if !self.allowed.contains(&true) {
+                return Err(NewCostsError::NoAllowedTask);
+            }
+            self.costs = column::centred(costs, &self.allowed);
+            self.task = column::round(&self.x, &self.allowed);
+        }
+        if !warm {
+            for v in [
+                &mut self.y,
+                &mut self.p,
+                &mut self.kappa,
+                &mut self.edges,
+                &mut self.x,
+            ] {
+                v.fill(0.0);
+            }
+            // A cold start follows the ρ schedule from ρ₀ again; a warm one goes on from the
+            // ρ it reached (100 drifting episodes of a 10-robot ring: 39 rounds a warm
+            // episode, 58 with ρ from ρ₀ again, 75 cold).
+            self.steps = 0;
+        }
+        self.snapshot.restart();
+        self.episode_steps = 0;
+        self.slack = f64::INFINITY;
+        Ok(())
     }
 
     /// Own relaxed column `x_i`.
@@ -177,8 +251,12 @@ impl FastDualAgent {
         2.0 * self.degree.max(1) as f64
     }
 
-    /// `±1/n`: the share of a task row's right-hand side (negative for coverage rows).
+    /// `±1/n`: the share of a task row's right-hand side (negative for coverage rows; a
+    /// relay has none).
     fn rhs(&self) -> f64 {
+        if self.relay {
+            return 0.0;
+        }
         let share = 1.0 / self.robots as f64;
         if self.case == AssignmentCase::Two {
             -share
@@ -228,6 +306,10 @@ impl FastDualAgent {
     }
 
     fn update_x(&mut self) {
+        if self.relay {
+            // No column: x ≡ 0.
+            return;
+        }
         let rho = self.rho;
         let two_d_rho = self.two_d() * rho;
         let (costs, kappa, allowed, case) = (&self.costs, &self.kappa, &self.allowed, self.case);
@@ -336,7 +418,8 @@ impl ConsensusAgent for FastDualAgent {
         let disagreement = self.accumulate(inbox);
         self.snapshot.begin();
         for k in 0..inbox.len() {
-            self.snapshot.merge(self.steps, &inbox.payload(k)[m..]);
+            self.snapshot
+                .merge(self.episode_steps, &inbox.payload(k)[m..]);
         }
         self.update_x();
         let (two_d, rho, case) = (self.two_d(), self.rho, self.case);
@@ -348,16 +431,20 @@ impl ConsensusAgent for FastDualAgent {
                 value
             };
         }
-        self.task = column::round(&self.x, &self.allowed);
+        let own = (!self.relay).then(|| column::round(&self.x, &self.allowed));
+        self.task = own.unwrap_or(self.task);
+        let (costs, allowed) = (&self.costs, &self.allowed);
         self.snapshot
-            .advance(self.steps, self.task, &self.costs, &self.allowed);
+            .advance(self.episode_steps, own, costs, allowed);
         self.snapshot.write(&mut out[m..]);
-        self.slack = self
-            .snapshot
-            .slack(self.task, &self.costs, &self.allowed, self.case);
+        self.slack = match own {
+            Some(task) => self.snapshot.slack(task, costs, allowed, self.case),
+            None => self.snapshot.relay_slack(),
+        };
         let report = column::report(&self.x, self.task, disagreement, &out[..m], &self.y);
         self.y.copy_from_slice(&out[..m]);
         self.steps += 1;
+        self.episode_steps += 1;
         report
     }
 
@@ -383,6 +470,10 @@ impl AgentAlgorithm for FastDualAgent {
     fn set_rho(&mut self, rho: f64) {
         assert!(rho > 0.0 && rho.is_finite(), "ρ must be positive");
         self.params.rho = rho;
+    }
+
+    fn set_costs(&mut self, costs: &[f64], warm: bool) -> Result<(), NewCostsError> {
+        self.take_costs(costs, warm)
     }
 }
 
@@ -517,6 +608,74 @@ mod tests {
                 (1, 0),
                 "{update:?}"
             );
+        }
+    }
+
+    /// Steps a chain of agents (each the next one's neighbour) until every slack is 0;
+    /// returns the round, or `None` after `limit` rounds.
+    fn certify_chain(agents: &mut [FastDualAgent], limit: usize) -> Option<usize> {
+        let n = agents.len();
+        let len = agents[0].payload_len();
+        let mut messages = vec![vec![0.0; len]; n];
+        for (agent, message) in agents.iter().zip(&mut messages) {
+            agent.write_initial_payload(message);
+        }
+        for round in 0..limit {
+            let gathered = messages.clone();
+            for (i, agent) in agents.iter_mut().enumerate() {
+                let inbox: Vec<&[f64]> = [i.wrapping_sub(1), i + 1]
+                    .into_iter()
+                    .filter(|&j| j < n)
+                    .map(|j| gathered[j].as_slice())
+                    .collect();
+                agent.step(&inbox, &mut messages[i]);
+            }
+            if agents.iter().all(|a| a.certificate_slack() <= 1e-12) {
+                return Some(round);
+            }
+        }
+        None
+    }
+
+    /// A relay between two robots (a chain robot–relay–robot) adds nothing: the two robots
+    /// certify their optimum, the relay's slack is 0 with theirs; new costs (warm and
+    /// cold) are certified again, the warm start from the last prices.
+    #[test]
+    fn a_relay_carries_prices_and_claims_and_new_costs_certify_again() {
+        for case in [AssignmentCase::One, AssignmentCase::Two] {
+            let tasks = if case == AssignmentCase::One { 2 } else { 1 };
+            let params = DualParams {
+                rho: 0.5,
+                update: DualUpdate::Exact,
+                diameter: 2,
+                tolerance: 1e-9,
+            };
+            let robot = |i: usize, costs: &[f64]| {
+                FastDualAgent::new(i, costs, vec![true; tasks], 2, case, 1, params)
+            };
+            let (first, second) = ([0.0, 1.0], [0.0, 3.0]);
+            let mut agents = vec![
+                robot(0, &first[..tasks]),
+                FastDualAgent::relay(2, tasks, case, 2, params),
+                robot(1, &second[..tasks]),
+            ];
+            assert!(certify_chain(&mut agents, 2000).is_some(), "{case:?}");
+            if case == AssignmentCase::One {
+                // Robot 1 loses less by taking task 1.
+                assert_eq!((agents[0].decide(), agents[2].decide()), (1, 0));
+                // Swapped costs, warm and cold: the other assignment.
+                for warm in [true, false] {
+                    agents[0].set_costs(&second, warm).unwrap();
+                    agents[1].set_costs(&[0.0, 0.0], warm).unwrap();
+                    agents[2].set_costs(&first, warm).unwrap();
+                    assert!(certify_chain(&mut agents, 2000).is_some(), "warm {warm}");
+                    assert_eq!((agents[0].decide(), agents[2].decide()), (0, 1));
+                }
+                assert_eq!(
+                    agents[0].set_costs(&[1.0], true),
+                    Err(NewCostsError::WrongLength { got: 1 })
+                );
+            }
         }
     }
 }

@@ -23,6 +23,7 @@ use crate::method::info::{
     Certification, Fig2Graphs, Memory, MethodInfo, Numbers, OWN_STATE_STOPS, PaperFacts,
     ReportText, Role, TEAM_STATE, per_agent,
 };
+use crate::method::masked::PartLayout;
 use crate::method::settings::{MethodSettings, Setting, SettingKind, SettingSpec, SettingValue};
 use crate::method::team::{
     AgentInit, Refusal, RunOption, TeamBuilder, TeamContext, TeamMethod, TeamParams,
@@ -273,6 +274,13 @@ impl<S: DualKind> TeamMethod for DualMethod<S> {
     fn stop_cadence(&self, _: &S) -> (u64, u32) {
         CADENCE
     }
+
+    /// The fast variant: its robots' constraints are their own, so a relay is an agent
+    /// without a column ([`FastDualAgent::relay`]); the paper variant's robot rows are
+    /// every robot's copy of every robot's constraint, and take no relays.
+    fn parts(&self, settings: &S) -> Option<PartLayout> {
+        (settings.variant() == DualVariant::Fast).then_some(PartLayout::Prefix)
+    }
 }
 
 /// The certificate is checked every round: its disagreement level changes every round (see
@@ -317,17 +325,23 @@ impl<'a> DualTeam<'a> {
     }
 }
 
+impl DualTeam<'_> {
+    fn params(&self) -> DualParams {
+        DualParams {
+            rho: self.params.rho,
+            update: self.update,
+            diameter: self.params.diameter,
+            tolerance: self.params.tolerance,
+        }
+    }
+}
+
 impl TeamBuilder for DualTeam<'_> {
     fn agent(&self, init: AgentInit) -> Box<dyn AgentAlgorithm> {
         let allowed: Vec<bool> = (0..self.costs.tasks())
             .map(|t| self.costs.is_allowed(init.index, t))
             .collect();
-        let params = DualParams {
-            rho: self.params.rho,
-            update: self.update,
-            diameter: self.params.diameter,
-            tolerance: self.params.tolerance,
-        };
+        let params = self.params();
         let (index, robots, case, degree) = (init.index, init.robots, init.case, init.degree);
         match self.variant {
             DualVariant::Fast => Box::new(FastDualAgent::new(
@@ -343,6 +357,24 @@ impl TeamBuilder for DualTeam<'_> {
                 DualAgent::new(index, init.costs, robots, case, degree, params)
                     .with_allowed(allowed),
             ),
+        }
+    }
+
+    /// The fast variant's relay (the paper variant's team takes none: [`DualMethod::parts`];
+    /// it gets the default, an agent at the first robot's place).
+    fn relay(&self, init: AgentInit) -> Box<dyn AgentAlgorithm> {
+        match self.variant {
+            DualVariant::Fast => Box::new(FastDualAgent::relay(
+                init.robots,
+                init.costs.len(),
+                init.case,
+                init.degree,
+                self.params(),
+            )),
+            DualVariant::Paper => {
+                let costs = vec![0.0; init.costs.len()];
+                self.agent(AgentInit { costs, ..init })
+            }
         }
     }
 }

@@ -251,11 +251,22 @@ impl Snapshot {
         }
     }
 
-    /// After merging step `step`'s messages and deciding the robot's `task`: relaxes its
-    /// own constraints (its `costs`, centred, and `allowed` tasks), notes whether the
-    /// potentials stood still, settles the snapshot that has flooded for `P` rounds and
-    /// starts the next one. Every robot does the same at the same steps.
-    pub fn advance(&mut self, step: u64, task: usize, costs: &[f64], allowed: &[bool]) {
+    /// Forgets everything of the last episode (its potentials were lowered for other
+    /// costs, its claims are of other tasks): the state of a new snapshot.
+    pub fn restart(&mut self) {
+        self.potentials.fill(0.0);
+        self.before.fill(0.0);
+        self.stable = false;
+        self.flooding = Claims::empty(self.potentials.len());
+        self.settled = Claims::empty(self.potentials.len());
+    }
+
+    /// After merging step `step`'s messages and deciding the robot's `task` (`None`: it
+    /// relays, with no constraint and no claim of its own): relaxes its own constraints
+    /// (its `costs`, centred, and `allowed` tasks), notes whether the potentials stood
+    /// still, settles the snapshot that has flooded for `P` rounds and starts the next one.
+    /// Every robot does the same at the same steps.
+    pub fn advance(&mut self, step: u64, task: Option<usize>, costs: &[f64], allowed: &[bool]) {
         let settles = step > 0 && step.is_multiple_of(self.period);
         let restart = self.reset.is_some_and(|every| {
             step > 0
@@ -267,12 +278,14 @@ impl Snapshot {
             self.potentials.fill(0.0);
             self.stable = false;
         } else {
-            let best = (0..costs.len())
-                .filter(|&t| allowed[t] && t != task)
-                .map(|t| self.potentials[t] + costs[t] - costs[task])
-                .fold(f64::INFINITY, f64::min);
-            if best < self.potentials[task] - self.epsilon {
-                self.potentials[task] = best;
+            if let Some(task) = task {
+                let best = (0..costs.len())
+                    .filter(|&t| allowed[t] && t != task)
+                    .map(|t| self.potentials[t] + costs[t] - costs[task])
+                    .fold(f64::INFINITY, f64::min);
+                if best < self.potentials[task] - self.epsilon {
+                    self.potentials[task] = best;
+                }
             }
             self.stable = self.potentials == self.before;
         }
@@ -285,8 +298,20 @@ impl Snapshot {
         let code = self.own_code();
         let next = &mut self.flooding;
         next.claims.fill(UNCLAIMED);
-        next.claims[task] = code;
-        next.task = Some(task);
+        if let Some(task) = task {
+            next.claims[task] = code;
+        }
+        next.task = task;
+    }
+
+    /// A relay's slack: 0 when its potentials stood still and the settled snapshot claims
+    /// every task (it has no constraint of its own to meet), ∞ otherwise.
+    pub fn relay_slack(&self) -> f64 {
+        if self.stable && !self.settled.claims.contains(&UNCLAIMED) {
+            0.0
+        } else {
+            f64::INFINITY
+        }
     }
 
     /// Writes the potentials and the snapshot being flooded into the message's section.
@@ -359,7 +384,7 @@ mod tests {
                         robot.merge(step, &gathered[j]);
                     }
                 }
-                robot.advance(step, tasks_of[i], &costs[i], &allowed);
+                robot.advance(step, Some(tasks_of[i]), &costs[i], &allowed);
                 robot.write(&mut sections[i]);
                 round.push(robot.slack(tasks_of[i], &costs[i], &allowed, case));
             }

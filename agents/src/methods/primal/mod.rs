@@ -20,6 +20,7 @@ use crate::method::info::{
     ALL_STOPS, Certification, Fig2Graphs, Memory, MethodInfo, Numbers, PaperFacts, ReportText,
     Role, TEAM_STATE, per_agent,
 };
+use crate::method::masked::PartLayout;
 use crate::method::team::{
     AgentInit, Decisions, Refusal, RunOption, TeamBuilder, TeamContext, TeamMethod,
 };
@@ -76,11 +77,14 @@ pub struct PrimalMethod;
 impl TeamMethod for PrimalMethod {
     type Settings = PrimalSettings;
     const PENALTY: bool = true;
-    const NEW_COSTS: bool = true;
-    const MASKABLE: bool = true;
 
     fn payload_len(&self, _: &PrimalSettings, robots: usize, tasks: usize) -> usize {
         robots * tasks
+    }
+
+    /// Both variants: their message is the team's assignment matrix.
+    fn parts(&self, _: &PrimalSettings) -> Option<PartLayout> {
+        Some(PartLayout::Block)
     }
 
     /// The paper's variant: [`crate::methods::rho::default_rho`]; the fast one:
