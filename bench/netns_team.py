@@ -6,7 +6,7 @@
 
 Makes `--hosts` network namespaces on a bridge (veth pairs, addresses 10.232.0.K/24, no
 route anywhere else), and for each run writes a team file (random costs from the run's seed,
-the primal method, the agents split evenly over the hosts), starts in every namespace
+the primal method or `--method`, the agents split evenly over the hosts), starts in every namespace
 `admm-ta host --team T --name hK` and its agents (`admm-ta agent --team T --robot I`), waits,
 and runs `admm-ta collect --check --json`. Prints one line per run (certified and optimal,
 wall time from the first process started to the last one ended, round p50/p99 from the
@@ -63,7 +63,7 @@ def team_file(path, args, hosts, run, seed):
         f'run = "{run}"', f"robots = {n}", 'costs = "random"', f"tasks = {n}",
         f"seed = {seed}", f'topology = "{args.topology}"', 'results = "results"',
         f"startup_timeout = {args.startup_timeout}", f"round_timeout = {args.round_timeout}",
-        f'transport = "{args.transport}"',
+        f'transport = "{args.transport}"', f'method = "{args.method}"',
     ]
     first = 0
     for h, (_, address) in enumerate(hosts):
@@ -167,6 +167,7 @@ def main():
     parser.add_argument("--hosts", type=int, default=4)
     parser.add_argument("--transport", choices=["zenoh", "mixed"], default="zenoh")
     parser.add_argument("--topology", default="random:0.1")
+    parser.add_argument("--method", default="primal", help="the team's method (dual, …)")
     parser.add_argument("--round-timeout", type=float, default=10.0)
     parser.add_argument("--startup-timeout", type=float, default=60.0)
     parser.add_argument("--runs", type=int, default=1)

@@ -90,13 +90,14 @@ def run_sequence(team, sequences):
     """Latencies and rounds per named sequence of episodes."""
     out = {}
     for name, episodes in sequences:
-        times, rounds = [], []
+        times, rounds, sent = [], [], []
         for k, rows in enumerate(episodes):
             elapsed, answers = team.episode(rows)
             check(answers, f"{name} episode {k}")
             times.append(elapsed)
             rounds.append(answers[0]["rounds"])
-        out[name] = (times, rounds, answers[0]["agreement_rounds"])
+            sent.append(answers[0]["sent_bytes"])
+        out[name] = (times, rounds, answers[0]["agreement_rounds"], sent)
     return out
 
 
@@ -109,14 +110,16 @@ def main():
     parser.add_argument("--transport", default="ipc")
     parser.add_argument("--solves", type=int, default=5)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--method", default="primal",
+                        help="the team's method (and the one-shot solve's): primal, dual, inexact-dual")
     parser.add_argument("--team-key", action="append", default=[],
                         help="an extra line of the team file (primal_variant = \"paper\")")
     args = parser.parse_args()
     directory = tempfile.mkdtemp(prefix="admm-ta-standing-")
     print(f"| robots | warm episode p50 / p99 (drift) | warm p50 (redrawn) | rounds warm / cold "
           f"(drift) | rounds warm / cold (redrawn) | agreement rounds | one-shot solve p50 "
-          f"| warm / one-shot |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+          f"| warm / one-shot | sent per robot per episode (warm drift p50) |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for n in [int(x) for x in args.robots.split(",")]:
         rng = random.Random(args.seed * 1000 + n)
         base = [[rng.random() for _ in range(n)] for _ in range(n)]
@@ -131,7 +134,7 @@ def main():
         for warm in (True, False):
             run = f"st{os.getpid() % 100000}-{n}-{'w' if warm else 'c'}"
             team = Team(args.binary, directory, run, n, args.topology, args.transport, warm,
-                        args.seed, args.team_key)
+                        args.seed, [f'method = "{args.method}"'] + args.team_key)
             try:
                 # An untimed first episode on the base costs: the sidecars join meanwhile.
                 check(team.episode(base)[1], "first episode")
@@ -143,16 +146,18 @@ def main():
         with open(csv, "w", encoding="utf-8") as f:
             for r in drift[-1]:
                 f.write(",".join(repr(v) for v in r) + "\n")
-        solves = []
+        solves = [float("nan")]
         for _ in range(args.solves):
             started = time.perf_counter()
             done = subprocess.run([args.binary, "solve", "--costs", csv, "--transport",
                                    args.transport, "--topology", args.topology, "--seed",
-                                   str(args.seed)], capture_output=True, text=True)
+                                   str(args.seed), "--method", args.method],
+                                  capture_output=True, text=True)
             solves.append(time.perf_counter() - started)
+            solves = [v for v in solves if v == v]
             if done.returncode != 0:
                 raise SystemExit(f"solve failed: {done.stderr}")
-        warm_drift, warm_rounds, agreement = results[True]["drift"]
+        warm_drift, warm_rounds, agreement, warm_sent = results[True]["drift"]
         warm_redrawn = results[True]["redrawn"]
         cold_drift = results[False]["drift"]
         cold_redrawn = results[False]["redrawn"]
@@ -163,7 +168,8 @@ def main():
               f"| {statistics.median(warm_rounds):.0f} / {statistics.median(cold_drift[1]):.0f} "
               f"| {statistics.median(warm_redrawn[1]):.0f} / "
               f"{statistics.median(cold_redrawn[1]):.0f} | {agreement} "
-              f"| {ms(solve_p50)} | {statistics.median(warm_drift) / solve_p50:.3f} |",
+              f"| {ms(solve_p50)} | {statistics.median(warm_drift) / solve_p50:.3f} "
+              f"| {statistics.median(warm_sent) / 1e3:.1f} kB |",
               flush=True)
     return 0
 

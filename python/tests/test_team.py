@@ -1,6 +1,7 @@
 """admm_ta.TeamMember: robots that keep their own costs, one member per thread as separate
 robot programs would be, every episode the optimum of the stacked rows (scipy as the
-oracle), bad rows refused without touching the team, unavailable robots relaying."""
+oracle), bad rows refused without touching the team, unavailable robots relaying; the
+primal and both dual methods."""
 
 import os
 import threading
@@ -56,9 +57,13 @@ def run_team(team, robots, script):
     return answers
 
 
-def test_every_episode_is_the_optimum_of_the_stacked_rows(tmp_path):
+METHODS = ["primal", "dual", "inexact-dual"]
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_every_episode_is_the_optimum_of_the_stacked_rows(tmp_path, method):
     n, m = 6, 4
-    team = team_file(tmp_path, "pyteam", n, m)
+    team = team_file(tmp_path, f"pyteam{method[:2]}", n, m, f'method = "{method}"\n')
     rng = np.random.default_rng(5)
     episodes = [rng.random((n, m)).tolist() for _ in range(3)]
     ints = rng.integers(0, 3, (n, m)).astype(float).tolist()
@@ -86,9 +91,11 @@ def test_every_episode_is_the_optimum_of_the_stacked_rows(tmp_path):
         assert [a["task"] for a in views] == views[0]["assignment"]
 
 
-def test_an_unavailable_robot_relays(tmp_path):
+@pytest.mark.parametrize("method", METHODS)
+def test_an_unavailable_robot_relays(tmp_path, method):
     n, m = 5, 4
-    team = team_file(tmp_path, "pyrelay", n, m, 'maximize = true\n')
+    extra = f'maximize = true\nmethod = "{method}"\n'
+    team = team_file(tmp_path, f"pyrelay{method[:2]}", n, m, extra)
     rows = np.random.default_rng(9).random((n, m)).tolist()
 
     def script(member, i):

@@ -351,6 +351,21 @@ impl Episodes {
         part: Participation,
         joiners: &[usize],
     ) -> Result<Outcome, EpisodeError> {
+        let first = self.rounds.as_ref().map(RoundLoop::round);
+        let mut outcome = self.agree_and_solve(exchange, row, part, joiners)?;
+        // One message a round (the roster's first round, if it was this episode's, too).
+        let rounds = self.round() + 1 - first.map_or(0, |r| r + 1);
+        outcome.sent_bytes = rounds * (self.message.len() * size_of::<f64>()) as u64;
+        Ok(outcome)
+    }
+
+    fn agree_and_solve(
+        &mut self,
+        exchange: &mut dyn Exchange,
+        row: Option<&[Option<f64>]>,
+        part: Participation,
+        joiners: &[usize],
+    ) -> Result<Outcome, EpisodeError> {
         let opening = self.open(exchange, row, part, joiners)?;
         let change = change(
             &self.settings.graph,
@@ -370,6 +385,7 @@ impl Episodes {
                     certified: false,
                     rounds: 0,
                     agreement_rounds,
+                    sent_bytes: 0,
                     closing: None,
                     unsolved: Some(why),
                     infeasible,
@@ -384,6 +400,7 @@ impl Episodes {
             certified,
             rounds,
             agreement_rounds: agreement_rounds * 2 + 1,
+            sent_bytes: 0,
             closing: Some(closing),
             unsolved: None,
             infeasible: false,

@@ -17,6 +17,8 @@ pub(super) struct Outcome {
     pub(super) certified: bool,
     pub(super) rounds: u64,
     pub(super) agreement_rounds: u64,
+    /// Bytes of round messages it sent.
+    pub(super) sent_bytes: u64,
     pub(super) closing: Option<Closing>,
     /// Why nothing was solved.
     pub(super) unsolved: Option<String>,
@@ -52,6 +54,7 @@ impl Outcome {
             certified: self.certified && solved,
             rounds: self.rounds,
             agreement_rounds: self.agreement_rounds,
+            sent_bytes: self.sent_bytes,
             cost: cost.filter(|c| c.is_finite() && solved),
             total_cost: total.filter(|t| t.is_finite()),
             assignment: self

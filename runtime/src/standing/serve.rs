@@ -5,7 +5,8 @@
 //! **Out** (standard output), one line each (nothing else: rows written before the sidecar
 //! has joined its team wait in the pipe):
 //! * per episode, the [`Answer`]: `{"episode": k, "robot": I, "task": j or null,
-//!   "certified": bool, "rounds": r, "agreement_rounds": a, "cost": c, "total_cost": C,
+//!   "certified": bool, "rounds": r, "agreement_rounds": a, "sent_bytes": b, "cost": c,
+//!   "total_cost": C,
 //!   "assignment": [...], "feasible": bool, "ms": t}`, plus, when it applies, `"missing"`,
 //!   `"unavailable"`, `"left"`, `"leave_refused"`, `"lost"`, `"joined"` and `"crashed"`
 //!   (lists of robots: the roster's changes);

@@ -44,9 +44,20 @@ fn stacked_rows_optimal(method: &str, n: usize, m: usize) {
         }
     }
     cases.insert(2, ("distance, moved a little", drift));
+    // One message of the team's size a round: the dual's prices and certificate, 2m + 1
+    // values here, or 2n for the closing's costs and tasks (the primal's: n·m).
+    let message = 8 * (2 * m + 1).max(2 * n) as u64;
     for (case, rows) in &cases {
         let answers = episode(&mut team_of, rows);
         assert_optimal(&answers, rows, false, &what(case));
+        let rounds = answers[0]["rounds"].as_u64().unwrap();
+        let agreement = answers[0]["agreement_rounds"].as_u64().unwrap();
+        assert_eq!(
+            answers[0]["sent_bytes"],
+            (rounds + agreement) * message,
+            "{}",
+            what(case)
+        );
     }
     // Robot 2 unavailable: the others solve, it relays.
     let full = distances(&mut rng, n, m.min(n - 1));

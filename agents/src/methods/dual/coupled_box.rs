@@ -43,14 +43,19 @@ pub fn solve_simplex_box(
     x: &mut [f64],
 ) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut jumps = false;
     for t in 0..tasks {
         let (jump, offset) = response(t);
         if offset > f64::NEG_INFINITY {
             lo = lo.min(offset - 1.0);
             hi = hi.max(offset).max(jump);
+            jumps |= jump > f64::NEG_INFINITY;
         }
     }
     assert!(lo.is_finite(), "the simplex needs an entry that can be 1");
+    if !jumps {
+        return project_onto_simplex(tasks, |t| response(t).1, scratch, x);
+    }
     // Below `lo` some entry is 1 (G ≤ 0); above `hi` every entry is 0 (G = 1 > 0).
     let root = Root {
         slope: 0.0,
@@ -59,6 +64,39 @@ pub fn solve_simplex_box(
         hi: hi + 1.0,
     };
     root.solve(tasks, response, scratch, x);
+}
+
+/// `Σ_t x_t(τ) = 1` without jumps, `x_t = max(offset_t − τ, 0)` (`offset_t = −∞`: fixed at
+/// 0): the Euclidean projection of the offsets onto the simplex, by Michelot's method: `τ`
+/// is the mean excess over 1 of the entries above the last `τ`, until they stay the same
+/// (`τ` only grows, the entries above it only drop out, and the largest never does). A few
+/// passes of `O(m)` instead of a sort of the breakpoints.
+fn project_onto_simplex(
+    tasks: usize,
+    offset: impl Fn(usize) -> f64,
+    scratch: &mut Vec<f64>,
+    x: &mut [f64],
+) {
+    scratch.clear();
+    scratch.extend((0..tasks).map(offset));
+    // The entries above τ set the next τ; when they are the same as last time, τ is the root.
+    // Every pass but the last drops an entry (a bound against rounding all the same).
+    let (mut tau, mut above) = (f64::NEG_INFINITY, usize::MAX);
+    for _ in 0..=tasks {
+        let (mut sum, mut count) = (0.0, 0usize);
+        for &o in scratch.iter().filter(|&&o| o > tau) {
+            sum += o;
+            count += 1;
+        }
+        if count == above {
+            break;
+        }
+        above = count;
+        tau = (sum - 1.0) / count as f64;
+    }
+    for (slot, &o) in x.iter_mut().zip(scratch.iter()) {
+        *slot = (o - tau).clamp(0.0, 1.0);
+    }
 }
 
 /// `G(τ) = slope · τ − base − Σ_t x_t(τ)` on `[lo, hi]`, with `G(lo) ≤ 0`.

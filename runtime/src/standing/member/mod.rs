@@ -431,6 +431,7 @@ impl TeamMember {
             certified: false,
             rounds: 0,
             agreement_rounds: 0,
+            sent_bytes: 0,
             cost: None,
             total_cost: None,
             assignment: None,
