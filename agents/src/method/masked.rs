@@ -23,17 +23,7 @@
 
 use crate::agent::{ConsensusAgent, Inbox, NewCostsError, PayloadError, StepReport, check_length};
 use crate::method::agent::MethodAgent;
-
-/// How a method's message of a part sits in the team's message.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PartLayout {
-    /// The message is the team's `m × n` assignment matrix (column-major tasks × robots):
-    /// the part's block, in place.
-    Block,
-    /// The part's own message (never longer than the whole team's: the method's payload
-    /// grows with robots and tasks) as the first values of the team's.
-    Prefix,
-}
+pub use crate::method::team::PartLayout;
 
 /// Which robots take part and which tasks exist (both sorted, both non-empty).
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -7,7 +7,6 @@
 use crate::agent::AgentAlgorithm;
 use crate::certify::local_stop::{CHECK_AFTER, CHECK_EVERY};
 use crate::certify::stopping::StopRule;
-use crate::method::masked::PartLayout;
 use crate::method::settings::{GivenSettings, MethodSettings, SettingError, SettingSpec};
 use crate::methods::rho::RhoSchedule;
 use crate::problem::{AssignmentCase, CostMatrix, TaskAssignmentProblem};
@@ -85,6 +84,17 @@ pub struct Refusal {
     pub needs: &'static SettingSpec,
     pub value: &'static str,
     pub because: &'static str,
+}
+
+/// How a method's message of a part sits in the team's message ([`crate::method::masked`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PartLayout {
+    /// The message is the team's `m × n` assignment matrix (column-major tasks × robots):
+    /// the part's block, in place.
+    Block,
+    /// The part's own message (never longer than the whole team's: the method's payload
+    /// grows with robots and tasks) as the first values of the team's.
+    Prefix,
 }
 
 /// A method whose team of agents solves the problem, implemented once per method; runners

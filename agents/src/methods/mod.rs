@@ -105,7 +105,7 @@ impl Method {
 
     /// Whether a standing team whose robots keep their costs private may run it with its
     /// default settings, and how ([`crate::method::team::TeamMethod::parts`]).
-    pub fn parts(self) -> Option<crate::method::masked::PartLayout> {
+    pub fn parts(self) -> Option<crate::method::team::PartLayout> {
         self.team().and_then(|t| t.parts())
     }
 

@@ -23,8 +23,8 @@ use crate::method::info::{
     Certification, Fig2Graphs, Memory, MethodInfo, Numbers, OWN_STATE_STOPS, PaperFacts,
     ReportText, Role, TEAM_STATE, per_agent,
 };
-use crate::method::masked::PartLayout;
 use crate::method::settings::{MethodSettings, Setting, SettingKind, SettingSpec, SettingValue};
+use crate::method::team::PartLayout;
 use crate::method::team::{
     AgentInit, Refusal, RunOption, TeamBuilder, TeamContext, TeamMethod, TeamParams,
 };

@@ -20,7 +20,7 @@ use crate::method::info::{
     ALL_STOPS, Certification, Fig2Graphs, Memory, MethodInfo, Numbers, PaperFacts, ReportText,
     Role, TEAM_STATE, per_agent,
 };
-use crate::method::masked::PartLayout;
+use crate::method::team::PartLayout;
 use crate::method::team::{
     AgentInit, Decisions, Refusal, RunOption, TeamBuilder, TeamContext, TeamMethod,
 };
