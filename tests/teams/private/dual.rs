@@ -123,32 +123,43 @@ fn mean(v: &[u64]) -> f64 {
     v.iter().sum::<u64>() as f64 / v.len().max(1) as f64
 }
 
-/// 100 episodes of a 10-robot ring, both dual methods, Case 1 and Case 2: every episode the
-/// optimum, and warm episodes take fewer rounds than cold ones.
+/// A team of `method` on `topology` (the team's `seed`), `episodes` drifting episodes: every one optimal, warm
+/// episodes fewer rounds than cold ones on average, nothing left in shared memory.
+fn warm_beats_cold(
+    method: &str,
+    (n, m): (usize, usize),
+    topology: &str,
+    seed: u64,
+    episodes: usize,
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("pd{n}{}{m}-{}", &method[..2], std::process::id());
+    let extra = format!("topology = \"{topology}\"\nseed = {seed}\nmethod = \"{method}\"\n");
+    let team = team_file(dir.path(), &run, n, m, &extra);
+    let mut team_of = start_team(&team, n);
+    let what = format!("{method} {n}×{m} on {topology}");
+    let (cold, warm) = drifting_episodes(&mut team_of, n, m, episodes, &what);
+    eprintln!(
+        "{what}: cold {:.1} rounds (mean of {}), warm {:.1} (mean of {})",
+        mean(&cold),
+        cold.len(),
+        mean(&warm),
+        warm.len()
+    );
+    assert!(
+        mean(&warm) < mean(&cold),
+        "{what}: warm {warm:?}, cold {cold:?}"
+    );
+    finish_all(team_of);
+    assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
+}
+
+/// 100 episodes of a 10-robot ring, both dual methods, Case 1 and Case 2.
 #[test]
 fn a_hundred_dual_episodes_of_ten_robots_on_a_ring() {
     for method in ["dual", "inexact-dual"] {
-        for (n, m) in [(10, 10), (10, 7)] {
-            let dir = tempfile::tempdir().unwrap();
-            let run = format!("pd100{}{m}-{}", &method[..2], std::process::id());
-            let extra = format!("topology = \"ring\"\nseed = 9\nmethod = \"{method}\"\n");
-            let team = team_file(dir.path(), &run, n, m, &extra);
-            let mut team_of = start_team(&team, n);
-            let what = format!("{method} {n}×{m}");
-            let (cold, warm) = drifting_episodes(&mut team_of, n, m, 100, &what);
-            eprintln!(
-                "{what}: cold {:.1} rounds (mean of {}), warm {:.1} (mean of {})",
-                mean(&cold),
-                cold.len(),
-                mean(&warm),
-                warm.len()
-            );
-            assert!(
-                mean(&warm) < mean(&cold),
-                "{what}: warm {warm:?}, cold {cold:?}"
-            );
-            finish_all(team_of);
-            assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
+        for shape in [(10, 10), (10, 7)] {
+            warm_beats_cold(method, shape, "ring", 9, 100);
         }
     }
 }
@@ -157,20 +168,6 @@ fn a_hundred_dual_episodes_of_ten_robots_on_a_ring() {
 #[test]
 fn twenty_dual_episodes_of_fifty_robots() {
     for (method, m) in [("dual", 50), ("inexact-dual", 40)] {
-        let n = 50;
-        let dir = tempfile::tempdir().unwrap();
-        let run = format!("pd50{}{m}-{}", &method[..2], std::process::id());
-        let extra = format!("topology = \"random:0.1\"\nseed = 4\nmethod = \"{method}\"\n");
-        let team = team_file(dir.path(), &run, n, m, &extra);
-        let mut team_of = start_team(&team, n);
-        let what = format!("{method} {n}×{m}");
-        let (cold, warm) = drifting_episodes(&mut team_of, n, m, 20, &what);
-        eprintln!("{what}: cold {cold:?}, warm {warm:?}");
-        assert!(
-            mean(&warm) < mean(&cold),
-            "{what}: warm {warm:?}, cold {cold:?}"
-        );
-        finish_all(team_of);
-        assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
+        warm_beats_cold(method, (50, m), "random:0.1", 4, 20);
     }
 }

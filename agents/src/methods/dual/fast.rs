@@ -194,7 +194,6 @@ impl FastDualAgent {
             params,
         );
         agent.relay = true;
-        agent.costs.fill(0.0);
         agent
     }
 
