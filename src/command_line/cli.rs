@@ -97,6 +97,16 @@ pub struct AgentArgs {
     /// out, episode after episode; end of input leaves the team (see docs/standing-teams.md).
     #[arg(long, requires = "team", conflicts_with = "row")]
     pub serve: bool,
+    /// As --serve, over ROS 2 topics (std_msgs/String, one JSON line each): rows from
+    /// `/robotI/admm_ta/costs`, answers to `/robotI/admm_ta/assignment` (`/<name>/…` when
+    /// the cost file names the robots); `{"leave": true}` leaves. Reads ROS_DOMAIN_ID and
+    /// ROS_AUTOMATIC_DISCOVERY_RANGE (see docs/ros2.md). Needs a build with `--features ros2`.
+    #[arg(long, requires = "team", conflicts_with_all = ["row", "serve"])]
+    pub ros2: bool,
+    /// The ROS 2 namespace of the member's node and topics (default: `/robotI`, or the
+    /// robot's name).
+    #[arg(long, requires = "ros2", value_name = "NAMESPACE")]
+    pub ros2_namespace: Option<String>,
     /// One episode of a private team with this robot's row from FILE (`-`: standard input;
     /// one CSV line or a JSON list, null or inf for a forbidden task): prints the answer
     /// and leaves with the others.

@@ -22,6 +22,8 @@
 //!   machine; `zenoh_plane`: Zenoh tokens across machines);
 //! * [`serve`]: `admm-ta agent --team FILE --robot I --serve`, the same over JSON lines on
 //!   standard input and output, for robot programs in any language;
+//! * `ros2` (feature `ros2`): `--ros2`, the same over ROS 2 topics, for robot programs that
+//!   are ROS 2 nodes;
 //! * [`answer`]: what a robot gets back per episode, and the rows it cannot give;
 //! * [`one_process`]: a standing team in one process, a thread per robot (benchmarks,
 //!   simulations; its robots do not come and go);
@@ -35,6 +37,8 @@ pub mod member;
 pub mod one_process;
 mod outcome;
 pub(crate) mod plane;
+#[cfg(feature = "ros2")]
+pub mod ros2;
 pub mod roster;
 pub mod serve;
 pub(crate) mod zenoh_plane;

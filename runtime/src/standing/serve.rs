@@ -23,7 +23,8 @@
 //! `null` for a task this robot may not take, one per task of the team file (`M`); an
 //! episode with fewer tasks says so, `{"costs": [c_0, …, c_{k−1}], "tasks": k}` (the first
 //! `k` tasks exist, the same `k` at every robot); or `{"available": false}`: this robot takes
-//! no task this episode and relays for its neighbours. No row within the team file's
+//! no task this episode and relays for its neighbours; or `{"leave": true}`: the robot leaves
+//! as at the end of input (below) and the sidecar exits 0. No row within the team file's
 //! `episode_timeout`: every robot's answer names this one in `missing`, and the team solves
 //! nothing (`on_failure = "abort"`, the default) or solves without it (`"continue"`). End of
 //! input: the robot leaves at the next episode boundary (it relays in that episode) and the
@@ -64,15 +65,21 @@ struct RowLine {
     /// The episode's tasks, when fewer than the team's (the row then has that many costs).
     #[serde(default)]
     tasks: Option<usize>,
+    /// The robot leaves the team (as at the end of input).
+    #[serde(default)]
+    leave: Option<bool>,
 }
 
 /// What a robot program's line asks for.
 enum Request {
     Row(Vec<Option<f64>>),
     Unavailable,
+    Leave,
 }
 
-enum Input {
+/// What the robot program sent: the input of [`serve_from`] (standard input's lines, or the
+/// messages of a ROS 2 topic).
+pub(crate) enum Input {
     Line(String),
     /// A line that is no text, or too long: an error line, and the next line.
     Bad(String),
@@ -81,7 +88,7 @@ enum Input {
 }
 
 /// Reads `input` line by line on its own thread (a blocking read has no deadline).
-fn read_lines(input: impl BufRead + Send + 'static) -> Receiver<Input> {
+pub(crate) fn read_lines(input: impl BufRead + Send + 'static) -> Receiver<Input> {
     let (sender, receiver) = sync_channel(4);
     std::thread::Builder::new()
         .name("serve-input".into())
@@ -136,7 +143,12 @@ fn row_error(episode: u64, robot: usize, error: &str) -> serde_json::Value {
 }
 
 /// The robot program learns why its robot stopped (the same line goes to standard error).
-fn tell_failure(output: &mut dyn Write, episode: u64, robot: usize, error: &MemberError) {
+pub(crate) fn tell_failure(
+    output: &mut dyn Write,
+    episode: u64,
+    robot: usize,
+    error: &MemberError,
+) {
     let line = serde_json::json!({
         "error": error.text(),
         "failed": true,
@@ -159,6 +171,8 @@ enum BadLine {
     Neither,
     #[error("an unavailable robot gives no costs")]
     Both,
+    #[error("a robot that leaves gives no costs and no availability")]
+    LeaveWithRow,
     #[error(
         "a row for episode {given}, but the team is at episode {current} (a row after its episode's deadline?)"
     )]
@@ -176,6 +190,13 @@ fn parse_line(member: &TeamMember, line: &str, current: u64) -> Result<Request, 
     let line: RowLine = serde_json::from_str(line)?;
     if let Some(given) = line.episode.filter(|&given| given != current) {
         return Err(BadLine::OtherEpisode { given, current });
+    }
+    match line.leave {
+        Some(true) if line.costs.is_some() || line.available.is_some() => {
+            return Err(BadLine::LeaveWithRow);
+        }
+        Some(true) => return Ok(Request::Leave),
+        _ => {}
     }
     match (line.costs, line.available) {
         (Some(_), Some(false)) => Err(BadLine::Both),
@@ -330,6 +351,10 @@ fn serve_episode(
                     let answer = match request {
                         Request::Row(row) => member.assign(&row),
                         Request::Unavailable => member.unavailable(),
+                        Request::Leave => {
+                            leave_for_good(member, output, true)?;
+                            return Ok(Next::End(ServeEnd::Left));
+                        }
                     };
                     let answer = answer.inspect_err(|e| tell_failure(output, episode, id, e))?;
                     return Ok(Next::Answer(Box::new(answer)));
@@ -380,6 +405,18 @@ pub fn serve(
     // Termination signals stop the team cleanly, between episodes too.
     let _signals = admm_ta_transport::signals::install();
     let mut member = TeamMember::join(team_path, id)?;
+    serve_from(&mut member, read_lines(input), output)
+}
+
+/// Serves `member` to the program whose lines come from `lines` and whose answers go to
+/// `output`, one JSON line each, until the program leaves, the team goes on without the
+/// robot, or the team fails. The caller installs the signal handling.
+pub(crate) fn serve_from(
+    member: &mut TeamMember,
+    lines: Receiver<Input>,
+    output: &mut dyn Write,
+) -> Result<ServeEnd, MemberError> {
+    let id = member.id();
     tracing::info!(
         robot = id,
         robots = member.robots(),
@@ -387,9 +424,8 @@ pub fn serve(
         roster = ?member.roster(),
         "joined the team: reading rows"
     );
-    let lines = read_lines(input);
     loop {
-        let answer = match serve_episode(&mut member, &lines, output)? {
+        let answer = match serve_episode(member, &lines, output)? {
             Next::Answer(answer) => answer,
             Next::End(end) => return Ok(end),
         };
@@ -404,7 +440,7 @@ pub fn serve(
             return Err(cut);
         }
         if !delivered {
-            leave_for_good(&mut member, output, false)?;
+            leave_for_good(member, output, false)?;
             return Ok(ServeEnd::OutputClosed);
         }
     }

@@ -21,6 +21,26 @@ fn robot_number(team: &std::path::Path, robot: RobotRef) -> Result<usize> {
     })
 }
 
+/// Serves robot `id` over ROS 2 topics.
+#[cfg(feature = "ros2")]
+fn serve_ros2(
+    team: &std::path::Path,
+    id: usize,
+    namespace: Option<&str>,
+) -> Result<Result<(), crate::runtime::process::member_error::MemberError>> {
+    Ok(crate::runtime::standing::ros2::serve_ros2(team, id, namespace).map(|_| ()))
+}
+
+/// Without the feature, `--ros2` is a usage error that says how to get it.
+#[cfg(not(feature = "ros2"))]
+fn serve_ros2(
+    _team: &std::path::Path,
+    _id: usize,
+    _namespace: Option<&str>,
+) -> Result<Result<(), crate::runtime::process::member_error::MemberError>> {
+    usage_bail!("--ros2: this admm-ta was built without ROS 2 (build it with --features ros2)")
+}
+
 /// Runs the agent. An independently started agent whose team reached the round limit before
 /// any certificate ends with [`Outcome::Uncertified`] (5), as `solve` and `collect` do; an
 /// agent of a launcher's run leaves that to the launcher.
@@ -37,6 +57,16 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
             let stdin = std::io::BufReader::new(std::io::stdin());
             let served = serve::serve(&team, id, stdin, &mut std::io::stdout());
             (id, served.map(|_| ()))
+        }
+        AgentArgs {
+            team: Some(team),
+            robot: Some(robot),
+            ros2: true,
+            ros2_namespace,
+            ..
+        } => {
+            let id = robot_number(&team, robot)?;
+            (id, serve_ros2(&team, id, ros2_namespace.as_deref())?)
         }
         AgentArgs {
             team: Some(team),
@@ -90,6 +120,8 @@ pub fn run(args: AgentArgs) -> Result<Outcome> {
             scenario_digest: Some(digest),
             serve: false,
             row: None,
+            ros2: false,
+            ros2_namespace: None,
         } => {
             let RobotRef::Index(index) = robot else {
                 usage_bail!(

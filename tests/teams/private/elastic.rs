@@ -95,10 +95,15 @@ impl Fleet {
         Episode { answers, rows }
     }
 
-    /// Robot `id`'s program ends: it leaves at the next episode.
+    /// Robot `id`'s program ends: it leaves at the next episode. Odd robots say so,
+    /// `{"leave": true}` with their input still open; even ones close their input.
     fn close(&mut self, id: usize) -> Sidecar {
         let mut s = self.members.remove(&id).unwrap();
-        s.close();
+        if id % 2 == 1 {
+            s.send(r#"{"leave": true}"#);
+        } else {
+            s.close();
+        }
         s
     }
 

@@ -1,0 +1,205 @@
+"""Robots that are ROS 2 nodes: real rclpy nodes (examples/ros2/robot_node.py, separate
+processes) drive a standing team of `admm-ta agent --ros2` members through ROS 2 topics.
+
+Needs rclpy and std_msgs in this environment (`./test` installs the wheels from PyPI) and
+an admm-ta built with `--features ros2` in ADMM_TA_ROS2_BIN (`./test` builds it); without
+either the tests are skipped with the reason. DDS discovery stays on this machine
+(ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST), in a domain of each test's own.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from test_interrupt import alive, team_shm
+from test_team import optimum
+
+rclpy = pytest.importorskip(
+    "rclpy", reason="rclpy is not installed (pip install 'ros-rclpy[fastrtps]' ros-std-msgs)")
+
+ADMM_TA = os.environ.get("ADMM_TA_ROS2_BIN")
+if not ADMM_TA or not os.access(ADMM_TA, os.X_OK):
+    pytest.skip("ADMM_TA_ROS2_BIN names no admm-ta built with --features ros2 (./test sets it)",
+                allow_module_level=True)
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROBOT_NODE = os.path.join(REPO, "examples", "ros2", "robot_node.py")
+_domains = iter(range(1 + os.getpid() % 50, 233))
+_runs = iter(range(1_000_000))
+
+
+def ros_env():
+    """A domain of this test's own, discovery on this machine."""
+    env = dict(os.environ)
+    env["ROS_DOMAIN_ID"] = str(next(_domains))
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    return env
+
+
+def write_team(tmp_path, robots, tasks, extra=""):
+    path = tmp_path / "team.toml"
+    path.write_text(
+        f'run = "ros2-{os.getpid()}-{next(_runs)}"\nrobots = {robots}\n'
+        f'tasks = {tasks}\ncosts = "private"\ntopology = "ring"\n'
+        f'round_timeout = 30.0\nepisode_timeout = 60.0\n{extra}')
+    return path
+
+
+class Team:
+    """The members and the robot nodes of a team, each a process."""
+
+    def __init__(self, tmp_path, robots, tasks, episodes, robot_args=None, extra=""):
+        self.tmp_path, self.robots = tmp_path, robots
+        self.team = write_team(tmp_path, robots, tasks, extra)
+        self.env = ros_env()
+        # The members in one process group, as a terminal's foreground job.
+        self.members = []
+        for i in range(robots):
+            group = self.members[0].pid if self.members else 0
+            self.members.append(subprocess.Popen(
+                [ADMM_TA, "agent", "--team", str(self.team), "--robot", str(i), "--ros2"],
+                env=self.env, stderr=subprocess.PIPE, text=True, process_group=group))
+        self.nodes = [
+            subprocess.Popen([sys.executable, ROBOT_NODE, "--team", str(self.team),
+                              "--robot", str(i), "--episodes", str(episodes), "--range", "1.5",
+                              "--timeout", "90", "--log", str(self.log(i)),
+                              *(robot_args or {}).get(i, [])],
+                             env=self.env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                             text=True)
+            for i in range(robots)]
+
+    def log(self, i):
+        return self.tmp_path / f"robot-{i}.jsonl"
+
+    def entries(self, i):
+        if not self.log(i).exists():
+            return []
+        return [json.loads(line) for line in self.log(i).read_text().splitlines()]
+
+    def wait(self, timeout=300):
+        codes = [p.wait(timeout=timeout) for p in self.nodes + self.members]
+        errors = [p.stderr.read() for p in self.nodes + self.members]
+        return codes, errors
+
+    def kill(self):
+        for p in self.members + self.nodes:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+
+
+@pytest.fixture
+def teams():
+    started = []
+    yield lambda *a, **k: started.append(Team(*a, **k)) or started[-1]
+    for team in started:
+        team.kill()
+
+
+def test_eight_rclpy_robots_drive_a_ring_team_for_twenty_episodes(tmp_path, teams):
+    shm_before = team_shm()
+    robots, tasks, episodes = 8, 6, 20
+    team = teams(tmp_path, robots, tasks, episodes, robot_args={5: ["--bad-row-at", "3"]})
+    codes, errors = team.wait()
+    assert codes == [0] * (2 * robots), "\n".join(errors)
+    rows, answers, row_errors = {}, {}, []
+    for i in range(robots):
+        for entry in team.entries(i):
+            if "row" in entry:
+                rows.setdefault(entry["row"]["episode"], {})[i] = entry["row"]["costs"]
+            elif "error" in entry["answer"]:
+                row_errors.append((i, entry["answer"]))
+            else:
+                answers.setdefault(entry["answer"]["episode"], {})[i] = entry["answer"]
+    assert sorted(answers) == list(range(episodes))
+    for episode in range(episodes):
+        stacked = [rows[episode][i] for i in range(robots)]
+        try:
+            best = optimum(stacked)
+        except ValueError:  # scipy: no feasible assignment (tasks out of battery range)
+            best = float("inf")
+        got = answers[episode]
+        assert sorted(got) == list(range(robots))
+        views = {json.dumps(a["assignment"]) for a in got.values()}
+        assert len(views) == 1, f"episode {episode}: the robots disagree"
+        if best == float("inf"):
+            assert not any(a["feasible"] for a in got.values())
+            continue
+        for i, a in got.items():
+            assert a["certified"] and a["feasible"], (episode, i, a)
+            assert a["total_cost"] == pytest.approx(best, rel=1e-9, abs=1e-9), episode
+            own = a["task"]
+            assert a["cost"] == (None if own is None else pytest.approx(stacked[i][own]))
+    # The bad row: its error on robot 5's answers' topic, and nothing changed.
+    assert len(row_errors) == 1, row_errors
+    robot, error = row_errors[0]
+    assert robot == 5 and error["episode"] == 3 and "costs for 6 tasks" in error["error"]
+    assert team_shm() <= shm_before
+
+
+def test_a_late_subscriber_gets_the_latest_answer_and_ctrl_c_stops_the_team(tmp_path, teams):
+    shm_before = team_shm()
+    robots = 4
+    team = teams(tmp_path, robots, 4, 10_000)
+    deadline = time.monotonic() + 120
+    while not all(sum("answer" in e for e in team.entries(i)) >= 3 for i in range(robots)):
+        assert time.monotonic() < deadline, "no answers"
+        assert all(p.poll() is None for p in team.members), [p.poll() for p in team.members]
+        time.sleep(0.1)
+    latest = subprocess.run(
+        [sys.executable, "-c", LATE_SUBSCRIBER], env=team.env, capture_output=True, text=True,
+        timeout=60)
+    assert latest.returncode == 0, latest.stderr
+    late = json.loads(latest.stdout)
+    assert late["robot"] == 2 and late["episode"] >= 2 and "assignment" in late, late
+    os.killpg(team.members[0].pid, signal.SIGINT)  # Ctrl-C
+    codes = [p.wait(timeout=30) for p in team.members]
+    # The signal's exit code (130), or 0 for one that left in between.
+    assert set(codes) <= {130, 0} and 130 in codes, codes
+    for p in team.nodes:
+        p.send_signal(signal.SIGINT)
+        p.wait(timeout=30)
+    assert not any(alive(p.pid) for p in team.members + team.nodes)
+    assert team_shm() <= shm_before
+    # Each robot program heard why its team stopped.
+    failed = [e["answer"] for i in range(robots) for e in team.entries(i)
+              if e.get("answer", {}).get("failed")]
+    assert failed, "no robot heard that the team stopped"
+
+
+LATE_SUBSCRIBER = """
+import json, sys, time, rclpy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import String
+rclpy.init()
+node = rclpy.create_node("late")
+got = []
+qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                 durability=DurabilityPolicy.TRANSIENT_LOCAL)
+node.create_subscription(String, "/robot2/admm_ta/assignment", lambda m: got.append(m.data), qos)
+end = time.monotonic() + 30
+while not got and time.monotonic() < end:
+    rclpy.spin_once(node, timeout_sec=0.1)
+print(got[0] if got else "null")
+sys.exit(0 if got else 1)
+"""
+
+
+@pytest.mark.parametrize("args, env, said", [
+    (["--ros2-namespace", "3robots"], {}, "ROS 2 namespace"),
+    (["--ros2-namespace", "a//b"], {}, "ROS 2 namespace"),
+    ([], {"ROS_DOMAIN_ID": "999"}, "domain id"),
+    ([], {"ROS_AUTOMATIC_DISCOVERY_RANGE": "EVERYWHERE"}, "ROS_AUTOMATIC_DISCOVERY_RANGE"),
+])
+def test_a_member_refuses_what_ros_2_cannot_take(tmp_path, args, env, said):
+    team = write_team(tmp_path, 2, 2)
+    run = subprocess.run([ADMM_TA, "agent", "--team", str(team), "--robot", "0", "--ros2",
+                          *args], env={**ros_env(), **env}, capture_output=True, text=True,
+                         timeout=30)
+    assert run.returncode == 2, run.stderr
+    assert said in run.stderr and run.stderr.count("\n") == 1, run.stderr
