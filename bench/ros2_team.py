@@ -116,6 +116,7 @@ class Topics:
         end = time.monotonic() + 120
         while any(p.get_subscription_count() == 0 for p in self.rows):
             if time.monotonic() > end:
+                self.kill()
                 sys.exit("the ROS 2 members did not subscribe within 120 s")
             rclpy.spin_once(self.node, timeout_sec=0.05)
 
@@ -123,9 +124,18 @@ class Topics:
         self.inbox.clear()
         for publisher, row in zip(self.rows, rows):
             publisher.publish(String(data=json.dumps({"costs": row})))
+        deadline = time.monotonic() + 120
         while len(self.inbox) < len(self.rows):
+            if time.monotonic() > deadline or any(m.poll() is not None for m in self.members):
+                self.kill()
+                sys.exit("a ROS 2 member exited, or no answer within 120 s")
             rclpy.spin_once(self.node, timeout_sec=1.0)
         return [self.inbox[i] for i in range(len(self.rows))]
+
+    def kill(self):
+        for m in self.members:
+            m.kill()
+            m.wait()
 
     def close(self):
         for publisher in self.rows:
@@ -170,9 +180,9 @@ def main():
     directory = tempfile.mkdtemp(prefix="admm-ta-ros2-bench-")
     print("| robots | pipes p50 / p99 (ms) | ROS 2 p50 / p99 (ms) | ROS 2 − pipes, p50 (ms) |")
     print("| --- | --- | --- | --- |")
-    for robots in [int(r) for r in args.robots.split(",")]:
+    for k, robots in enumerate(int(r) for r in args.robots.split(",")):
         sequence = list(drift(robots, args.episodes, args.seed))
-        run = f"ros2bench-{os.getpid()}-{robots}"
+        run = f"ros2bench-{os.getpid()}-{k}-{robots}"
         pipes, pipe_totals = measure(
             Pipes(args.binary, write_team(directory, run + "p", robots, args.topology,
                                           args.method), robots),

@@ -35,10 +35,12 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 
-# The answers' QoS: the member keeps its latest answer for subscribers that come late.
+# The answers' QoS: the member keeps its latest answer for subscribers that come late
+# (transient local). A depth of 10 keeps an error line that comes just before an answer;
+# answers are told apart by their "episode".
 ANSWERS_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
-    depth=1,
+    depth=10,
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )

@@ -25,7 +25,7 @@
 
 use crate::process::member_error::MemberError;
 use crate::standing::member::TeamMember;
-use crate::standing::serve::{Input, ServeEnd, serve_from, tell_failure};
+use crate::standing::serve::{Input, Lines, ServeEnd, serve_from, tell_failure};
 use crate::team::team_file::Team;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::dds::rustdds::mio1::{Events, Interest, Poll, Token};
@@ -34,10 +34,11 @@ use ros2_client::{
     Context, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher,
     QosProfile, Subscription,
 };
+use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
-use std::sync::mpsc::{SyncSender, sync_channel};
-use std::time::Duration;
+use std::sync::mpsc::RecvTimeoutError;
+use std::time::{Duration, Instant};
 
 /// The node's name, in the robot's namespace.
 pub const NODE_NAME: &str = "admm_ta";
@@ -147,9 +148,16 @@ fn participant() -> Result<DomainParticipantBuilder, Ros2Error> {
 /// starts (DDS's event loops) never take one: a signal that interrupts their `poll` would
 /// end them. This thread's mask comes back afterwards.
 fn with_signals_blocked<T>(build: impl FnOnce() -> T) -> T {
+    struct Restore(libc::sigset_t);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            // SAFETY: the mask saved below; only this thread's mask changes.
+            unsafe { libc::pthread_sigmask(libc::SIG_SETMASK, &self.0, std::ptr::null_mut()) };
+        }
+    }
     // SAFETY: the sets are initialised by sigemptyset before use; pthread_sigmask only
-    // changes this thread's mask, and the old mask is restored.
-    unsafe {
+    // changes this thread's mask, and the guard restores the old one (on a panic too).
+    let _restore = unsafe {
         let mut blocked: libc::sigset_t = std::mem::zeroed();
         let mut old: libc::sigset_t = std::mem::zeroed();
         libc::sigemptyset(&mut blocked);
@@ -157,10 +165,9 @@ fn with_signals_blocked<T>(build: impl FnOnce() -> T) -> T {
             libc::sigaddset(&mut blocked, signal);
         }
         libc::pthread_sigmask(libc::SIG_BLOCK, &blocked, &mut old);
-        let built = build();
-        libc::pthread_sigmask(libc::SIG_SETMASK, &old, std::ptr::null_mut());
-        built
-    }
+        Restore(old)
+    };
+    build()
 }
 
 /// The member's node and its two topics.
@@ -229,36 +236,55 @@ fn face(namespace: &str, parameters: Vec<(&str, ParameterValue)>) -> Result<Face
     })
 }
 
-/// Hands every row message to `lines`, until the serving ends (a message finds the
-/// receiver gone) or the process does.
-fn read_rows(rows: Subscription<String>, lines: SyncSender<Input>) {
-    let mut rows = rows;
-    let registered = Poll::new().and_then(|poll| {
+/// The rows' topic as the robot program's lines, taken in the serving thread itself (no
+/// thread between DDS and the team: one wake-up less per row).
+struct TopicRows {
+    rows: Subscription<String>,
+    poll: Poll,
+    events: Events,
+    /// Messages taken and not yet served (the poll is edge-triggered: a wake-up takes all).
+    taken: VecDeque<Input>,
+}
+
+impl TopicRows {
+    fn new(rows: Subscription<String>) -> Result<Self, Ros2Error> {
+        let mut rows = rows;
+        let poll = Poll::new().map_err(|e| Ros2Error::node("has no poll for its rows", e))?;
         poll.registry()
             .register(&mut rows, Token(0), Interest::READABLE)
-            .map(|()| poll)
-    });
-    let mut poll = match registered {
-        Ok(poll) => poll,
-        Err(e) => {
-            let _ = lines.send(Input::End(Some(format!("the rows' topic: {e}"))));
-            return;
-        }
-    };
-    let mut events = Events::with_capacity(4);
-    loop {
-        // Edge-triggered: whatever arrived is taken (the timeout only guards a missed edge).
-        let _ = poll.poll(&mut events, Some(Duration::from_secs(1)));
+            .map_err(|e| Ros2Error::node("cannot wait for its rows", e))?;
+        Ok(Self {
+            rows,
+            poll,
+            events: Events::with_capacity(4),
+            taken: VecDeque::new(),
+        })
+    }
+
+    fn take_all(&mut self) {
         loop {
-            let message = match rows.take() {
-                Ok(Some((line, _))) => Input::Line(line),
-                Ok(None) => break,
-                Err(e) => Input::Bad(format!("an unreadable message on the rows' topic: {e:?}")),
-            };
-            if lines.send(message).is_err() {
-                return;
+            match self.rows.take() {
+                Ok(Some((line, _))) => self.taken.push_back(Input::Line(line)),
+                Ok(None) => return,
+                Err(e) => self.taken.push_back(Input::Bad(format!(
+                    "an unreadable message on the rows' topic: {e:?}"
+                ))),
             }
         }
+    }
+}
+
+impl Lines for TopicRows {
+    fn next_line(&mut self, timeout: Duration) -> Result<Input, RecvTimeoutError> {
+        if self.taken.is_empty() {
+            self.take_all();
+        }
+        if self.taken.is_empty() {
+            // An interrupted poll (a signal) is a timeout: the caller looks at the team.
+            let _ = self.poll.poll(&mut self.events, Some(timeout));
+            self.take_all();
+        }
+        self.taken.pop_front().ok_or(RecvTimeoutError::Timeout)
     }
 }
 
@@ -310,14 +336,13 @@ pub fn serve_ros2(
             ParameterValue::String(team_path.display().to_string()),
         ),
     ];
-    let (lines, answers, node) = with_signals_blocked(|| {
+    let (mut lines, answers, node) = with_signals_blocked(|| {
         let Face {
             mut node,
             rows,
             answers,
         } = face(&namespace, parameters)?;
-        let (sender, lines) = sync_channel(4);
-        spawn("ros2-rows", move || read_rows(rows, sender))?;
+        let lines = TopicRows::new(rows)?;
         let spinner = node
             .spinner()
             .map_err(|e| Ros2Error::node("has no spinner", e))?;
@@ -326,7 +351,11 @@ pub fn serve_ros2(
         })?;
         Ok::<_, Ros2Error>((lines, answers, node))
     })
-    .map_err(MemberError::refused)?;
+    .map_err(|e| match e {
+        // DDS or the system failed it; the rest is the user's to change.
+        Ros2Error::Node { .. } => MemberError::failed(e),
+        _ => MemberError::refused(e),
+    })?;
     let mut output = LineMessages {
         publish: |text| {
             answers
@@ -339,8 +368,15 @@ pub fn serve_ros2(
     // A member that cannot join says why on the answers' topic too (the robot program
     // reads no standard error).
     let served = TeamMember::join(team_path, id)
-        .inspect_err(|e| tell_failure(&mut output, 0, id, e))
-        .and_then(|mut member| serve_from(&mut member, lines, &mut output));
+        .inspect_err(|e| {
+            // The robot's node may not have matched yet (the join can fail fast).
+            let deadline = Instant::now() + DELIVERY;
+            while answers.get_subscription_count(&node) == 0 && Instant::now() < deadline {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            tell_failure(&mut output, 0, id, e);
+        })
+        .and_then(|mut member| serve_from(&mut member, &mut lines, &mut output));
     drop(output);
     linger(&node, &answers);
     served

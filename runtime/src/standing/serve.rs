@@ -87,6 +87,19 @@ pub(crate) enum Input {
     End(Option<String>),
 }
 
+/// Where the robot program's lines come from: a channel fed by a thread (standard input),
+/// or a source polled in place (a ROS 2 subscription).
+pub(crate) trait Lines {
+    /// The next line, waiting up to `timeout`.
+    fn next_line(&mut self, timeout: Duration) -> Result<Input, RecvTimeoutError>;
+}
+
+impl Lines for Receiver<Input> {
+    fn next_line(&mut self, timeout: Duration) -> Result<Input, RecvTimeoutError> {
+        self.recv_timeout(timeout)
+    }
+}
+
 /// Reads `input` line by line on its own thread (a blocking read has no deadline).
 pub(crate) fn read_lines(input: impl BufRead + Send + 'static) -> Receiver<Input> {
     let (sender, receiver) = sync_channel(4);
@@ -188,15 +201,16 @@ enum BadLine {
 /// What one line asks for, or why it cannot be used.
 fn parse_line(member: &TeamMember, line: &str, current: u64) -> Result<Request, BadLine> {
     let line: RowLine = serde_json::from_str(line)?;
+    // A leave is for whatever episode comes: its episode number does not matter.
+    if line.leave == Some(true) {
+        return if line.costs.is_some() || line.available == Some(false) {
+            Err(BadLine::LeaveWithRow)
+        } else {
+            Ok(Request::Leave)
+        };
+    }
     if let Some(given) = line.episode.filter(|&given| given != current) {
         return Err(BadLine::OtherEpisode { given, current });
-    }
-    match line.leave {
-        Some(true) if line.costs.is_some() || line.available.is_some() => {
-            return Err(BadLine::LeaveWithRow);
-        }
-        Some(true) => return Ok(Request::Leave),
-        _ => {}
     }
     match (line.costs, line.available) {
         (Some(_), Some(false)) => Err(BadLine::Both),
@@ -327,7 +341,7 @@ enum Next {
 /// Serves one episode: the program's next usable line, or the deadline.
 fn serve_episode(
     member: &mut TeamMember,
-    lines: &Receiver<Input>,
+    lines: &mut dyn Lines,
     output: &mut dyn Write,
 ) -> Result<Next, MemberError> {
     let id = member.id();
@@ -344,7 +358,7 @@ fn serve_episode(
         let slice = deadline
             .saturating_duration_since(Instant::now())
             .min(Duration::from_millis(50));
-        let bad = match lines.recv_timeout(slice) {
+        let bad = match lines.next_line(slice) {
             Ok(Input::Line(line)) if line.trim().is_empty() => None,
             Ok(Input::Line(line)) => match parse_line(member, &line, episode) {
                 Ok(request) => {
@@ -405,7 +419,7 @@ pub fn serve(
     // Termination signals stop the team cleanly, between episodes too.
     let _signals = admm_ta_transport::signals::install();
     let mut member = TeamMember::join(team_path, id)?;
-    serve_from(&mut member, read_lines(input), output)
+    serve_from(&mut member, &mut read_lines(input), output)
 }
 
 /// Serves `member` to the program whose lines come from `lines` and whose answers go to
@@ -413,7 +427,7 @@ pub fn serve(
 /// robot, or the team fails. The caller installs the signal handling.
 pub(crate) fn serve_from(
     member: &mut TeamMember,
-    lines: Receiver<Input>,
+    lines: &mut dyn Lines,
     output: &mut dyn Write,
 ) -> Result<ServeEnd, MemberError> {
     let id = member.id();
@@ -425,7 +439,7 @@ pub(crate) fn serve_from(
         "joined the team: reading rows"
     );
     loop {
-        let answer = match serve_episode(member, &lines, output)? {
+        let answer = match serve_episode(member, lines, output)? {
             Next::Answer(answer) => answer,
             Next::End(end) => return Ok(end),
         };
