@@ -142,10 +142,10 @@ def test_eight_rclpy_robots_drive_a_ring_team_for_twenty_episodes(tmp_path, team
     assert team_shm() <= shm_before
 
 
-def test_a_late_subscriber_gets_the_latest_answer_and_ctrl_c_stops_the_team(tmp_path, teams):
+def test_a_late_subscriber_and_ctrl_c_of_an_eight_robot_team(tmp_path, teams):
     shm_before = team_shm()
-    robots = 4
-    team = teams(tmp_path, robots, 4, 10_000)
+    robots = 8
+    team = teams(tmp_path, robots, 6, 10_000)
     deadline = time.monotonic() + 120
     while not all(sum("answer" in e for e in team.entries(i)) >= 3 for i in range(robots)):
         assert time.monotonic() < deadline, "no answers"
