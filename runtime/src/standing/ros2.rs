@@ -346,9 +346,12 @@ pub fn serve_ros2(
         let spinner = node
             .spinner()
             .map_err(|e| Ros2Error::node("has no spinner", e))?;
-        spawn("ros2-spin", move || {
-            let _ = futures::executor::block_on(spinner.spin());
-        })?;
+        std::thread::Builder::new()
+            .name("ros2-spin".into())
+            .spawn(move || {
+                let _ = futures::executor::block_on(spinner.spin());
+            })
+            .map_err(|e| Ros2Error::node("could not start a thread", e))?;
         Ok::<_, Ros2Error>((lines, answers, node))
     })
     .map_err(|e| match e {
@@ -380,15 +383,6 @@ pub fn serve_ros2(
     drop(output);
     linger(&node, &answers);
     served
-}
-
-/// Starts a named thread.
-fn spawn(name: &str, body: impl FnOnce() + Send + 'static) -> Result<(), Ros2Error> {
-    std::thread::Builder::new()
-        .name(name.into())
-        .spawn(body)
-        .map(drop)
-        .map_err(|e| Ros2Error::node("could not start a thread", e))
 }
 
 /// Gives the subscribers of the answers' topic a moment to take the last answer (or error)

@@ -101,7 +101,7 @@ impl Lines for Receiver<Input> {
 }
 
 /// Reads `input` line by line on its own thread (a blocking read has no deadline).
-pub(crate) fn read_lines(input: impl BufRead + Send + 'static) -> Receiver<Input> {
+fn read_lines(input: impl BufRead + Send + 'static) -> Receiver<Input> {
     let (sender, receiver) = sync_channel(4);
     std::thread::Builder::new()
         .name("serve-input".into())
