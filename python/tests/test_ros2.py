@@ -33,6 +33,20 @@ _domains = iter(range(1 + os.getpid() % 50, 233))
 _runs = iter(range(1_000_000))
 
 
+# Waits until the nodes named in argv[1] (JSON [[namespace, name], ...]) are on the graph.
+WAIT_FOR_NODES = """
+import json, sys, time, rclpy
+rclpy.init()
+node = rclpy.create_node("wait_for_robots")
+wanted = {tuple(w) for w in json.loads(sys.argv[1])}
+deadline = time.monotonic() + 50
+while not wanted <= {(ns, n) for n, ns in node.get_node_names_and_namespaces()}:
+    if time.monotonic() > deadline:
+        sys.exit("the robots' nodes did not come up")
+    rclpy.spin_once(node, timeout_sec=0.1)
+"""
+
+
 def ros_env():
     """A domain of this test's own, discovery on this machine."""
     env = dict(os.environ)
@@ -53,17 +67,29 @@ def write_team(tmp_path, robots, tasks, extra=""):
 class Team:
     """The members and the robot nodes of a team, each a process."""
 
-    def __init__(self, tmp_path, robots, tasks, episodes, robot_args=None, extra=""):
+    def __init__(self, tmp_path, robots, tasks, episodes, robot_args=None, extra="",
+                 nodes_first=False):
         self.tmp_path, self.robots = tmp_path, robots
         self.team = write_team(tmp_path, robots, tasks, extra)
         self.env = ros_env()
+        self.members, self.nodes = [], []
+        if nodes_first:
+            self.start_nodes(episodes, robot_args)
+            try:
+                self.wait_for_nodes()
+            except BaseException:
+                self.kill()
+                raise
         # The members in one process group, as a terminal's foreground job.
-        self.members = []
         for i in range(robots):
             group = self.members[0].pid if self.members else 0
             self.members.append(subprocess.Popen(
                 [ADMM_TA, "agent", "--team", str(self.team), "--robot", str(i), "--ros2"],
                 env=self.env, stderr=subprocess.PIPE, text=True, process_group=group))
+        if not nodes_first:
+            self.start_nodes(episodes, robot_args)
+
+    def start_nodes(self, episodes, robot_args):
         self.nodes = [
             subprocess.Popen([sys.executable, ROBOT_NODE, "--team", str(self.team),
                               "--robot", str(i), "--episodes", str(episodes), "--range", "1.5",
@@ -71,7 +97,13 @@ class Team:
                               *(robot_args or {}).get(i, [])],
                              env=self.env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                              text=True)
-            for i in range(robots)]
+            for i in range(self.robots)]
+
+    def wait_for_nodes(self):
+        """Until another ROS 2 node of the domain sees every robot's node."""
+        wanted = [(f"/robot{i}", "robot") for i in range(self.robots)]
+        subprocess.run([sys.executable, "-c", WAIT_FOR_NODES, json.dumps(wanted)],
+                       env=self.env, check=True, timeout=60)
 
     def log(self, i):
         return self.tmp_path / f"robot-{i}.jsonl"
@@ -140,6 +172,20 @@ def test_eight_rclpy_robots_drive_a_ring_team_for_twenty_episodes(tmp_path, team
     robot, error = row_errors[0]
     assert robot == 5 and error["episode"] == 3 and "costs for 6 tasks" in error["error"]
     assert team_shm() <= shm_before
+
+
+def test_members_launched_together_join_robots_already_up(tmp_path, teams):
+    # The robots' nodes (Fast DDS) are up first, then the eight members start at once: each
+    # member's topics must be matched by its robot's node (members starting within a few
+    # milliseconds of each other used to be missed by Fast DDS now and then).
+    robots, episodes = 8, 3
+    team = teams(tmp_path, robots, robots, episodes, nodes_first=True)
+    codes, errors = team.wait(timeout=120)
+    assert codes == [0] * (2 * robots), "\n".join(errors)
+    for i in range(robots):
+        answered = [e["answer"] for e in team.entries(i) if "answer" in e]
+        assert [a["episode"] for a in answered] == list(range(episodes)), i
+        assert all(a["certified"] for a in answered), answered
 
 
 def test_a_late_subscriber_and_ctrl_c_of_an_eight_robot_team(tmp_path, teams):

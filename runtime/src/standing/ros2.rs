@@ -52,6 +52,21 @@ const DELIVERY: Duration = Duration::from_secs(1);
 /// How long the process stays for its last answer to be taken.
 const LINGER: Duration = Duration::from_millis(250);
 
+/// How far apart the members of a team launched together start their DDS participants.
+///
+/// Measured here (8 members started within a few milliseconds of each other while rclpy's
+/// Fast DDS participant was up): Fast DDS never matched the endpoints of 1 to 5 of the 8
+/// (it took their participants, but not the announcements of their topics, and RustDDS did
+/// not send them again) in about half the launches with SUBNET discovery and one in eight
+/// with LOCALHOST. Started 80 ms apart and without same-host loopback (see
+/// [`participant`]), all were matched in 20 launches of 20 (SUBNET) and 12 of 12
+/// (LOCALHOST); 30 ms apart still missed one member in 10 SUBNET launches.
+const DDS_STAGGER: Duration = Duration::from_millis(80);
+
+/// Robots `0..STAGGER_SLOTS` start `DDS_STAGGER` apart; robot `i` takes slot `i % STAGGER_SLOTS`,
+/// so none waits more than about 5 s whatever the team's size.
+const STAGGER_SLOTS: usize = 64;
+
 /// What keeps a ROS 2 member from starting.
 #[derive(Debug, thiserror::Error)]
 pub enum Ros2Error {
@@ -136,12 +151,42 @@ fn participant() -> Result<DomainParticipantBuilder, Ros2Error> {
         "SUBNET" => false,
         _ => return Err(Ros2Error::DiscoveryRange(range)),
     };
-    let builder = DomainParticipantBuilder::new(domain);
+    // RustDDS's same-host loopback (announcing to 127.0.0.1's well-known ports, preferring
+    // loopback routes) lets the members of a team find each other, which they do not need,
+    // and with it Fast DDS missed some members launched together (see [`DDS_STAGGER`]). It
+    // stays on only where loopback is the only way to the robot's node.
+    let builder = DomainParticipantBuilder::new(domain).same_host_loopback(!has_network());
     Ok(if localhost {
         builder.with_only_networks([std::net::Ipv4Addr::LOCALHOST])
     } else {
         builder
     })
+}
+
+/// Whether an interface other than loopback is up with an IPv4 address.
+fn has_network() -> bool {
+    let mut list: *mut libc::ifaddrs = std::ptr::null_mut();
+    // SAFETY: getifaddrs fills `list` with a list this function frees below.
+    if unsafe { libc::getifaddrs(&mut list) } != 0 {
+        return false;
+    }
+    let mut found = false;
+    let mut entry = list;
+    while !entry.is_null() && !found {
+        // SAFETY: `entry` is a node of the list getifaddrs returned, not yet freed.
+        let ifa = unsafe { &*entry };
+        let flags = ifa.ifa_flags;
+        let up = flags & libc::IFF_UP as libc::c_uint != 0;
+        let loopback = flags & libc::IFF_LOOPBACK as libc::c_uint != 0;
+        // SAFETY: a non-null ifa_addr points to a sockaddr whose family field is readable.
+        let ipv4 = !ifa.ifa_addr.is_null()
+            && i32::from(unsafe { (*ifa.ifa_addr).sa_family }) == libc::AF_INET;
+        found = up && !loopback && ipv4;
+        entry = ifa.ifa_next;
+    }
+    // SAFETY: `list` came from getifaddrs and is freed once.
+    unsafe { libc::freeifaddrs(list) };
+    found
 }
 
 /// Runs `build` with the termination signals blocked in this thread, so that the threads it
@@ -336,6 +381,7 @@ pub fn serve_ros2(
             ParameterValue::String(team_path.display().to_string()),
         ),
     ];
+    wait_for_slot(id);
     let (mut lines, answers, node) = with_signals_blocked(|| {
         let Face {
             mut node,
@@ -383,6 +429,18 @@ pub fn serve_ros2(
     drop(output);
     linger(&node, &answers);
     served
+}
+
+/// Waits for this robot's turn to start its DDS participant (see [`DDS_STAGGER`]), or
+/// until a termination signal comes.
+fn wait_for_slot(id: usize) {
+    let slot = u32::try_from(id % STAGGER_SLOTS).unwrap_or(0);
+    let start = Instant::now() + DDS_STAGGER * slot;
+    while Instant::now() < start && admm_ta_transport::signals::stop_requested().is_none() {
+        std::thread::sleep(
+            Duration::from_millis(5).min(start.saturating_duration_since(Instant::now())),
+        );
+    }
 }
 
 /// Gives the subscribers of the answers' topic a moment to take the last answer (or error)
