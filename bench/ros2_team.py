@@ -9,8 +9,9 @@ Needs rclpy (`pip install "ros-rclpy[fastrtps]" ros-std-msgs`; `./test` puts it 
 target/python-venv) and an admm-ta built with `--features ros2`.
 
 For each team size N (N robots, N tasks, private costs) the same sequence of rows (uniform
-costs, each moved by up to ±1 % of the range per episode, warm starts) goes to two teams
-in turn, a fresh run each:
+costs, each moved by up to ±1 % of the range per episode, warm starts) goes to two teams,
+both up at once, episode by episode (the first team alternating), so that machine noise
+falls on both alike:
 
 * **pipes**: N `--serve` sidecars, one driver writing each robot's row to its sidecar's
   standard input and reading the answers from their standard output;
@@ -21,7 +22,9 @@ in turn, a fresh run each:
   ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, Fast DDS reaches only the first 32 participants
   of the machine, too few for a driver and 50 members (docs/ros2.md).
 
-An episode's latency is the wall time from the first row sent to the last answer in. The
+The driver takes the answers with rclpy's SingleThreadedExecutor (`--executor single`, the
+default) or its EventsExecutor (`--executor events`), whose overhead per message is far
+smaller. An episode's latency is the wall time from the first row sent to the last answer in. The
 first `--warmup` episodes of each team are left out. Every episode must be certified with
 the same assignment at every robot, and both teams must find the same total cost. Prints
 p50 / p99 per team and the difference of the p50s.
@@ -37,6 +40,8 @@ import tempfile
 import time
 
 import rclpy
+import rclpy.experimental
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 
@@ -98,12 +103,14 @@ class Pipes:
 class Topics:
     """N `--ros2` members, one rclpy node with a publisher and a subscription per robot."""
 
-    def __init__(self, binary, team, robots, env):
+    def __init__(self, binary, team, robots, env, executor):
         self.members = [
             subprocess.Popen([binary, "agent", "--team", team, "--robot", str(i), "--ros2"],
                              env=env)
             for i in range(robots)]
-        self.node = rclpy.create_node("bench_driver")
+        self.node = rclpy.create_node(f"bench_driver_{robots}")
+        self.executor = executor()
+        self.executor.add_node(self.node)
         answers_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                                  durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self.inbox = {}
@@ -118,7 +125,7 @@ class Topics:
             if time.monotonic() > end:
                 self.kill()
                 sys.exit("the ROS 2 members did not subscribe within 120 s")
-            rclpy.spin_once(self.node, timeout_sec=0.05)
+            self.executor.spin_once(timeout_sec=0.05)
 
     def episode(self, rows):
         self.inbox.clear()
@@ -127,9 +134,11 @@ class Topics:
         deadline = time.monotonic() + 120
         while len(self.inbox) < len(self.rows):
             if time.monotonic() > deadline or any(m.poll() is not None for m in self.members):
+                codes = [m.poll() for m in self.members]
                 self.kill()
-                sys.exit("a ROS 2 member exited, or no answer within 120 s")
-            rclpy.spin_once(self.node, timeout_sec=1.0)
+                sys.exit(f"a ROS 2 member exited, or no answer within 120 s: exit codes {codes}, "
+                         f"answers from {sorted(self.inbox)}")
+            self.executor.spin_once(timeout_sec=1.0)
         return [self.inbox[i] for i in range(len(self.rows))]
 
     def kill(self):
@@ -142,24 +151,30 @@ class Topics:
             publisher.publish(String(data=json.dumps({"leave": True})))
         end = time.monotonic() + 0.5
         while time.monotonic() < end:
-            rclpy.spin_once(self.node, timeout_sec=0.1)
+            self.executor.spin_once(timeout_sec=0.1)
         codes = [m.wait(timeout=60) for m in self.members]
         self.node.destroy_node()
         return codes
 
 
-def measure(team, sequence, robots, warmup):
-    times, totals = [], []
+def measure(teams, sequence, robots, warmup):
+    """Each episode's rows to every team in turn (the first team alternating), so that both
+    see the same machine; the wall times per team after the warmup, and the total costs."""
+    times = [[] for _ in teams]
+    totals = [[] for _ in teams]
     for episode, rows in enumerate(sequence):
-        began = time.perf_counter()
-        answers = team.episode(rows)
-        elapsed = time.perf_counter() - began
-        totals.append(check(answers, robots, episode))
-        if episode >= warmup:
-            times.append(elapsed * 1e3)
-    codes = team.close()
-    if any(codes):
-        sys.exit(f"members exited {codes}")
+        order = range(len(teams)) if episode % 2 == 0 else reversed(range(len(teams)))
+        for k in order:
+            began = time.perf_counter()
+            answers = teams[k].episode(rows)
+            elapsed = time.perf_counter() - began
+            totals[k].append(check(answers, robots, episode))
+            if episode >= warmup:
+                times[k].append(elapsed * 1e3)
+    for team in teams:
+        codes = team.close()
+        if any(codes):
+            sys.exit(f"members exited {codes}")
     return times, totals
 
 
@@ -172,25 +187,28 @@ def main():
     parser.add_argument("--topology", default="ring")
     parser.add_argument("--method", default="primal")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--executor", choices=("single", "events"), default="single",
+                        help="the driver's rclpy executor (events: rclpy's EventsExecutor)")
     args = parser.parse_args()
     env = dict(os.environ)
     env.setdefault("ROS_DOMAIN_ID", str(60 + os.getpid() % 40))
     os.environ.update(env)
     rclpy.init()
+    executor = (SingleThreadedExecutor if args.executor == "single"
+                else rclpy.experimental.EventsExecutor)
     directory = tempfile.mkdtemp(prefix="admm-ta-ros2-bench-")
     print("| robots | pipes p50 / p99 (ms) | ROS 2 p50 / p99 (ms) | ROS 2 − pipes, p50 (ms) |")
     print("| --- | --- | --- | --- |")
     for k, robots in enumerate(int(r) for r in args.robots.split(",")):
         sequence = list(drift(robots, args.episodes, args.seed))
         run = f"ros2bench-{os.getpid()}-{k}-{robots}"
-        pipes, pipe_totals = measure(
-            Pipes(args.binary, write_team(directory, run + "p", robots, args.topology,
-                                          args.method), robots),
-            sequence, robots, args.warmup)
-        topics, topic_totals = measure(
-            Topics(args.binary, write_team(directory, run + "r", robots, args.topology,
-                                           args.method), robots, env),
-            sequence, robots, args.warmup)
+        pipes_team = Pipes(args.binary, write_team(directory, run + "p", robots,
+                                                   args.topology, args.method), robots)
+        topics_team = Topics(args.binary, write_team(directory, run + "r", robots,
+                                                     args.topology, args.method), robots, env,
+                             executor)
+        (pipes, topics), (pipe_totals, topic_totals) = measure(
+            [pipes_team, topics_team], sequence, robots, args.warmup)
         if any(abs(a - b) > 1e-9 * max(1.0, abs(a)) for a, b in zip(pipe_totals, topic_totals)):
             sys.exit("the two teams found different optima")
         p50p, p50r = percentile(pipes, 50), percentile(topics, 50)
