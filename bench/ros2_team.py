@@ -31,6 +31,7 @@ p50 / p99 per team and the difference of the p50s.
 """
 
 import argparse
+import importlib
 import json
 import os
 import random
@@ -40,7 +41,6 @@ import tempfile
 import time
 
 import rclpy
-import rclpy.experimental
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
@@ -99,6 +99,12 @@ class Pipes:
             m.stdin.close()
         return [m.wait(timeout=60) for m in self.members]
 
+    def kill(self):
+        for m in self.members:
+            if m.poll() is None:
+                m.kill()
+                m.wait()
+
 
 class Topics:
     """N `--ros2` members, one rclpy node with a publisher and a subscription per robot."""
@@ -143,8 +149,9 @@ class Topics:
 
     def kill(self):
         for m in self.members:
-            m.kill()
-            m.wait()
+            if m.poll() is None:
+                m.kill()
+                m.wait()
 
     def close(self):
         for publisher in self.rows:
@@ -153,6 +160,8 @@ class Topics:
         while time.monotonic() < end:
             self.executor.spin_once(timeout_sec=0.1)
         codes = [m.wait(timeout=60) for m in self.members]
+        self.executor.remove_node(self.node)
+        self.executor.shutdown()
         self.node.destroy_node()
         return codes
 
@@ -194,27 +203,39 @@ def main():
     env.setdefault("ROS_DOMAIN_ID", str(60 + os.getpid() % 40))
     os.environ.update(env)
     rclpy.init()
-    executor = (SingleThreadedExecutor if args.executor == "single"
-                else rclpy.experimental.EventsExecutor)
+    if args.executor == "single":
+        executor = SingleThreadedExecutor
+    else:
+        executor = importlib.import_module("rclpy.experimental").EventsExecutor
     directory = tempfile.mkdtemp(prefix="admm-ta-ros2-bench-")
     print("| robots | pipes p50 / p99 (ms) | ROS 2 p50 / p99 (ms) | ROS 2 − pipes, p50 (ms) |")
     print("| --- | --- | --- | --- |")
-    for k, robots in enumerate(int(r) for r in args.robots.split(",")):
-        sequence = list(drift(robots, args.episodes, args.seed))
-        run = f"ros2bench-{os.getpid()}-{k}-{robots}"
-        pipes_team = Pipes(args.binary, write_team(directory, run + "p", robots,
-                                                   args.topology, args.method), robots)
-        topics_team = Topics(args.binary, write_team(directory, run + "r", robots,
-                                                     args.topology, args.method), robots, env,
-                             executor)
-        (pipes, topics), (pipe_totals, topic_totals) = measure(
-            [pipes_team, topics_team], sequence, robots, args.warmup)
-        if any(abs(a - b) > 1e-9 * max(1.0, abs(a)) for a, b in zip(pipe_totals, topic_totals)):
-            sys.exit("the two teams found different optima")
-        p50p, p50r = percentile(pipes, 50), percentile(topics, 50)
-        print(f"| {robots} | {p50p:.2f} / {percentile(pipes, 99):.2f} | "
-              f"{p50r:.2f} / {percentile(topics, 99):.2f} | {p50r - p50p:+.2f} |", flush=True)
-    rclpy.shutdown()
+    teams = []
+    try:
+        for k, robots in enumerate(int(r) for r in args.robots.split(",")):
+            compare(args, executor, directory, env, f"ros2bench-{os.getpid()}-{k}-{robots}",
+                    robots, teams)
+    finally:
+        # Whatever stopped the run (a check, a dead member, Ctrl-C), no member stays.
+        for team in teams:
+            team.kill()
+        rclpy.shutdown()
+
+
+def compare(args, executor, directory, env, run, robots, teams):
+    """One team size: both teams up, the same episodes, one line of the table."""
+    sequence = list(drift(robots, args.episodes, args.seed))
+    teams.append(Pipes(args.binary, write_team(directory, run + "p", robots, args.topology,
+                                               args.method), robots))
+    teams.append(Topics(args.binary, write_team(directory, run + "r", robots, args.topology,
+                                                args.method), robots, env, executor))
+    (pipes, topics), (pipe_totals, topic_totals) = measure(
+        teams[-2:], sequence, robots, args.warmup)
+    if any(abs(a - b) > 1e-9 * max(1.0, abs(a)) for a, b in zip(pipe_totals, topic_totals)):
+        sys.exit("the two teams found different optima")
+    p50p, p50r = percentile(pipes, 50), percentile(topics, 50)
+    print(f"| {robots} | {p50p:.2f} / {percentile(pipes, 99):.2f} | "
+          f"{p50r:.2f} / {percentile(topics, 99):.2f} | {p50r - p50p:+.2f} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -153,8 +153,11 @@ fn participant() -> Result<DomainParticipantBuilder, Ros2Error> {
     };
     // RustDDS's same-host loopback (announcing to 127.0.0.1's well-known ports, preferring
     // loopback routes) lets the members of a team find each other, which they do not need,
-    // and with it Fast DDS missed some members launched together (see [`DDS_STAGGER`]). It
-    // stays on only where loopback is the only way to the robot's node.
+    // and with it Fast DDS missed some members launched together (see [`DDS_STAGGER`]).
+    // Without it a member still answers the robots' nodes that announce themselves to it
+    // (with LOCALHOST, Fast DDS announces to the first 32 ports on 127.0.0.1), and with
+    // SUBNET it announces itself by multicast. It stays on where no interface but loopback
+    // can carry multicast, or the interfaces cannot be listed.
     let builder = DomainParticipantBuilder::new(domain).same_host_loopback(!has_network());
     Ok(if localhost {
         builder.with_only_networks([std::net::Ipv4Addr::LOCALHOST])
@@ -163,11 +166,12 @@ fn participant() -> Result<DomainParticipantBuilder, Ros2Error> {
     })
 }
 
-/// Whether an interface other than loopback is up with an IPv4 address.
+/// Whether an interface other than loopback is up, running, takes multicast and has an
+/// IPv4 address.
 fn has_network() -> bool {
     let mut list: *mut libc::ifaddrs = std::ptr::null_mut();
     // SAFETY: getifaddrs fills `list` with a list this function frees below.
-    if unsafe { libc::getifaddrs(&mut list) } != 0 {
+    if unsafe { libc::getifaddrs(&mut list) } != 0 || list.is_null() {
         return false;
     }
     let mut found = false;
@@ -176,8 +180,9 @@ fn has_network() -> bool {
         // SAFETY: `entry` is a node of the list getifaddrs returned, not yet freed.
         let ifa = unsafe { &*entry };
         let flags = ifa.ifa_flags;
-        let up = flags & libc::IFF_UP as libc::c_uint != 0;
-        let loopback = flags & libc::IFF_LOOPBACK as libc::c_uint != 0;
+        let has = |flag: libc::c_int| flags & flag as libc::c_uint != 0;
+        let up = has(libc::IFF_UP) && has(libc::IFF_RUNNING) && has(libc::IFF_MULTICAST);
+        let loopback = has(libc::IFF_LOOPBACK);
         // SAFETY: a non-null ifa_addr points to a sockaddr whose family field is readable.
         let ipv4 = !ifa.ifa_addr.is_null()
             && i32::from(unsafe { (*ifa.ifa_addr).sa_family }) == libc::AF_INET;
