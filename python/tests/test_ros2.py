@@ -16,6 +16,7 @@ import time
 
 import pytest
 
+from test_elastic import optimum as stacked_optimum
 from test_interrupt import alive, team_shm
 from test_team import optimum
 
@@ -29,6 +30,7 @@ if not ADMM_TA or not os.access(ADMM_TA, os.X_OK):
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 ROBOT_NODE = os.path.join(REPO, "examples", "ros2", "robot_node.py")
+ELASTIC_DRIVER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "ros2_elastic.py")
 _domains = iter(range(1 + os.getpid() % 50, 233))
 _runs = iter(range(1_000_000))
 
@@ -44,6 +46,8 @@ while not wanted <= {(ns, n) for n, ns in node.get_node_names_and_namespaces()}:
     if time.monotonic() > deadline:
         sys.exit("the robots' nodes did not come up")
     rclpy.spin_once(node, timeout_sec=0.1)
+node.destroy_node()
+rclpy.shutdown()
 """
 
 
@@ -102,8 +106,18 @@ class Team:
     def wait_for_nodes(self):
         """Until another ROS 2 node of the domain sees every robot's node."""
         wanted = [(f"/robot{i}", "robot") for i in range(self.robots)]
-        subprocess.run([sys.executable, "-c", WAIT_FOR_NODES, json.dumps(wanted)],
-                       env=self.env, check=True, timeout=60)
+        waiting = subprocess.Popen([sys.executable, "-c", WAIT_FOR_NODES, json.dumps(wanted)],
+                                   env=self.env, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 60
+        while waiting.poll() is None:
+            dead = [p for p in self.nodes if p.poll() is not None]
+            if dead or time.monotonic() > deadline:
+                waiting.kill()
+                waiting.wait()
+                why = "".join(p.stderr.read() for p in dead) or "no robot node came up in 60 s"
+                raise AssertionError(f"the robots' nodes did not come up: {why}")
+            time.sleep(0.05)
+        assert waiting.returncode == 0, waiting.stderr.read()
 
     def log(self, i):
         return self.tmp_path / f"robot-{i}.jsonl"
@@ -186,6 +200,45 @@ def test_members_launched_together_join_robots_already_up(tmp_path, teams):
         answered = [e["answer"] for e in team.entries(i) if "answer" in e]
         assert [a["episode"] for a in answered] == list(range(episodes)), i
         assert all(a["certified"] for a in answered), answered
+
+
+def test_robots_leave_crash_and_join_through_ros_2(tmp_path):
+    # A ring of 6 members fed by one rclpy node: robot 2 leaves ({"leave": true} on its rows'
+    # topic), robot 3's member is killed, a new member takes slot 2 again; every solved
+    # episode is certified and scipy's optimum of the rows of the robots that took part.
+    shm_before = team_shm()
+    slots, tasks, episodes = 6, 3, 20
+    plan = {5: ["leave", 2], 10: ["crash", 3], 14: ["join", 2]}
+    team = write_team(tmp_path, slots, tasks, "startup_timeout = 30.0\n")
+    done = subprocess.run(
+        [sys.executable, ELASTIC_DRIVER, ADMM_TA, str(team), str(slots), str(tasks),
+         str(episodes), json.dumps(plan), str(tmp_path)],
+        env=ros_env(), capture_output=True, text=True, timeout=600)
+    logs = "".join(p.read_text() for p in tmp_path.glob("member-*.log"))
+    assert done.returncode == 0, done.stderr + logs[-3000:]
+    lines = [json.loads(line) for line in done.stdout.splitlines()]
+    assert [e["episode"] for e in lines] == list(range(episodes))
+    solved = 0
+    for entry in lines:
+        rows = {int(i): r for i, r in entry["rows"].items()}
+        answers = {int(i): a for i, a in entry["answers"].items()}
+        first = next(iter(answers.values()))
+        for i, a in answers.items():
+            assert a["episode"] == first["episode"] and a["assignment"] == first["assignment"]
+        if first.get("unsolved"):
+            assert first.get("crashed"), entry  # only a crash may cost an episode
+            continue
+        solved += 1
+        best = stacked_optimum([rows[i] for i in sorted(rows)])
+        for i, a in answers.items():
+            assert a["certified"] and a["task"] == a["assignment"][i], (entry["episode"], i, a)
+            assert a["total_cost"] == pytest.approx(best, rel=1e-9, abs=1e-9), entry
+        taking = sorted(i for i, t in enumerate(first["assignment"]) if t is not None)
+        assert taking == sorted(rows), entry
+    assert solved >= episodes - 1
+    # Robot 2 came back: the last episodes have it, and not robot 3.
+    assert sorted(int(i) for i in lines[-1]["rows"]) == [0, 1, 2, 4, 5]
+    assert team_shm() <= shm_before
 
 
 def test_a_late_subscriber_and_ctrl_c_of_an_eight_robot_team(tmp_path, teams):
