@@ -78,7 +78,19 @@ def check(answers, robots, episode):
     return answers[0]["total_cost"]
 
 
-class Pipes:
+class Members:
+    """A team's member processes."""
+
+    members = ()
+
+    def kill(self):
+        for m in self.members:
+            if m.poll() is None:
+                m.kill()
+                m.wait()
+
+
+class Pipes(Members):
     """N sidecars on pipes."""
 
     def __init__(self, binary, team, robots):
@@ -99,14 +111,8 @@ class Pipes:
             m.stdin.close()
         return [m.wait(timeout=60) for m in self.members]
 
-    def kill(self):
-        for m in self.members:
-            if m.poll() is None:
-                m.kill()
-                m.wait()
 
-
-class Topics:
+class Topics(Members):
     """N `--ros2` members, one rclpy node with a publisher and a subscription per robot."""
 
     def __init__(self, binary, team, robots, env, executor):
@@ -146,12 +152,6 @@ class Topics:
                          f"answers from {sorted(self.inbox)}")
             self.executor.spin_once(timeout_sec=1.0)
         return [self.inbox[i] for i in range(len(self.rows))]
-
-    def kill(self):
-        for m in self.members:
-            if m.poll() is None:
-                m.kill()
-                m.wait()
 
     def close(self):
         for publisher in self.rows:

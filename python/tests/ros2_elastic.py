@@ -13,7 +13,6 @@ import json
 import os
 import queue
 import random
-import signal
 import subprocess
 import sys
 import threading
@@ -123,7 +122,7 @@ def main():
                 driver.send(event[1], {"leave": True})
             elif event and event[0] == "crash":
                 gone = members.pop(event[1])
-                gone.process.send_signal(signal.SIGKILL)
+                gone.process.kill()  # SIGKILL
                 gone.process.wait(timeout=WITHIN)
             elif event and event[0] == "join":
                 before = driver.readers(event[1])
