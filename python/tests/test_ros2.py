@@ -285,7 +285,13 @@ node.create_subscription(String, "/robot2/admm_ta/assignment", lambda m: got.app
 end = time.monotonic() + 30
 while not got and time.monotonic() < end:
     rclpy.spin_once(node, timeout_sec=0.1)
-print(got[0] if got else "null")
+# RustDDS may hand a late subscriber a few older answers first (docs/ros2.md): the latest is
+# the one with the greatest episode among those that come at once.
+end = time.monotonic() + 0.5
+while got and time.monotonic() < end:
+    rclpy.spin_once(node, timeout_sec=0.05)
+answers = [json.loads(text) for text in got]
+print(json.dumps(max(answers, key=lambda a: a.get("episode", -1))) if got else "null")
 sys.exit(0 if got else 1)
 """
 
