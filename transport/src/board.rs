@@ -269,10 +269,19 @@ impl Board {
     }
 
     /// Agent `agent` of an independently started team joined and its process is gone since
-    /// (it did not leave: a member that leaves clears its process id).
+    /// (it did not leave: a member that leaves clears its process id before it exits).
+    ///
+    /// The id is read again after the process is found gone: a member that cleared it and
+    /// exited between the two reads left (200 robots leaving at once on 2 cores took such a
+    /// leaver for dead, and cut their team apart).
     pub fn member_died(&self, agent: usize) -> bool {
+        self.member_died_by(agent, process_alive)
+    }
+
+    /// [`Board::member_died`], with `alive` telling whether a process lives.
+    fn member_died_by(&self, agent: usize, alive: impl Fn(u32) -> bool) -> bool {
         self.member_pid(agent)
-            .is_some_and(|pid| !process_alive(pid))
+            .is_some_and(|pid| !alive(pid) && self.member_pid(agent) == Some(pid))
     }
 
     /// Marks agent `failed` as failed (the first mark wins); every agent stops at its next
@@ -574,5 +583,30 @@ impl Board {
     pub fn arrivals(&self, agent: usize, round: u64) -> &AtomicU64 {
         debug_assert!(agent < self.agents);
         self.word(LINE * (agent + 1) + 8 * (round % 2) as usize)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A member that clears its process id and exits between a neighbour's two reads
+    /// (its id, then whether the process lives) left: it did not die.
+    #[test]
+    fn a_member_that_left_between_the_two_reads_did_not_die() {
+        let shm = format!("adtboard{}", std::process::id());
+        let board = Board::create(&shm, 2, 2, 4).unwrap();
+        board.set_member_pid(1, 4_000_000);
+        // The process is gone, its id still recorded: it died.
+        assert!(board.member_died_by(1, |_| false));
+        // It cleared its id (it left), then exited, while the neighbour looked.
+        let leaves = |_| {
+            board.set_member_pid(1, 0);
+            false
+        };
+        assert!(!board.member_died_by(1, leaves));
+        assert!(!board.member_died_by(1, |_| false), "no id: not a member");
+        board.set_member_pid(0, std::process::id());
+        assert!(!board.member_died(0), "this process lives");
     }
 }

@@ -469,3 +469,44 @@ fn a_killed_robot_costs_at_most_one_episode_across_two_hosts() {
         a_killed_robot_costs_at_most_one_episode(transport);
     }
 }
+
+/// A robot leaving while two crashes split its ring is out, as it asked: the part that goes
+/// on is the larger one, without it; its sidecar exits 0 (it said "cut off" and exited 4
+/// before), while the robot beside it that did not ask to leave says it was cut off (4).
+#[test]
+fn a_leaver_cut_off_by_crashes_in_its_leave_is_out_as_it_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = format!("elasticsplit-{}", std::process::id());
+    let (n, m) = (7, 3);
+    let team = team_file(dir.path(), &run, n, m, "topology = \"ring\"\n");
+    let mut fleet = Fleet::start(team, &run, n, m, Vec::new());
+    assert_optimal_among(&fleet.episode(), "before");
+    // Robot 2 asks to leave: it waits in its leave episode for its neighbours' rows.
+    let mut leaver = fleet.members.remove(&2).unwrap();
+    leaver.send(r#"{"leave": true}"#);
+    std::thread::sleep(Duration::from_millis(300));
+    // Robots 1 and 4 die: {2, 3} and {5, 6, 0} are apart; the larger part goes on.
+    fleet.kill(1);
+    fleet.kill(4);
+    let mut beside = fleet.members.remove(&3).unwrap();
+    let row = fleet.row();
+    beside.send_row(&row);
+    let e = fleet.episode();
+    let first = assert_optimal_among(&e, "the part that goes on");
+    let crashed = first["crashed"].as_array().unwrap();
+    assert!(
+        crashed.contains(&1.into()) && crashed.contains(&4.into()),
+        "{first}"
+    );
+    let (status, stderr) = leaver.finish();
+    assert!(status.success(), "the leaver: {status:?}: {stderr}");
+    let line = beside.next();
+    assert_eq!(line["failed"], true, "{line}");
+    assert!(
+        line["error"].as_str().unwrap().contains("cut off"),
+        "{line}"
+    );
+    let (status, _) = beside.finish();
+    assert_eq!(status.code(), Some(4));
+    fleet.finish();
+}

@@ -262,11 +262,23 @@ impl TeamMember {
     /// others would fall apart without it, the leave is refused ([`LeaveRefused`], inside
     /// [`MemberError::Refused`]) and it stays: ask again later (each call is an episode in
     /// which it relays), or set `leave = "force"` in the team file.
+    ///
+    /// A robot that the team went on without meanwhile (a crash, or other robots leaving,
+    /// split its roster and left it in a part that does not go on) is out, as it asked:
+    /// that is a leave too.
     pub fn leave(&mut self) -> Result<(), MemberError> {
         let me = self.id();
+        let was_in = self.standing == Standing::In;
         while self.standing == Standing::In {
             let roster = self.roster();
-            let answer = self.episode_with(None, Participation::Leaving)?;
+            let answer = match self.episode_with(None, Participation::Leaving) {
+                Ok(answer) => answer,
+                Err(e) if matches!(self.standing, Standing::Lost(_)) => {
+                    tracing::info!(robot = me, why = %e, "left: the team went on without it");
+                    return Ok(());
+                }
+                Err(e) => return Err(e),
+            };
             if answer.leave_refused.contains(&me) {
                 let others: Vec<usize> = roster.into_iter().filter(|&r| r != me).collect();
                 return Err(MemberError::refused(LeaveRefused {
@@ -280,6 +292,7 @@ impl TeamMember {
         }
         match self.usable() {
             Err(RowError::Left) => Ok(()),
+            Err(RowError::Lost(_)) if was_in => Ok(()),
             other => other.map_err(MemberError::refused),
         }
     }
