@@ -271,7 +271,11 @@ impl Episodes {
         let degree = self.graph.degree(id);
         let layout = plan.agents.setup.parts().ok_or(EpisodeError::NoParts)?;
         let inner = plan.agents.agent_with_degree(place, degree);
-        let stop = LocalCertifiedStop::new(plan.diameter, n, plan.tolerance)?
+        // Each robot's share of the tolerance is the one a solve of the part's rows gives it
+        // (`prepare` sizes the tolerance, and the fast primal its tie-break, by the part's
+        // robots): shared among the team's `n` slots instead, a part of fewer than half of
+        // them never certified (its tie-break alone took more than a robot's share).
+        let stop = LocalCertifiedStop::new(plan.diameter, r, plan.tolerance)?
             .with_cadence(plan.stop_cadence);
         let team = (n, self.settings.tasks);
         let (len, part) = (self.message.len(), part.clone());

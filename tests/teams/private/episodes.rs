@@ -125,8 +125,8 @@ fn a_hundred_episodes_of_ten_robots() {
 }
 
 /// Episodes with robots that take no part (unavailable, or without a row and
-/// `on_failure = "continue"`) and with fewer tasks than declared: the optimum of what takes
-/// part; too few robots, or rows of different lengths, solve nothing and say why.
+/// `on_failure = "continue"`) and with fewer tasks than declared: the certified optimum of
+/// what takes part, also when most robots only relay; too few robots, or rows of different lengths, solve nothing and say why.
 #[test]
 fn unavailable_robots_missing_rows_and_fewer_tasks() {
     let dir = tempfile::tempdir().unwrap();
@@ -142,12 +142,15 @@ fn unavailable_robots_missing_rows_and_fewer_tasks() {
     let mut team_of = start_team(&team, n);
     let mut rng = SeededRng::new(31);
     // (robots without a part: unavailable, missing), tasks
-    let plans: [(&[usize], &[usize], usize); 6] = [
+    let plans: [(&[usize], &[usize], usize); 7] = [
         (&[], &[], 5),
         (&[2], &[], 5),
         (&[], &[], 3),
         (&[1, 4], &[], 4),
         (&[], &[3], 5),
+        // A part of fewer than half the team (it never certified when the tolerance was
+        // shared among every slot).
+        (&[0, 2, 3, 5], &[], 2),
         (&[], &[], 5),
     ];
     for (k, (unavailable, missing, tasks)) in plans.iter().enumerate() {
