@@ -262,22 +262,19 @@ impl TeamMember {
     /// others would fall apart without it, the leave is refused ([`LeaveRefused`], inside
     /// [`MemberError::Refused`]) and it stays: ask again later (each call is an episode in
     /// which it relays), or set `leave = "force"` in the team file.
-    ///
-    /// A robot that the team went on without meanwhile (a crash, or other robots leaving,
-    /// split its roster and left it in a part that does not go on) is out, as it asked:
-    /// that is a leave too.
+    /// A robot the team went on without meanwhile (crashes split its roster, and its part
+    /// does not go on) is out, as it asked: that is a leave too.
     pub fn leave(&mut self) -> Result<(), MemberError> {
         let me = self.id();
         let was_in = self.standing == Standing::In;
         while self.standing == Standing::In {
             let roster = self.roster();
             let answer = match self.episode_with(None, Participation::Leaving) {
-                Ok(answer) => answer,
                 Err(e) if matches!(self.standing, Standing::Lost(_)) => {
                     tracing::info!(robot = me, why = %e, "left: the team went on without it");
                     return Ok(());
                 }
-                Err(e) => return Err(e),
+                other => other?,
             };
             if answer.leave_refused.contains(&me) {
                 let others: Vec<usize> = roster.into_iter().filter(|&r| r != me).collect();
@@ -384,7 +381,6 @@ impl TeamMember {
         })
     }
 
-    /// The team failed: nothing more goes out.
     /// The team failed for this robot: it leaves its roster and the team (the others see
     /// it gone rather than wait for it) and nothing more goes out.
     fn fail(&mut self, error: impl Into<crate::process::member_error::Cause>) -> MemberError {
