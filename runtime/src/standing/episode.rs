@@ -265,17 +265,19 @@ impl Episodes {
             .options
             .method_setup()
             .ok_or(EpisodeError::NoAgents)?;
-        let plan = prepare(&problem, &self.compact, &self.settings.options, setup)?;
+        // Every robot of the roster takes part in the stop, relays too: the tolerance is
+        // shared among them all (a part's method sized for its robots alone gave each agent
+        // more slack than its share of the team's, and a part of fewer than half of the
+        // team's slots never certified).
+        let stoppers = self.roster.len();
+        let plan =
+            prepare(&problem, &self.compact, &self.settings.options, setup)?.shared_by(stoppers);
         // Its own neighbours, whatever its place among the robots that take part.
         let (n, id) = (self.settings.robots, self.settings.id);
         let degree = self.graph.degree(id);
         let layout = plan.agents.setup.parts().ok_or(EpisodeError::NoParts)?;
         let inner = plan.agents.agent_with_degree(place, degree);
-        // Each robot's share of the tolerance is the one a solve of the part's rows gives it
-        // (`prepare` sizes the tolerance, and the fast primal its tie-break, by the part's
-        // robots): shared among the team's `n` slots instead, a part of fewer than half of
-        // them never certified (its tie-break alone took more than a robot's share).
-        let stop = LocalCertifiedStop::new(plan.diameter, r, plan.tolerance)?
+        let stop = LocalCertifiedStop::new(plan.diameter, stoppers, plan.tolerance)?
             .with_cadence(plan.stop_cadence);
         let team = (n, self.settings.tasks);
         let (len, part) = (self.message.len(), part.clone());

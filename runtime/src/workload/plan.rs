@@ -106,6 +106,37 @@ pub struct Plan<'a> {
     pub agents: AgentFactory<'a>,
 }
 
+impl Plan<'_> {
+    /// The plan for a part of a team in which `agents` agents (the problem's robots and the
+    /// relays beside them) take part in the stop, each certifying its share of
+    /// [`Plan::tolerance`]: the method's own tolerance (its tie-break, its certificate's
+    /// thresholds), sized for the problem's robots alone, is scaled to that share, so
+    /// that every agent's slack fits it and the slacks of all of them sum to at most
+    /// the tolerance.
+    pub fn shared_by(self, agents: usize) -> Self {
+        let robots = self.agents.problem.robots();
+        if agents <= robots {
+            return self;
+        }
+        let AgentFactory {
+            problem,
+            graph,
+            setup,
+            params,
+            epsilon,
+            seed,
+            schedule,
+            ..
+        } = self.agents;
+        let params = TeamParams {
+            tolerance: params.tolerance * robots as f64 / agents as f64,
+            ..params
+        };
+        let agents = AgentFactory::new(problem, graph, setup, params, epsilon, seed, schedule);
+        Self { agents, ..self }
+    }
+}
+
 /// ρ, the tie-breaking perturbation, the stop tolerance and the agents of `setup` (the
 /// options' method with its settings), as every transport (and every independently started
 /// agent) computes them.
