@@ -305,6 +305,7 @@ fn leave_for_good(
     output: &mut dyn Write,
     mut tell: bool,
 ) -> Result<(), MemberError> {
+    tracing::info!(robot = member.id(), "leaving the team");
     loop {
         let episode = member.episode();
         let id = member.id();

@@ -253,7 +253,14 @@ impl Membership {
                 drop(resources);
                 last
             }
-            Err(_) => false,
+            Err(_) => {
+                // Without the lock, still not a death: a neighbour that finds the process
+                // gone with its id recorded would take this member for crashed.
+                for &slot in &slots {
+                    board.set_member_pid(slot, 0);
+                }
+                false
+            }
         };
         if last {
             drop(board);

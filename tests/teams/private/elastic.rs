@@ -39,8 +39,20 @@ struct Episode {
 
 impl Fleet {
     fn start(team: PathBuf, run: &str, robots: usize, tasks: usize, hosts: Vec<Child>) -> Self {
-        let members: BTreeMap<usize, Sidecar> =
-            (0..robots).map(|i| (i, Sidecar::start(&team, i))).collect();
+        Self::start_with(team, run, (robots, tasks), hosts, &[])
+    }
+
+    /// [`Fleet::start`] with `env` added to every sidecar's environment.
+    fn start_with(
+        team: PathBuf,
+        run: &str,
+        (robots, tasks): (usize, usize),
+        hosts: Vec<Child>,
+        env: &[(&str, &str)],
+    ) -> Self {
+        let members: BTreeMap<usize, Sidecar> = (0..robots)
+            .map(|i| (i, Sidecar::start_with(&team, i, env)))
+            .collect();
         let pids = members.iter().map(|(&i, s)| (i, s.child.id())).collect();
         Self {
             team,
@@ -479,18 +491,26 @@ fn a_leaver_cut_off_by_crashes_in_its_leave_is_out_as_it_asked() {
     let run = format!("elasticsplit-{}", std::process::id());
     let (n, m) = (7, 3);
     let team = team_file(dir.path(), &run, n, m, "topology = \"ring\"\n");
-    let mut fleet = Fleet::start(team, &run, n, m, Vec::new());
+    let log = [("RUST_LOG", "admm_ta_runtime=info")];
+    let mut fleet = Fleet::start_with(team, &run, (n, m), Vec::new(), &log);
     assert_optimal_among(&fleet.episode(), "before");
-    // Robot 2 asks to leave: it waits in its leave episode for its neighbours' rows.
+    // Robot 2 asks to leave and waits in its leave episode for its neighbours' rows; robot
+    // 3 beside it gives its row.
     let mut leaver = fleet.members.remove(&2).unwrap();
     leaver.send(r#"{"leave": true}"#);
-    std::thread::sleep(Duration::from_millis(300));
-    // Robots 1 and 4 die: {2, 3} and {5, 6, 0} are apart; the larger part goes on.
-    fleet.kill(1);
-    fleet.kill(4);
+    leaver.await_stderr("leaving the team");
     let mut beside = fleet.members.remove(&3).unwrap();
     let row = fleet.row();
     beside.send_row(&row);
+    std::thread::sleep(Duration::from_millis(100));
+    // Robots 1 and 4 die together: {2, 3} and {5, 6, 0} are apart; the larger part goes on.
+    let mut dead: Vec<Sidecar> = [1, 4].map(|i| fleet.members.remove(&i).unwrap()).into();
+    for s in &mut dead {
+        let _ = s.child.kill();
+    }
+    for s in &mut dead {
+        let _ = s.child.wait();
+    }
     let e = fleet.episode();
     let first = assert_optimal_among(&e, "the part that goes on");
     let crashed = first["crashed"].as_array().unwrap();

@@ -271,7 +271,7 @@ impl TeamMember {
             let roster = self.roster();
             let answer = match self.episode_with(None, Participation::Leaving) {
                 Err(e) if matches!(self.standing, Standing::Lost(_)) => {
-                    tracing::info!(robot = me, why = %e, "left: the team went on without it");
+                    tracing::info!(robot = me, why = %e, "left: its roster broke apart in its leave");
                     return Ok(());
                 }
                 other => other?,
