@@ -9,7 +9,7 @@ use crate::standing::agreement::{Closing, Flooded, Opening, Participation, Sync}
 use crate::standing::outcome::{Outcome, nothing_to_solve};
 use crate::standing::roster::{LeaveRule, Roster, change};
 use crate::team::team_file::Team;
-use crate::workload::plan::{BadRho, prepare};
+use crate::workload::plan::{BadRho, prepare_for_stop};
 use admm_ta_agents::agent::{ConsensusAgent, NewCostsError};
 use admm_ta_agents::certify::local_stop::{LocalCertifiedStop, LocalStopError};
 use admm_ta_agents::method::masked::{MaskedAgent, Part};
@@ -270,8 +270,8 @@ impl Episodes {
         // more slack than its share of the team's, and a part of fewer than half of the
         // team's slots never certified).
         let stoppers = self.roster.len();
-        let plan =
-            prepare(&problem, &self.compact, &self.settings.options, setup)?.shared_by(stoppers);
+        let options = &self.settings.options;
+        let plan = prepare_for_stop(&problem, &self.compact, options, setup, stoppers)?;
         // Its own neighbours, whatever its place among the robots that take part.
         let (n, id) = (self.settings.robots, self.settings.id);
         let degree = self.graph.degree(id);

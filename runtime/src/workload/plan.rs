@@ -106,37 +106,6 @@ pub struct Plan<'a> {
     pub agents: AgentFactory<'a>,
 }
 
-impl Plan<'_> {
-    /// The plan for a part of a team in which `agents` agents (the problem's robots and the
-    /// relays beside them) take part in the stop, each certifying its share of
-    /// [`Plan::tolerance`]: the method's own tolerance (its tie-break, its certificate's
-    /// thresholds), sized for the problem's robots alone, is scaled to that share, so
-    /// that every agent's slack fits it and the slacks of all of them sum to at most
-    /// the tolerance.
-    pub fn shared_by(self, agents: usize) -> Self {
-        let robots = self.agents.problem.robots();
-        if agents <= robots {
-            return self;
-        }
-        let AgentFactory {
-            problem,
-            graph,
-            setup,
-            params,
-            epsilon,
-            seed,
-            schedule,
-            ..
-        } = self.agents;
-        let params = TeamParams {
-            tolerance: params.tolerance * robots as f64 / agents as f64,
-            ..params
-        };
-        let agents = AgentFactory::new(problem, graph, setup, params, epsilon, seed, schedule);
-        Self { agents, ..self }
-    }
-}
-
 /// ρ, the tie-breaking perturbation, the stop tolerance and the agents of `setup` (the
 /// options' method with its settings), as every transport (and every independently started
 /// agent) computes them.
@@ -145,6 +114,21 @@ pub fn prepare<'a>(
     graph: &'a Graph,
     options: &SolveOptions,
     setup: Box<dyn MethodSetup>,
+) -> Result<Plan<'a>, BadRho> {
+    prepare_for_stop(problem, graph, options, setup, problem.robots())
+}
+
+/// [`prepare`] for a part of a team in which `stoppers` agents (the problem's robots and
+/// the relays beside them) take part in the stop, each certifying its share of
+/// [`Plan::tolerance`]: the method's own tolerance (its tie-break, its certificate's
+/// thresholds), sized for the problem's robots alone, is scaled to that share, so that
+/// every agent's slack fits it and the slacks of all of them sum to at most the tolerance.
+pub fn prepare_for_stop<'a>(
+    problem: &'a TaskAssignmentProblem,
+    graph: &'a Graph,
+    options: &SolveOptions,
+    setup: Box<dyn MethodSetup>,
+    stoppers: usize,
 ) -> Result<Plan<'a>, BadRho> {
     let n = problem.robots();
     // Methods without a penalty report ρ = 0 and ignore --rho and --adaptive-rho.
@@ -166,10 +150,15 @@ pub fn prepare<'a>(
         .then(|| setup.schedule(rho))
         .flatten();
     let stop_cadence = setup.stop_cadence();
+    let method_tolerance = if stoppers > n {
+        tolerance * n as f64 / stoppers as f64
+    } else {
+        tolerance
+    };
     let params = TeamParams {
         rho,
         diameter,
-        tolerance,
+        tolerance: method_tolerance,
     };
     let agents = AgentFactory::new(
         problem,

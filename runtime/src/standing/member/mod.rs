@@ -266,7 +266,6 @@ impl TeamMember {
     /// does not go on) is out, as it asked: that is a leave too.
     pub fn leave(&mut self) -> Result<(), MemberError> {
         let me = self.id();
-        let was_in = self.standing == Standing::In;
         while self.standing == Standing::In {
             let roster = self.roster();
             let answer = match self.episode_with(None, Participation::Leaving) {
@@ -289,7 +288,6 @@ impl TeamMember {
         }
         match self.usable() {
             Err(RowError::Left) => Ok(()),
-            Err(RowError::Lost(_)) if was_in => Ok(()),
             other => other.map_err(MemberError::refused),
         }
     }
