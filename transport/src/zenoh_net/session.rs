@@ -222,11 +222,21 @@ pub fn open(role: &Role, listen: &[String], connect: &[String]) -> Result<Sessio
 }
 
 /// The keys below `key` with a liveliness token on the network now.
+///
+/// The replies go to an unbounded channel: Zenoh answers the tokens it knows inside the
+/// query's `wait`, on the asking thread, and its default handler (a channel of 256) blocked
+/// that thread for good once a standing team of 200 robots held more tokens than that.
 pub fn alive_keys(session: &Session, key: String) -> Result<Vec<String>, ZenohError> {
-    let replies = session
+    let (sender, replies) = std::sync::mpsc::channel();
+    let deliver = move |reply: zenoh::query::Reply| {
+        // The receiver outlives the query; a send can only fail once it is gone.
+        let _ = sender.send(reply);
+    };
+    session
         .liveliness()
         .get(&key)
         .timeout(Duration::from_secs(1))
+        .with((deliver, ()))
         .wait()
         .map_err(|e| ZenohError::new(format!("cannot ask for the liveliness tokens {key}"), e))?;
     let mut keys = Vec::new();
@@ -375,7 +385,37 @@ pub fn watch_failures(
 
 #[cfg(test)]
 mod tests {
-    use super::parse_failure;
+    use super::*;
+
+    /// More tokens than Zenoh's default reply channel holds (256): the query answers every
+    /// one, where it used to block its own thread for good (a standing team of 200 robots).
+    #[test]
+    fn a_liveliness_query_answers_more_tokens_than_a_default_channel_holds() {
+        let session = open(&Role::Router, &[], &[]).unwrap();
+        let prefix = format!("admm-ta-test/{}/alive", std::process::id());
+        let _tokens: Vec<_> = (0..300)
+            .map(|k| {
+                session
+                    .liveliness()
+                    .declare_token(format!("{prefix}/{k}"))
+                    .wait()
+                    .unwrap()
+            })
+            .collect();
+        let (done, keys) = std::sync::mpsc::channel();
+        let asking = session.clone();
+        std::thread::spawn(move || {
+            let _ = done.send(alive_keys(&asking, format!("{prefix}/*")));
+        });
+        match keys.recv_timeout(Duration::from_secs(30)) {
+            Ok(keys) => assert_eq!(keys.unwrap().len(), 300),
+            Err(_) => {
+                // Dropping them would wait for the blocked query's lock.
+                std::mem::forget((_tokens, session));
+                panic!("the liveliness query blocked its thread");
+            }
+        }
+    }
 
     #[test]
     fn failure_announcements() {
