@@ -13,11 +13,20 @@ wall time from the first process started to the last one ended, round p50/p99 fr
 agents' merged latencies, start-up from the first process started to the last agent
 connected, every host's exit) and a summary; removes the namespaces and
 the bridge at the end, whatever happens. Standard library only.
+
+With `--episodes E` it runs a *standing team* instead (private costs, `agent --serve`
+sidecars in the namespaces, one `host` per namespace): E episodes, the first half with costs
+drifting by up to ±1 % of the range from the last episode's, the second half redrawn. An
+episode passes when every robot's answer is certified, all name the same assignment and its
+cost equals the optimum of `admm-ta solve --method hungarian` on the stacked rows. Prints
+one line per episode (latency from the first row written to the last answer read, rounds,
+bytes one robot sent) and a summary.
 """
 
 import argparse
 import json
 import os
+import random
 import subprocess
 import sys
 import tempfile
@@ -56,15 +65,17 @@ def remove_hosts(bridge, hosts):
     ip("link", "del", bridge, check=False)
 
 
-def team_file(path, args, hosts, run, seed):
+def team_file(path, args, hosts, run, seed, costs="random"):
     n = args.agents
     per = [n // len(hosts) + (1 if h < n % len(hosts) else 0) for h in range(len(hosts))]
     lines = [
-        f'run = "{run}"', f"robots = {n}", 'costs = "random"', f"tasks = {n}",
+        f'run = "{run}"', f"robots = {n}", f'costs = "{costs}"', f"tasks = {n}",
         f"seed = {seed}", f'topology = "{args.topology}"', 'results = "results"',
         f"startup_timeout = {args.startup_timeout}", f"round_timeout = {args.round_timeout}",
         f'transport = "{args.transport}"', f'method = "{args.method}"',
     ]
+    if costs == "private":
+        lines.append(f"episode_timeout = {args.episode_timeout}")
     first = 0
     for h, (_, address) in enumerate(hosts):
         agents = ", ".join(str(a) for a in range(first, first + per[h]))
@@ -160,6 +171,111 @@ def one_run(args, hosts, k):
         }
 
 
+def hungarian_cost(binary, rows, directory):
+    """The optimum of the stacked rows, from the centralized oracle."""
+    csv = os.path.join(directory, "episode.csv")
+    with open(csv, "w") as f:
+        for r in rows:
+            f.write(",".join(repr(v) for v in r) + "\n")
+    done = subprocess.run([binary, "solve", "--costs", csv, "--method", "hungarian", "--json"],
+                          capture_output=True, text=True, check=True)
+    return json.loads(done.stdout)["cost"]
+
+
+def standing_rows(n, episodes, seed):
+    """Half drifting episodes (±1 % of the range each), then half redrawn."""
+    rng = random.Random(seed)
+    rows = [[rng.random() for _ in range(n)] for _ in range(n)]
+    out = []
+    for k in range(episodes):
+        if k == 0 or k >= episodes // 2:
+            rows = [[rng.random() for _ in range(n)] for _ in range(n)]
+        else:
+            rows = [[min(1.0, max(0.0, v + rng.uniform(-0.01, 0.01))) for v in r] for r in rows]
+        out.append(("redrawn" if k == 0 or k >= episodes // 2 else "drift", rows))
+    return out
+
+
+def standing_team(args, hosts):
+    """A standing team of private-cost sidecars across the namespaces; one line per episode."""
+    n = args.agents
+    with tempfile.TemporaryDirectory() as d:
+        team = os.path.join(d, "team.toml")
+        run = f"{TAG}s"
+        per = team_file(team, args, hosts, run, args.seed, costs="private")
+        procs, sidecars = [], []
+        first = 0
+        for h, (ns, _) in enumerate(hosts):
+            # Logs go to files (a pipe nobody reads would stop a talkative process).
+            log = open(os.path.join(d, f"host{h}.log"), "w")
+            procs.append(subprocess.Popen(
+                ["ip", "netns", "exec", ns, args.binary, "host", "--team", team, "--name", f"h{h}"],
+                stdout=subprocess.DEVNULL, stderr=log, text=True))
+            for a in range(first, first + per[h]):
+                log = open(os.path.join(d, f"robot{a}.log"), "w")
+                sidecars.append(subprocess.Popen(
+                    ["ip", "netns", "exec", ns, args.binary, "agent", "--team", team,
+                     "--robot", str(a), "--serve"],
+                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=log,
+                    text=True, bufsize=1))
+            first += per[h]
+        passed, lines = 0, []
+        try:
+            for k, (kind, rows) in enumerate(standing_rows(n, args.episodes, args.seed)):
+                started = time.monotonic()
+                for s, row in zip(sidecars, rows):
+                    s.stdin.write(json.dumps({"costs": row}) + "\n")
+                    s.stdin.flush()
+                answers = []
+                for i, s in enumerate(sidecars):
+                    line = s.stdout.readline()
+                    if not line:
+                        with open(os.path.join(d, f"robot{i}.log")) as f:
+                            said = f.read().strip().splitlines()[-1:]
+                        raise SystemExit(f"episode {k}: robot {i} ended: exit {s.wait()} {said}")
+                    answers.append(json.loads(line))
+                latency = time.monotonic() - started
+                best = hungarian_cost(args.binary, rows, d)
+                views = {json.dumps(a.get("assignment")) for a in answers}
+                total = answers[0].get("total_cost")
+                ok = (len(views) == 1 and all(a.get("certified") for a in answers)
+                      and total is not None and abs(total - best) <= 1e-9 * max(1.0, abs(best)))
+                passed += ok
+                line = {"episode": k, "costs": kind, "ok": ok, "latency_s": round(latency, 2),
+                        "rounds": answers[0].get("rounds"),
+                        "sent_kB": round(answers[0].get("sent_bytes", 0) / 1e3, 1),
+                        "cost": total, "optimum": best}
+                lines.append(line)
+                print(json.dumps(line), flush=True)
+        finally:
+            for s in sidecars:
+                try:
+                    s.stdin.close()
+                except OSError:
+                    pass
+            codes = []
+            for s in sidecars:
+                try:
+                    codes.append(s.wait(timeout=120))
+                except subprocess.TimeoutExpired:
+                    s.kill()
+                    codes.append(s.wait())
+            for p in procs:
+                try:
+                    p.wait(timeout=60)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+                    p.wait()
+        latencies = sorted(x["latency_s"] for x in lines)
+        rounds = sorted(x["rounds"] for x in lines)
+        print(f"standing {args.method} team of {n} on {len(hosts)} hosts: {passed}/{len(lines)} "
+              f"episodes certified optimal, latency median {latencies[len(latencies) // 2]} s "
+              f"(max {latencies[-1]} s), rounds median {rounds[len(rounds) // 2]}, "
+              f"sidecar exits {sorted(set(codes))}, host exits {[p.returncode for p in procs]}",
+              flush=True)
+        return passed == len(lines) == args.episodes and not any(codes)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--binary", default="target/release/admm-ta")
@@ -171,6 +287,9 @@ def main():
     parser.add_argument("--round-timeout", type=float, default=10.0)
     parser.add_argument("--startup-timeout", type=float, default=60.0)
     parser.add_argument("--runs", type=int, default=1)
+    parser.add_argument("--episodes", type=int,
+                        help="run a standing team of private costs for this many episodes")
+    parser.add_argument("--episode-timeout", type=float, default=300.0)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--limit", type=float, default=300.0, help="seconds per run")
     parser.add_argument("--verbose", action="store_true", help="every failing process's line")
@@ -186,6 +305,8 @@ def main():
     bridge, hosts = None, []
     try:
         bridge, hosts = make_hosts(args.hosts)
+        if args.episodes:
+            return 0 if standing_team(args, hosts) else 1
         rows = []
         for k in range(args.runs):
             row = one_run(args, hosts, k)
@@ -206,4 +327,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
