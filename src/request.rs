@@ -230,3 +230,72 @@ pub fn parse_rho(text: &str) -> Result<Option<f64>, RequestError> {
         ))),
     }
 }
+
+/// The run options a front end was given, each `None` when not given (the options' default
+/// then holds, and an option the run never reads is not refused): the command line fills it
+/// from its flags, the Python package from `admm_ta.solve`'s keyword arguments, and both
+/// apply it with [`GivenOptions::apply`].
+#[derive(Debug, Clone, Default)]
+pub struct GivenOptions {
+    /// `--rho`: `auto` or a number.
+    pub rho: Option<String>,
+    pub adaptive_rho: Option<bool>,
+    pub max_iters: Option<usize>,
+    pub stop: Option<crate::StopRule>,
+    pub stop_rounds: Option<usize>,
+    /// `--perturb`: `auto`, `off` or a positive number.
+    pub perturb: Option<String>,
+    pub trace: Option<bool>,
+    pub global_barrier: Option<bool>,
+    pub round_timeout: Option<f64>,
+    pub startup_timeout: Option<f64>,
+    pub on_failure: Option<crate::OnFailure>,
+    pub wait: Option<crate::WaitStrategy>,
+}
+
+impl GivenOptions {
+    /// `options` with every given option set (the text ones parsed, refused in the command
+    /// line's words).
+    pub fn apply(
+        self,
+        mut options: SolveOptionsBuilder,
+    ) -> Result<SolveOptionsBuilder, RequestError> {
+        if let Some(rho) = self.rho {
+            options = options.rho(parse_rho(&rho)?);
+        }
+        if let Some(perturb) = self.perturb {
+            options = options.perturbation(parse_perturb(&perturb)?);
+        }
+        if let Some(on) = self.adaptive_rho {
+            options = options.adaptive_rho(on);
+        }
+        if let Some(rounds) = self.max_iters {
+            options = options.max_iters(rounds);
+        }
+        if let Some(stop) = self.stop {
+            options = options.stop(stop);
+        }
+        if let Some(rounds) = self.stop_rounds {
+            options = options.stop_rounds(rounds);
+        }
+        if let Some(on) = self.trace {
+            options = options.trace(on);
+        }
+        if let Some(on) = self.global_barrier {
+            options = options.global_barrier(on);
+        }
+        if let Some(seconds) = self.round_timeout {
+            options = options.round_timeout_secs(seconds);
+        }
+        if let Some(seconds) = self.startup_timeout {
+            options = options.startup_timeout_secs(seconds);
+        }
+        if let Some(on_failure) = self.on_failure {
+            options = options.on_failure(on_failure);
+        }
+        if let Some(wait) = self.wait {
+            options = options.wait(wait);
+        }
+        Ok(options)
+    }
+}

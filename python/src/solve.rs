@@ -9,9 +9,7 @@ use admm_ta::command_line::Outcome;
 use admm_ta::command_line::cli::Delimiter;
 use admm_ta::command_line::commands::shared::agent_program;
 use admm_ta::command_line::exit::code_of;
-use admm_ta::request::{
-    CostSource, RequestError, SolveRequest, TopologySource, parse_perturb, parse_rho,
-};
+use admm_ta::request::{CostSource, GivenOptions, RequestError, SolveRequest, TopologySource};
 use admm_ta::{CostMatrix, Graph, Method, SolveOptions, SolveOptionsBuilder, SolveReport};
 use numpy::{PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -203,52 +201,31 @@ fn settings_of(kwargs: &mut Kwargs<'_>) -> anyhow::Result<GivenSettings> {
     Ok(given)
 }
 
-/// The solve options the keyword arguments give, as the command line sets its flags.
+/// The solve options the keyword arguments give, as the command line sets its flags (a
+/// switch set to `False` is not given, as a flag left out).
 fn options_of(kwargs: &mut Kwargs<'_>) -> anyhow::Result<SolveOptionsBuilder> {
-    let mut options = SolveOptions::builder()
+    let options = SolveOptions::builder()
         .method(kwargs.choice("method")?.unwrap_or_default())
         .transport(kwargs.choice("transport")?.unwrap_or_default())
         .check(kwargs.switch("check")?)
         .settings(settings_of(kwargs)?)
         .agent_program(agent_program()?)
         .fault_injection(true);
-    if let Some(rho) = kwargs.text("rho")? {
-        options = options.rho(parse_rho(&rho)?);
-    }
-    if kwargs.switch("adaptive_rho")? {
-        options = options.adaptive_rho(true);
-    }
-    if let Some(rounds) = kwargs.number("max_iters")? {
-        options = options.max_iters(rounds);
-    }
-    if let Some(stop) = kwargs.choice("stop")? {
-        options = options.stop(stop);
-    }
-    if let Some(rounds) = kwargs.number("stop_rounds")? {
-        options = options.stop_rounds(rounds);
-    }
-    if let Some(perturb) = kwargs.text("perturb")? {
-        options = options.perturbation(parse_perturb(&perturb)?);
-    }
-    if kwargs.switch("trace")? {
-        options = options.trace(true);
-    }
-    if kwargs.switch("global_barrier")? {
-        options = options.global_barrier(true);
-    }
-    if let Some(seconds) = kwargs.number("round_timeout")? {
-        options = options.round_timeout_secs(seconds);
-    }
-    if let Some(seconds) = kwargs.number("startup_timeout")? {
-        options = options.startup_timeout_secs(seconds);
-    }
-    if let Some(on_failure) = kwargs.choice("on_failure")? {
-        options = options.on_failure(on_failure);
-    }
-    if let Some(wait) = kwargs.choice("wait")? {
-        options = options.wait(wait);
-    }
-    Ok(options)
+    let given = GivenOptions {
+        rho: kwargs.text("rho")?,
+        adaptive_rho: kwargs.switch("adaptive_rho")?.then_some(true),
+        max_iters: kwargs.number("max_iters")?,
+        stop: kwargs.choice("stop")?,
+        stop_rounds: kwargs.number("stop_rounds")?,
+        perturb: kwargs.text("perturb")?,
+        trace: kwargs.switch("trace")?.then_some(true),
+        global_barrier: kwargs.switch("global_barrier")?.then_some(true),
+        round_timeout: kwargs.number("round_timeout")?,
+        startup_timeout: kwargs.number("startup_timeout")?,
+        on_failure: kwargs.choice("on_failure")?,
+        wait: kwargs.choice("wait")?,
+    };
+    Ok(given.apply(options)?)
 }
 
 /// The request of `admm_ta.solve`'s arguments: the cost matrix or cost file, the graph as

@@ -4,7 +4,7 @@ use crate::command_line::cli::SolveArgs;
 use crate::command_line::commands::shared::agent_program;
 use crate::command_line::exit::{Outcome, UsageError};
 use crate::command_line::output;
-use crate::request::{CostSource, SolveRequest, TopologySource, parse_perturb, parse_rho};
+use crate::request::{CostSource, GivenOptions, SolveRequest, TopologySource};
 use crate::{CostMatrix, Graph, SolveOptions, SolveOptionsBuilder, SolveReport};
 use anyhow::Result;
 use clap::ArgMatches;
@@ -84,48 +84,27 @@ fn request_of(
 
 /// The solve options the user gave (`given`).
 fn options_of(args: &SolveArgs, given: &dyn Fn(&str) -> bool) -> Result<SolveOptionsBuilder> {
-    let mut options = SolveOptions::builder()
+    let options = SolveOptions::builder()
         .method(args.method)
         .settings(args.settings.0.clone())
         .transport(args.transport)
         .check(args.check)
         .agent_program(agent_program()?)
         .fault_injection(true);
-    if given("rho") {
-        options = options.rho(parse_rho(&args.rho)?);
-    }
-    if given("adaptive_rho") {
-        options = options.adaptive_rho(args.adaptive_rho);
-    }
-    if given("max_iters") {
-        options = options.max_iters(args.max_iters);
-    }
-    if given("stop") {
-        options = options.stop(args.stop);
-    }
-    if given("stop_rounds") {
-        options = options.stop_rounds(args.stop_rounds);
-    }
-    if given("perturb") {
-        options = options.perturbation(parse_perturb(&args.perturb)?);
-    }
-    if given("trace") {
-        options = options.trace(args.trace);
-    }
-    if given("global_barrier") {
-        options = options.global_barrier(args.global_barrier);
-    }
-    if given("round_timeout") {
-        options = options.round_timeout_secs(args.round_timeout);
-    }
-    if given("startup_timeout") {
-        options = options.startup_timeout_secs(args.startup_timeout);
-    }
-    if given("on_failure") {
-        options = options.on_failure(args.on_failure);
-    }
-    if given("wait") {
-        options = options.wait(args.wait);
-    }
-    Ok(options)
+    let flag = given;
+    let given = GivenOptions {
+        rho: flag("rho").then(|| args.rho.clone()),
+        adaptive_rho: flag("adaptive_rho").then_some(args.adaptive_rho),
+        max_iters: flag("max_iters").then_some(args.max_iters),
+        stop: flag("stop").then_some(args.stop),
+        stop_rounds: flag("stop_rounds").then_some(args.stop_rounds),
+        perturb: flag("perturb").then(|| args.perturb.clone()),
+        trace: flag("trace").then_some(args.trace),
+        global_barrier: flag("global_barrier").then_some(args.global_barrier),
+        round_timeout: flag("round_timeout").then_some(args.round_timeout),
+        startup_timeout: flag("startup_timeout").then_some(args.startup_timeout),
+        on_failure: flag("on_failure").then_some(args.on_failure),
+        wait: flag("wait").then_some(args.wait),
+    };
+    Ok(given.apply(options)?)
 }
