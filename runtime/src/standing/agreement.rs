@@ -209,26 +209,23 @@ impl Flooded for Opening {
     }
 }
 
-/// What the robots report after an episode: every robot's cost of its own task and, when
-/// the message has room, its task.
+/// What the robots report after an episode: every robot's cost of its own task and its
+/// task (a round message has room for both: [`message_len`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Closing {
     /// Per robot its cost (user's numbers; `+∞`: a forbidden pair; 0 for a relay; NaN: not
     /// heard of yet).
     pub costs: Vec<f64>,
-    /// Per robot its task (`−1`: a relay; NaN: not heard of yet); empty when the message
-    /// has no room.
+    /// Per robot its task (`−1`: a relay; NaN: not heard of yet).
     pub tasks: Vec<f64>,
 }
 
 impl Closing {
-    /// Robot `index`'s own closing (`task` `None`: a relay), in a message of `payload_len`
-    /// values, in a team whose robots outside `roster` take no part (known at once as
-    /// relays: nobody waits to hear of them).
+    /// Robot `index`'s own closing (`task` `None`: a relay), in a team whose robots outside
+    /// `roster` take no part (known at once as relays: nobody waits to hear of them).
     pub fn own(
         robots: usize,
         roster: &[usize],
-        payload_len: usize,
         index: usize,
         task: Option<usize>,
         cost: f64,
@@ -242,11 +239,8 @@ impl Closing {
         };
         let mut costs: Vec<f64> = (0..robots).map(|i| unknown(i, 0.0)).collect();
         costs[index] = cost;
-        let mut tasks = Vec::new();
-        if payload_len >= 2 * robots {
-            tasks = (0..robots).map(|i| unknown(i, -1.0)).collect();
-            tasks[index] = task.map_or(-1.0, |t| t as f64);
-        }
+        let mut tasks: Vec<f64> = (0..robots).map(|i| unknown(i, -1.0)).collect();
+        tasks[index] = task.map_or(-1.0, |t| t as f64);
         Self { costs, tasks }
     }
 
@@ -256,11 +250,10 @@ impl Closing {
         complete.then(|| self.costs.iter().sum())
     }
 
-    /// The team's assignment (`None` for a relay), once every robot is heard of (when the
-    /// message had room).
+    /// The team's assignment (`None` for a relay), once every robot is heard of.
     pub fn assignment(&self) -> Option<Vec<Option<usize>>> {
         let valid = |t: &f64| t.is_finite() && *t >= -1.0 && t.fract() == 0.0;
-        (!self.tasks.is_empty() && self.tasks.iter().all(valid)).then(|| {
+        self.tasks.iter().all(valid).then(|| {
             self.tasks
                 .iter()
                 .map(|&t| (t >= 0.0).then_some(t as usize))
@@ -448,20 +441,18 @@ mod tests {
     #[test]
     fn closings_total_once_complete() {
         let all = [0, 1, 2];
-        let mut a = Closing::own(3, &all, 9, 0, Some(2), 1.5);
+        let mut a = Closing::own(3, &all, 0, Some(2), 1.5);
         assert_eq!(a.total(), None);
         let mut words = vec![0.0; 9];
-        Closing::own(3, &all, 9, 1, None, 0.0).write(&mut words);
+        Closing::own(3, &all, 1, None, 0.0).write(&mut words);
         a.merge(&words);
-        Closing::own(3, &all, 9, 2, Some(1), -0.5).write(&mut words);
+        Closing::own(3, &all, 2, Some(1), -0.5).write(&mut words);
         a.merge(&words);
         assert_eq!(a.total(), Some(1.0));
         assert_eq!(a.assignment(), Some(vec![Some(2), None, Some(1)]));
-        let narrow = Closing::own(3, &all, 4, 0, Some(0), 1.0);
-        assert!(narrow.tasks.is_empty() && narrow.assignment().is_none());
         // Robots outside the roster are known at once, as relays.
-        let mut part = Closing::own(4, &[0, 2], 8, 0, Some(1), 2.0);
-        Closing::own(4, &[0, 2], 8, 2, Some(0), 1.0).write(&mut words);
+        let mut part = Closing::own(4, &[0, 2], 0, Some(1), 2.0);
+        Closing::own(4, &[0, 2], 2, Some(0), 1.0).write(&mut words);
         part.merge(&words);
         assert_eq!(part.total(), Some(3.0));
         assert_eq!(part.assignment(), Some(vec![Some(1), None, Some(0), None]));

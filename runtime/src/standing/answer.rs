@@ -28,7 +28,7 @@ pub struct Answer {
     pub cost: Option<f64>,
     /// The team's total cost (a profit with `maximize`), from every robot's own cost.
     pub total_cost: Option<f64>,
-    /// Every robot's task (`None`: it took no part), when the round message has room for it.
+    /// Every robot's task (`None`: it took no part), once every robot is heard of.
     pub assignment: Option<Vec<Option<usize>>>,
     /// `false`: the stacked rows have no assignment that avoids every forbidden pair, or
     /// fewer robots took part than the episode has tasks.

@@ -469,7 +469,7 @@ impl Episodes {
             _ => (None, 0.0),
         };
         let message = &mut self.message;
-        let mut closing = Closing::own(n, self.roster.robots(), message.len(), id, task, cost);
+        let mut closing = Closing::own(n, self.roster.robots(), id, task, cost);
         let times = (self.diameter as u64).max(1);
         flood(
             rounds,
