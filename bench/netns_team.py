@@ -30,6 +30,7 @@ import random
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 TAG = f"nt{os.getpid() % 100000}"
@@ -196,84 +197,112 @@ def standing_rows(n, episodes, seed):
     return out
 
 
-def standing_team(args, hosts):
-    """A standing team of private-cost sidecars across the namespaces; one line per episode."""
-    n = args.agents
-    with tempfile.TemporaryDirectory() as d:
-        team = os.path.join(d, "team.toml")
-        run = f"{TAG}s"
-        per = team_file(team, args, hosts, run, args.seed, costs="private")
-        procs, sidecars = [], []
-        first = 0
-        for h, (ns, _) in enumerate(hosts):
-            # Logs go to files (a pipe nobody reads would stop a talkative process).
-            log = open(os.path.join(d, f"host{h}.log"), "w")
+def start_standing(args, hosts, team, per, d, procs, sidecars):
+    """Every host and its sidecars, in their namespaces; logs go to files in `d` (a pipe
+    nobody reads would stop a talkative process)."""
+    first = 0
+    for h, (ns, _) in enumerate(hosts):
+        with open(os.path.join(d, f"host{h}.log"), "w") as log:
             procs.append(subprocess.Popen(
                 ["ip", "netns", "exec", ns, args.binary, "host", "--team", team, "--name", f"h{h}"],
                 stdout=subprocess.DEVNULL, stderr=log, text=True))
-            for a in range(first, first + per[h]):
-                log = open(os.path.join(d, f"robot{a}.log"), "w")
+        for a in range(first, first + per[h]):
+            with open(os.path.join(d, f"robot{a}.log"), "w") as log:
                 sidecars.append(subprocess.Popen(
                     ["ip", "netns", "exec", ns, args.binary, "agent", "--team", team,
                      "--robot", str(a), "--serve"],
                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=log,
                     text=True, bufsize=1))
-            first += per[h]
-        passed, lines = 0, []
+        first += per[h]
+
+
+def episode_ok(answers, rows, best, k):
+    """Every robot certified, on episode `k`, with the same total and assignment: a
+    permutation whose cost on the stacked rows is the optimum `best`."""
+    close = lambda a, b: a is not None and abs(a - b) <= 1e-9 * max(1.0, abs(b))
+    first = answers[0].get("assignment")
+    if not first or any(t is None for t in first) or len(set(first)) != len(first):
+        return False
+    return (all(a.get("certified") and a.get("episode") == k and a.get("assignment") == first
+                and close(a.get("total_cost"), best) for a in answers)
+            and close(sum(rows[i][t] for i, t in enumerate(first)), best))
+
+
+def one_episode(args, sidecars, rows, k, d):
+    """Writes every robot's row and reads every answer (the watchdog ends a wedged team)."""
+    limit = args.episode_timeout + args.round_timeout + (args.startup_timeout if k == 0 else 0)
+    watchdog = threading.Timer(limit + 30, lambda: [s.kill() for s in sidecars])
+    watchdog.start()
+    try:
+        def ended(i):
+            with open(os.path.join(d, f"robot{i}.log")) as f:
+                said = f.read().strip().splitlines()[-1:]
+            return SystemExit(f"episode {k}: robot {i} ended: exit {sidecars[i].wait()} {said}")
+
+        started = time.monotonic()
+        for i, (s, row) in enumerate(zip(sidecars, rows)):
+            try:
+                s.stdin.write(json.dumps({"costs": row}) + "\n")
+                s.stdin.flush()
+            except BrokenPipeError:
+                raise ended(i) from None
+        answers = []
+        for i, s in enumerate(sidecars):
+            line = s.stdout.readline()
+            if not line:
+                raise ended(i)
+            answers.append(json.loads(line))
+        return time.monotonic() - started, answers
+    finally:
+        watchdog.cancel()
+
+
+def stop_all(sidecars, procs, within=120):
+    """Closes every sidecar's input and waits for all, hosts last, against one deadline;
+    kills what is left then. The exit codes."""
+    for s in sidecars:
         try:
+            s.stdin.close()
+        except OSError:
+            pass
+    deadline = time.monotonic() + within
+    for p in sidecars + procs:
+        try:
+            p.wait(timeout=max(0.1, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+    return [s.returncode for s in sidecars], [p.returncode for p in procs]
+
+
+def standing_team(args, hosts):
+    """A standing team of private-cost sidecars across the namespaces; one line per episode."""
+    n = args.agents
+    with tempfile.TemporaryDirectory() as d:
+        team = os.path.join(d, "team.toml")
+        per = team_file(team, args, hosts, f"{TAG}s", args.seed, costs="private")
+        procs, sidecars, lines = [], [], []
+        try:
+            start_standing(args, hosts, team, per, d, procs, sidecars)
             for k, (kind, rows) in enumerate(standing_rows(n, args.episodes, args.seed)):
-                started = time.monotonic()
-                for s, row in zip(sidecars, rows):
-                    s.stdin.write(json.dumps({"costs": row}) + "\n")
-                    s.stdin.flush()
-                answers = []
-                for i, s in enumerate(sidecars):
-                    line = s.stdout.readline()
-                    if not line:
-                        with open(os.path.join(d, f"robot{i}.log")) as f:
-                            said = f.read().strip().splitlines()[-1:]
-                        raise SystemExit(f"episode {k}: robot {i} ended: exit {s.wait()} {said}")
-                    answers.append(json.loads(line))
-                latency = time.monotonic() - started
+                latency, answers = one_episode(args, sidecars, rows, k, d)
                 best = hungarian_cost(args.binary, rows, d)
-                views = {json.dumps(a.get("assignment")) for a in answers}
-                total = answers[0].get("total_cost")
-                ok = (len(views) == 1 and all(a.get("certified") for a in answers)
-                      and total is not None and abs(total - best) <= 1e-9 * max(1.0, abs(best)))
-                passed += ok
-                line = {"episode": k, "costs": kind, "ok": ok, "latency_s": round(latency, 2),
-                        "rounds": answers[0].get("rounds"),
+                line = {"episode": k, "costs": kind, "ok": episode_ok(answers, rows, best, k),
+                        "latency_s": round(latency, 2), "rounds": answers[0].get("rounds"),
                         "sent_kB": round(answers[0].get("sent_bytes", 0) / 1e3, 1),
-                        "cost": total, "optimum": best}
+                        "cost": answers[0].get("total_cost"), "optimum": best}
                 lines.append(line)
                 print(json.dumps(line), flush=True)
         finally:
-            for s in sidecars:
-                try:
-                    s.stdin.close()
-                except OSError:
-                    pass
-            codes = []
-            for s in sidecars:
-                try:
-                    codes.append(s.wait(timeout=120))
-                except subprocess.TimeoutExpired:
-                    s.kill()
-                    codes.append(s.wait())
-            for p in procs:
-                try:
-                    p.wait(timeout=60)
-                except subprocess.TimeoutExpired:
-                    p.kill()
-                    p.wait()
+            codes, host_codes = stop_all(sidecars, procs)
+        passed = sum(x["ok"] for x in lines)
         latencies = sorted(x["latency_s"] for x in lines)
         rounds = sorted(x["rounds"] for x in lines)
         print(f"standing {args.method} team of {n} on {len(hosts)} hosts: {passed}/{len(lines)} "
               f"episodes certified optimal, latency median {latencies[len(latencies) // 2]} s "
               f"(max {latencies[-1]} s), rounds median {rounds[len(rounds) // 2]}, "
-              f"sidecar exits {sorted(set(codes))}, host exits {[p.returncode for p in procs]}",
-              flush=True)
-        return passed == len(lines) == args.episodes and not any(codes)
+              f"sidecar exits {sorted(set(codes))}, host exits {host_codes}", flush=True)
+        return passed == len(lines) == args.episodes and not any(codes) and not any(host_codes)
 
 
 def main():
