@@ -266,36 +266,28 @@ impl GivenOptions {
         if let Some(perturb) = self.perturb {
             options = options.perturbation(parse_perturb(&perturb)?);
         }
-        if let Some(on) = self.adaptive_rho {
-            options = options.adaptive_rho(on);
+        type Set<T> = fn(SolveOptionsBuilder, T) -> SolveOptionsBuilder;
+        fn set<T>(
+            options: SolveOptionsBuilder,
+            value: Option<T>,
+            set: Set<T>,
+        ) -> SolveOptionsBuilder {
+            match value {
+                Some(value) => set(options, value),
+                None => options,
+            }
         }
-        if let Some(rounds) = self.max_iters {
-            options = options.max_iters(rounds);
-        }
-        if let Some(stop) = self.stop {
-            options = options.stop(stop);
-        }
-        if let Some(rounds) = self.stop_rounds {
-            options = options.stop_rounds(rounds);
-        }
-        if let Some(on) = self.trace {
-            options = options.trace(on);
-        }
-        if let Some(on) = self.global_barrier {
-            options = options.global_barrier(on);
-        }
-        if let Some(seconds) = self.round_timeout {
-            options = options.round_timeout_secs(seconds);
-        }
-        if let Some(seconds) = self.startup_timeout {
-            options = options.startup_timeout_secs(seconds);
-        }
-        if let Some(on_failure) = self.on_failure {
-            options = options.on_failure(on_failure);
-        }
-        if let Some(wait) = self.wait {
-            options = options.wait(wait);
-        }
+        use SolveOptionsBuilder as B;
+        options = set(options, self.adaptive_rho, B::adaptive_rho);
+        options = set(options, self.max_iters, B::max_iters);
+        options = set(options, self.stop, B::stop);
+        options = set(options, self.stop_rounds, B::stop_rounds);
+        options = set(options, self.trace, B::trace);
+        options = set(options, self.global_barrier, B::global_barrier);
+        options = set(options, self.round_timeout, B::round_timeout_secs);
+        options = set(options, self.startup_timeout, B::startup_timeout_secs);
+        options = set(options, self.on_failure, B::on_failure);
+        options = set(options, self.wait, B::wait);
         Ok(options)
     }
 }

@@ -91,20 +91,19 @@ fn options_of(args: &SolveArgs, given: &dyn Fn(&str) -> bool) -> Result<SolveOpt
         .check(args.check)
         .agent_program(agent_program()?)
         .fault_injection(true);
-    let flag = given;
-    let given = GivenOptions {
-        rho: flag("rho").then(|| args.rho.clone()),
-        adaptive_rho: flag("adaptive_rho").then_some(args.adaptive_rho),
-        max_iters: flag("max_iters").then_some(args.max_iters),
-        stop: flag("stop").then_some(args.stop),
-        stop_rounds: flag("stop_rounds").then_some(args.stop_rounds),
-        perturb: flag("perturb").then(|| args.perturb.clone()),
-        trace: flag("trace").then_some(args.trace),
-        global_barrier: flag("global_barrier").then_some(args.global_barrier),
-        round_timeout: flag("round_timeout").then_some(args.round_timeout),
-        startup_timeout: flag("startup_timeout").then_some(args.startup_timeout),
-        on_failure: flag("on_failure").then_some(args.on_failure),
-        wait: flag("wait").then_some(args.wait),
+    let chosen = GivenOptions {
+        rho: given("rho").then(|| args.rho.clone()),
+        adaptive_rho: given("adaptive_rho").then_some(args.adaptive_rho),
+        max_iters: given("max_iters").then_some(args.max_iters),
+        stop: given("stop").then_some(args.stop),
+        stop_rounds: given("stop_rounds").then_some(args.stop_rounds),
+        perturb: given("perturb").then(|| args.perturb.clone()),
+        trace: given("trace").then_some(args.trace),
+        global_barrier: given("global_barrier").then_some(args.global_barrier),
+        round_timeout: given("round_timeout").then_some(args.round_timeout),
+        startup_timeout: given("startup_timeout").then_some(args.startup_timeout),
+        on_failure: given("on_failure").then_some(args.on_failure),
+        wait: given("wait").then_some(args.wait),
     };
-    Ok(given.apply(options)?)
+    Ok(chosen.apply(options)?)
 }
