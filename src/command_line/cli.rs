@@ -507,8 +507,8 @@ pub struct SolveArgs {
     /// ADMM penalty ρ: auto (scale-free rule from the cost spread and the graph's mean
     /// degree d̄: primal fast 100·spread/(2·d̄), primal paper
     /// 0.5·spread·√((n−1)/d̄)/(2·d̄·n), dual and inexact dual (fast variant) 0.5·s/(spread·d̄)
-    /// with s from ½ (distance-like costs) to 3 (independent costs) by the costs' structure
-    /// (1 where it is unclear),
+    /// with s from 3 (independent costs) to ½ (distance-like costs; less for teams of 150
+    /// and more) by the costs' structure (1 where it is unclear),
     /// growing to 300× over the run; paper variant dual 5/(spread·d̄), inexact dual
     /// 10/(spread·d̄)) or a positive number.
     #[arg(long, default_value = "auto", allow_negative_numbers = true)]

@@ -8,8 +8,10 @@ use crate::problem::costs::spread_of;
 /// The fast variant's `ρ₀` follows the costs' structure ([`structure_factor`]): at most
 /// this many times its rule …
 pub const FAST_STRUCTURE_MAX: f64 = 3.0;
-/// … and at least this share of it.
+/// … and this share of it for distance-like costs up to `h` = [`FAST_STRUCTURE_KNEE`] …
 pub const FAST_STRUCTURE_MIN: f64 = 0.5;
+/// … beyond which it falls as `1/h²` (distance costs of 150 robots and more).
+pub const FAST_STRUCTURE_KNEE: f64 = 3.2;
 
 /// The fast variant's factor on `ρ₀` for these costs, from `h`: the mean over robots (with
 /// two allowed tasks or more) of the gap between their two cheapest allowed costs times
@@ -25,9 +27,9 @@ pub const FAST_STRUCTURE_MIN: f64 = 0.5;
 /// competition less (tasks in far-apart clusters 0.1–0.25, points on a line 0.5–0.9,
 /// rows of different scales 0.35–0.75, few distinct values 0). The factor is
 /// [`FAST_STRUCTURE_MAX`] in the band of independent costs (`0.8 ≤ h ≤ 1.25`), the rule
-/// as it is (1) below 0.7 and from 1.4, falling to [`FAST_STRUCTURE_MIN`] at `h = 2`,
-/// linear in between (`factor_of`; basic operations only, so every machine of a team
-/// computes the same ρ).
+/// as it is (1) below 0.7 and at 1.4, falling to [`FAST_STRUCTURE_MIN`] at `h = 2`,
+/// linear in between, and that times `(3.2/h)²` beyond [`FAST_STRUCTURE_KNEE`] (`factor_of`;
+/// basic operations only, so every machine of a team computes the same ρ).
 ///
 /// Measured (fast dual, seeds 1–10, rounds to the certified stop, the rule's ρ times a
 /// constant): uniform costs certify faster with 3× (50 × 50 complete 183 → 124, 120 × 120
@@ -35,8 +37,18 @@ pub const FAST_STRUCTURE_MIN: f64 = 0.5;
 /// want less: at 1× the 120 × 120 complete graph certified 5 of 10 runs and at 2× the
 /// 100 × 100 one 1 of 10, at ½ every run of every size from 50 to 120. Clustered costs
 /// (three far-apart clusters, 40 × 40) are why the band is narrow: they certified at 1×
-/// and never at 3×.
+/// and never at 3×. Distance costs of larger teams want less still (`h` measured 3.2–4.3 at
+/// 150, 4.1–4.5 at 200, 5.6–6.3 at 400): at ½ the 150 × 150 complete graph certified 7 of 8
+/// runs in 5000 rounds, 200 × 200 (complete and `random:0.1`) 1 of 3 each and
+/// `random:0.05` at 400 0 of 3; with the fall beyond the knee every one of them (bench/README.md,
+/// "Light messages").
 pub fn structure_factor(costs: &CostMatrix) -> f64 {
+    structure_h(costs).map_or(1.0, factor_of)
+}
+
+/// `h` of [`structure_factor`]: none when no robot has two allowed tasks whose costs tell
+/// something about the competition.
+fn structure_h(costs: &CostMatrix) -> Option<f64> {
     let (n, m) = (costs.robots(), costs.tasks());
     let allowed = |i: usize, t: usize| costs.is_allowed(i, t).then(|| costs.get(i, t));
     // Tasks and robots whose allowed costs differ somewhere (not an idle column or row).
@@ -65,10 +77,7 @@ pub fn structure_factor(costs: &CostMatrix) -> f64 {
         sum += (second / spread - first / spread) * tasks as f64;
         robots += 1;
     }
-    if robots == 0 {
-        return 1.0;
-    }
-    factor_of(sum / robots as f64)
+    (robots > 0).then(|| sum / robots as f64)
 }
 
 /// The factor for `h` (see [`structure_factor`]): [`FAST_STRUCTURE_MAX`] in the band of
@@ -83,7 +92,8 @@ fn factor_of(h: f64) -> f64 {
         h if h <= 1.25 => max,
         h if h <= 1.4 => ramp(h, 1.25, 1.4, max, 1.0),
         h if h <= 2.0 => ramp(h, 1.4, 2.0, 1.0, min),
-        _ => min,
+        h if h <= FAST_STRUCTURE_KNEE => min,
+        h => min * (FAST_STRUCTURE_KNEE / h) * (FAST_STRUCTURE_KNEE / h),
     }
 }
 
@@ -100,7 +110,8 @@ mod tests {
     use crate::problem::cost_model::geometric;
 
     /// Uniform costs get the largest factor at every size, distance costs (nearly) the
-    /// smallest from 50 robots on, clustered costs the rule as it is; the factor ignores
+    /// smallest from 50 robots on, and less for the larger teams, clustered costs the rule
+    /// as it is; the factor ignores
     /// shifts and scales of the costs and the idle columns and rows of a normalised
     /// problem; costs that say nothing (constant, or one allowed task per robot) leave ρ₀
     /// as it is.
@@ -115,6 +126,12 @@ mod tests {
                     let factor = structure_factor(&distance);
                     assert!(factor <= 0.7, "{n} {seed}: {factor}");
                 }
+            }
+            if n == 120 {
+                let (small, large) = (geometric(120, 120, 2), geometric(400, 400, 2));
+                let (small, large) = (small.unwrap(), large.unwrap());
+                let (a, b) = (structure_factor(&small), structure_factor(&large));
+                assert!(b < 0.2 && b < a / 2.0, "{a} {b}");
             }
             let moved = CostMatrix::new(
                 n,
@@ -173,7 +190,9 @@ mod tests {
             (1.0, 3.0),
             (1.4, 1.0),
             (1.7, 0.75),
-            (9.0, 0.5),
+            (3.0, 0.5),
+            (3.2, 0.5),
+            (6.4, 0.125),
         ] {
             assert!((factor_of(h) - factor).abs() < 1e-12, "{h}");
         }
