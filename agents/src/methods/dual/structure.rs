@@ -10,7 +10,9 @@ use crate::problem::costs::spread_of;
 pub const FAST_STRUCTURE_MAX: f64 = 3.0;
 /// … and this share of it for distance-like costs up to `h` = [`FAST_STRUCTURE_KNEE`] …
 pub const FAST_STRUCTURE_MIN: f64 = 0.5;
-/// … beyond which it falls as `1/h²` (distance costs of 150 robots and more).
+/// … beyond which it falls as `1/h²` to a quarter of that at twice the knee (distance
+/// costs of 150 to about 400 robots), rising back to it at four times the knee (costs
+/// with one clear favourite per robot, whose `h` grows with the number of tasks).
 pub const FAST_STRUCTURE_KNEE: f64 = 3.2;
 
 /// The fast variant's factor on `ρ₀` for these costs, from `h`: the mean over robots (with
@@ -28,8 +30,9 @@ pub const FAST_STRUCTURE_KNEE: f64 = 3.2;
 /// rows of different scales 0.35–0.75, few distinct values 0). The factor is
 /// [`FAST_STRUCTURE_MAX`] in the band of independent costs (`0.8 ≤ h ≤ 1.25`), the rule
 /// as it is (1) below 0.7 and at 1.4, falling to [`FAST_STRUCTURE_MIN`] at `h = 2`,
-/// linear in between, and that times `(3.2/h)²` beyond [`FAST_STRUCTURE_KNEE`] (`factor_of`;
-/// basic operations only, so every machine of a team computes the same ρ).
+/// linear in between, and that times `(3.2/h)²` from [`FAST_STRUCTURE_KNEE`] to twice it,
+/// back to [`FAST_STRUCTURE_MIN`] linearly at four times it and beyond (`factor_of`; basic
+/// operations only, so every machine of a team computes the same ρ).
 ///
 /// Measured (fast dual, seeds 1–10, rounds to the certified stop, the rule's ρ times a
 /// constant): uniform costs certify faster with 3× (50 × 50 complete 183 → 124, 120 × 120
@@ -41,7 +44,11 @@ pub const FAST_STRUCTURE_KNEE: f64 = 3.2;
 /// 150, 4.1–4.5 at 200, 5.6–6.3 at 400): at ½ the 150 × 150 complete graph certified 7 of 8
 /// runs in 5000 rounds, 200 × 200 (complete and `random:0.1`) 1 of 3 each and
 /// `random:0.05` at 400 0 of 3; with the fall beyond the knee every one of them (bench/README.md,
-/// "Light messages").
+/// "Light messages"). The fall stops at twice the knee because costs whose robots each
+/// have one clear favourite (`h` from 20 to 190 at 50–200 robots) want ½: with `(3.2/h)²`
+/// for every `h` favourites shared by two robots took 3 to 8 times the rounds or never
+/// certified, and at ⅛ they were slower on every run (complete graph, 50 / 100 / 200
+/// robots: 277 / 252 / 295 rounds at ½, 406 / 390 / 417 at ⅛).
 pub fn structure_factor(costs: &CostMatrix) -> f64 {
     structure_h(costs).map_or(1.0, factor_of)
 }
@@ -93,7 +100,12 @@ fn factor_of(h: f64) -> f64 {
         h if h <= 1.4 => ramp(h, 1.25, 1.4, max, 1.0),
         h if h <= 2.0 => ramp(h, 1.4, 2.0, 1.0, min),
         h if h <= FAST_STRUCTURE_KNEE => min,
-        h => min * (FAST_STRUCTURE_KNEE / h) * (FAST_STRUCTURE_KNEE / h),
+        h if h <= 2.0 * FAST_STRUCTURE_KNEE => min * (FAST_STRUCTURE_KNEE / h).powi(2),
+        h if h <= 4.0 * FAST_STRUCTURE_KNEE => {
+            let k = FAST_STRUCTURE_KNEE;
+            ramp(h, 2.0 * k, 4.0 * k, min / 4.0, min)
+        }
+        _ => min,
     }
 }
 
@@ -132,6 +144,23 @@ mod tests {
                 let (small, large) = (small.unwrap(), large.unwrap());
                 let (a, b) = (structure_factor(&small), structure_factor(&large));
                 assert!(b < 0.2 && b < a / 2.0, "{a} {b}");
+                // One clear favourite per robot (cost 0, the rest from ½ to 1): `h` near the
+                // number of tasks, and ρ₀ as for distance costs of small teams.
+                let favourite = CostMatrix::new(
+                    n,
+                    n,
+                    (0..n * n)
+                        .map(|k| {
+                            if k % (n + 1) == 0 {
+                                0.0
+                            } else {
+                                0.5 + uniform.values()[k] / 2.0
+                            }
+                        })
+                        .collect(),
+                )
+                .unwrap();
+                assert_eq!(structure_factor(&favourite), FAST_STRUCTURE_MIN);
             }
             let moved = CostMatrix::new(
                 n,
@@ -193,6 +222,9 @@ mod tests {
             (3.0, 0.5),
             (3.2, 0.5),
             (6.4, 0.125),
+            (9.6, 0.3125),
+            (12.8, 0.5),
+            (100.0, 0.5),
         ] {
             assert!((factor_of(h) - factor).abs() < 1e-12, "{h}");
         }
