@@ -39,7 +39,8 @@
 //!   by [`RHO_GROWTH`] a round up to [`RHO_MAX_GROWTH`] `ρ₀` (every robot from the round
 //!   number alone). `ρ₀` is, for both methods, a tenth of the paper variant's dual rule
 //!   (`c = 5`) times a factor from the costs' structure: 3 for independent costs, ½ for
-//!   distance-like ones (less for large teams), 1 where it is unclear ([`crate::methods::dual::structure_factor`]).
+//!   distance-like ones (less for large teams), 1 where it is unclear
+//!   ([`crate::methods::dual::structure_factor`]).
 //!
 //! The payload is `m` multipliers and the certificate's `m` potentials and `m` claims,
 //! several claims packed into one value ([`snapshot::claims_per_word`]: 7 for 100

@@ -89,9 +89,10 @@ fn structure_h(costs: &CostMatrix) -> Option<f64> {
 
 /// The factor for `h` (see [`structure_factor`]): [`FAST_STRUCTURE_MAX`] in the band of
 /// independent costs, 1 (the rule as it is) below it, falling to [`FAST_STRUCTURE_MIN`]
-/// above it; linear between, basic operations only.
+/// above it, and below that between one and four times [`FAST_STRUCTURE_KNEE`]; linear
+/// between, basic operations only.
 fn factor_of(h: f64) -> f64 {
-    let (max, min) = (FAST_STRUCTURE_MAX, FAST_STRUCTURE_MIN);
+    let (max, min, knee) = (FAST_STRUCTURE_MAX, FAST_STRUCTURE_MIN, FAST_STRUCTURE_KNEE);
     let ramp = |x: f64, from: f64, to: f64, a: f64, b: f64| a + (b - a) * (x - from) / (to - from);
     match h {
         h if !h.is_finite() || h < 0.7 => 1.0,
@@ -99,12 +100,9 @@ fn factor_of(h: f64) -> f64 {
         h if h <= 1.25 => max,
         h if h <= 1.4 => ramp(h, 1.25, 1.4, max, 1.0),
         h if h <= 2.0 => ramp(h, 1.4, 2.0, 1.0, min),
-        h if h <= FAST_STRUCTURE_KNEE => min,
-        h if h <= 2.0 * FAST_STRUCTURE_KNEE => min * (FAST_STRUCTURE_KNEE / h).powi(2),
-        h if h <= 4.0 * FAST_STRUCTURE_KNEE => {
-            let k = FAST_STRUCTURE_KNEE;
-            ramp(h, 2.0 * k, 4.0 * k, min / 4.0, min)
-        }
+        h if h <= knee => min,
+        h if h <= 2.0 * knee => min * (knee / h) * (knee / h),
+        h if h <= 4.0 * knee => ramp(h, 2.0 * knee, 4.0 * knee, min / 4.0, min),
         _ => min,
     }
 }
@@ -234,6 +232,6 @@ mod tests {
         let single = CostMatrix::new(2, 2, vec![1.0, inf, inf, 5.0]).unwrap();
         assert_eq!(structure_factor(&single), 1.0);
         let huge = CostMatrix::new(2, 2, vec![1e307, -1e307, -1e307, 1e307]).unwrap();
-        assert!(structure_factor(&huge).is_finite());
+        assert!(structure_factor(&huge).is_finite() && structure_factor(&huge) > 0.0);
     }
 }
