@@ -58,12 +58,26 @@ mod connect;
 
 type RoundSample = Sample<Svc, [f64], RoundHeader>;
 
-/// A waiting agent scans the run's iceoryx2 nodes for dead ones once it has waited this
-/// long for a round, and again at this interval. Scans read every node of the run, so they
-/// are kept off the normal path: with 100 agents on 2 cores, scanning after 100 ms slowed
-/// rounds a hundredfold. (Under the launcher a dead agent is found within milliseconds by
-/// `waitpid` anyway; the scan is for agents started without one.)
+/// A waiting agent of a team of up to 20 scans the run's iceoryx2 nodes for dead ones once
+/// it has waited this long for a round, and again at this interval (larger teams: see
+/// [`dead_node_scan_every`]). Scans read every node of the run, so they are kept off the
+/// normal path: with 100 agents on 2 cores, scanning after 100 ms slowed rounds a
+/// hundredfold. (Under the launcher a dead agent is found within milliseconds by `waitpid`
+/// anyway; the scan is for agents started without one.)
 const DEAD_NODE_SCAN_EVERY: Duration = Duration::from_millis(500);
+
+/// How often an agent of a team of `agents` without a launcher scans the run's nodes for a
+/// dead one while it waits, at start-up and in rounds: a scan reads every node of the run
+/// and every waiting agent scans, so the interval grows with the team (0.5 s per 20
+/// agents): the team scans as often in all at any size. (With a
+/// fixed 0.5 s, 200 agents scanning took most of the 2 cores while the last agents started,
+/// and a standing team of 200 sidecars whose rounds once took over 0.5 s, at the start of
+/// an episode, never recovered: every agent waited, so every agent scanned, so every round
+/// waited; its episode went from 30 s to over 10 minutes.) One agent that finds a dead node
+/// marks it on the board for all, so the team still looks far more often than each agent.
+fn dead_node_scan_every(agents: usize) -> Duration {
+    DEAD_NODE_SCAN_EVERY * (agents / 20).max(1) as u32
+}
 
 /// A neighbour's sample of the gathered round with its header and payload at hand: read
 /// once when it arrives, not re-derived from the shared memory at every use.
@@ -461,6 +475,8 @@ struct PeerWatch {
     /// The run's iceoryx2 configuration (to scan its nodes for dead ones).
     config: Config,
     last_dead_node_scan: Instant,
+    /// [`dead_node_scan_every`] of the team.
+    scan_every: Duration,
     /// The launcher's pid, for supervised agents: if this process is orphaned (the
     /// launcher died), it stops.
     launcher: Option<u32>,
@@ -468,8 +484,9 @@ struct PeerWatch {
 
 impl PeerWatch {
     /// Stops this agent if another agent failed: marked on the board (by the launcher or a
-    /// peer), or found dead among the run's iceoryx2 nodes (scanned at most every
-    /// [`DEAD_NODE_SCAN_EVERY`]; a dead node's stale resources are removed on the way).
+    /// peer), or found dead among the run's iceoryx2 nodes (scanned in waits at least
+    /// [`PeerWatch::scan_every`] long, at most that often; a dead node's stale resources are
+    /// removed on the way).
     fn check(&mut self, board: &Board, round: u64, waited: Duration) -> Result<(), ExchangeError> {
         board.check_team(self.index, round)?;
         // A system call: every 64 rounds and in long waits, not in every round.
@@ -487,8 +504,8 @@ impl PeerWatch {
         // without one, and for a subscriber that vanished (`waited` = `MAX`). (It can also mistake a neighbour that is just finishing — its node's
         // token released before its files are gone — for a dead one.)
         if (self.launcher.is_none() || waited == Duration::MAX)
-            && waited >= DEAD_NODE_SCAN_EVERY
-            && self.last_dead_node_scan.elapsed() >= DEAD_NODE_SCAN_EVERY
+            && waited >= self.scan_every
+            && self.last_dead_node_scan.elapsed() >= self.scan_every
         {
             self.last_dead_node_scan = Instant::now();
             if let Some(agent) = scan_dead_agents(&self.config, self.index, board) {

@@ -22,7 +22,7 @@ use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use std::time::{Duration, Instant};
 
-use super::{DEAD_NODE_SCAN_EVERY, Held};
+use super::{Held, dead_node_scan_every};
 
 impl IpcExchange {
     /// Creates this agent's node and its ports on the services its launcher created, then
@@ -158,7 +158,7 @@ impl Ports {
     }
 
     /// Phase 3: waits until every neighbour subscribed to this agent, backing off; stops on
-    /// a stop request, a failure mark or (without a launcher, see [`startup_scan_every`]) a
+    /// a stop request, a failure mark or (without a launcher, see [`dead_node_scan_every`]) a
     /// dead node, and at `deadline` names the neighbours that never started.
     fn await_subscribers(
         &self,
@@ -194,7 +194,8 @@ impl Ports {
                     how: "died during start-up".into(),
                 });
             }
-            if !endpoint.supervised && last_scan.elapsed() >= startup_scan_every(endpoint.agents())
+            if !endpoint.supervised
+                && last_scan.elapsed() >= dead_node_scan_every(endpoint.agents())
             {
                 last_scan = Instant::now();
                 if let Some(failed) = scan_dead_agents(config, i, board) {
@@ -295,21 +296,13 @@ impl Ports {
                 index: endpoint.index,
                 config: config.clone(),
                 last_dead_node_scan: Instant::now(),
+                scan_every: dead_node_scan_every(endpoint.agents()),
                 launcher: endpoint.supervised.then(std::os::unix::process::parent_id),
             },
             fault: endpoint.fault,
             _node: self.node,
         }
     }
-}
-
-/// How often an agent of a team of `agents` without a launcher scans the run's nodes for a
-/// dead one while it waits for its neighbours: a scan reads every node of the run, and
-/// every waiting agent scans, so the interval grows with the team (200 agents scanning
-/// every 0.5 s took most of the 2 cores while the last agents started). Under a launcher
-/// no agent scans at start-up: the launcher reaps a dead agent and marks it on the board.
-fn startup_scan_every(agents: usize) -> Duration {
-    DEAD_NODE_SCAN_EVERY * (agents / 20).max(1) as u32
 }
 
 /// Phase 5: the second half of the start-up rendezvous ([`Board::await_connected`]) as an
