@@ -229,7 +229,8 @@ impl FastDualAgent {
         // Warm or cold, ρ follows its schedule from ρ₀ again: a warm episode's prices must
         // still move. Drifting costs, warm episodes' median rounds, ρ from ρ₀ / ρ going on
         // from the last episode / cold: 10-robot ring 58 / 39 / 75, 50 robots `random:0.1`
-        // 246 / 316 / 372, 200 robots not measured / 1398 / 462 (bench/README.md).
+        // 246 / 316 / 372, 200 robots 502 / 1398 / 442 (bench/README.md: at 200 robots a
+        // drift moves half of the optimal tasks, and warm is no better than cold).
         self.steps = 0;
         self.snapshot.restart();
         self.episode_steps = 0;

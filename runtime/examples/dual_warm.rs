@@ -1,0 +1,127 @@
+//! Rounds of a fast dual standing team's episodes in the lockstep sim, warm against cold:
+//! the first episode's costs are seed `SEED`'s of the cost model, each next episode's the
+//! last's with every cost moved by up to ±`DRIFT` (default 0.01) and clipped to the first
+//! episode's range (as `bench/standing_team.py` does for uniform costs); `ROWS=file` gives
+//! the episodes' matrices instead (a JSON list of row lists, the first episode's first).
+//! The robots' agents are kept from episode to episode (`set_costs`, then every robot's
+//! iterate sent again, as a standing team starts an episode); every episode must certify
+//! the oracle's optimum. Prints each episode's rounds and how many robots' optimal tasks
+//! moved since the last. `RHO_SCALE=F` multiplies the one-shot default ρ (a standing team
+//! of private costs has no structure factor: `RHO_SCALE=0.333` for uniform costs).
+//! `cargo run --release -p admm-ta-runtime --example dual_warm -- ROBOTS TASKS TOPOLOGY uniform|distance EPISODES SEED [ROUNDS]`.
+mod common;
+
+use admm_ta_agents::agent::ConsensusAgent;
+use admm_ta_agents::certify::oracle;
+use admm_ta_agents::method::agent::MethodAgent;
+use admm_ta_agents::method::settings::GivenSettings;
+use admm_ta_agents::methods::Method;
+use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
+use admm_ta_topologies::Graph;
+use admm_ta_topologies::rng::SeededRng;
+use admm_ta_transport::sim::process::LockstepSim;
+use common::Problems;
+
+/// Runs the team to every robot's certificate; the rounds it took (None: not within
+/// `max_rounds`). Panics if the certified assignment is not the oracle's optimum.
+fn episode(
+    agents: Vec<MethodAgent>,
+    graph: &Graph,
+    problem: &TaskAssignmentProblem,
+    tol: f64,
+    max_rounds: usize,
+) -> (Vec<MethodAgent>, Option<usize>) {
+    let optimum = oracle::solve(problem).unwrap();
+    let mut sim = LockstepSim::new(agents, graph);
+    for round in 1..=max_rounds {
+        sim.step_round();
+        if sim.agents().iter().all(|a| a.certificate_slack() <= tol) {
+            let decisions: Vec<usize> = sim.agents().iter().map(|a| a.decide()).collect();
+            assert!(
+                problem.is_feasible(&decisions)
+                    && problem.cost_of(&decisions).unwrap() <= optimum.cost + 1e-9,
+                "wrong certificate at round {round}"
+            );
+            return (sim.into_agents(), Some(round));
+        }
+    }
+    (sim.into_agents(), None)
+}
+
+/// The episodes' cost matrices: `ROWS`, or `first` drifted `episodes` times.
+fn matrices(first: &CostMatrix, episodes: usize, seed: u64) -> Vec<CostMatrix> {
+    if let Ok(file) = std::env::var("ROWS") {
+        let rows: Vec<Vec<Vec<f64>>> =
+            serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+        let (n, m) = (rows[0].len(), rows[0][0].len());
+        return rows
+            .iter()
+            .map(|r| CostMatrix::new(n, m, r.concat()).unwrap())
+            .collect();
+    }
+    let drift: f64 = std::env::var("DRIFT").map_or(0.01, |v| v.parse().unwrap());
+    let values = first.values();
+    let low = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let high = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut rng = SeededRng::new(seed * 7 + 1);
+    let mut all = vec![first.clone()];
+    for _ in 0..episodes {
+        let moved = all[all.len() - 1]
+            .values()
+            .iter()
+            .map(|v| (v + drift * (2.0 * rng.uniform() - 1.0)).clamp(low, high))
+            .collect();
+        all.push(CostMatrix::new(first.robots(), first.tasks(), moved).unwrap());
+    }
+    all
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let problems = Problems::from_args(&args);
+    let episodes: usize = args[5].parse().unwrap();
+    let seed: u64 = args[6].parse().unwrap();
+    let max_rounds: usize = args.get(7).map_or(5000, |a| a.parse().unwrap());
+    let (generated, graph) = problems.instance(seed);
+    let problems: Vec<TaskAssignmentProblem> = matrices(generated.costs(), episodes, seed)
+        .into_iter()
+        .map(|costs| TaskAssignmentProblem::new(costs, CaseChoice::Auto).unwrap())
+        .collect();
+    let setup = Method::Dual.setup(&GivenSettings::default()).unwrap();
+    let setup = setup.unwrap();
+    let scale: f64 = std::env::var("RHO_SCALE").map_or(1.0, |v| v.parse().unwrap());
+    let first = &problems[0];
+    let rho = setup
+        .default_rho(first.costs(), graph.mean_degree())
+        .unwrap()
+        * scale;
+    let params = common::params(first, &graph, rho);
+    let tol = params.tolerance / problems[0].robots() as f64;
+    println!("ρ₀ {rho:.4e}");
+    for warm in [true, false] {
+        let agents = common::agents(setup.as_ref(), first, &graph, params);
+        let (mut agents, rounds) = episode(agents, &graph, first, tol, max_rounds);
+        println!(
+            "{}: first episode {rounds:?}",
+            if warm { "warm" } else { "cold" }
+        );
+        let mut last = oracle::solve(first).unwrap().assignment;
+        let mut all = Vec::new();
+        for (k, problem) in problems.iter().enumerate().skip(1) {
+            for (i, agent) in agents.iter_mut().enumerate() {
+                agent.set_costs(problem.costs().row(i), warm).unwrap();
+            }
+            let (next, rounds) = episode(agents, &graph, problem, tol, max_rounds);
+            agents = next;
+            let optimum = oracle::solve(problem).unwrap().assignment;
+            let moved = optimum.iter().zip(&last).filter(|(a, b)| a != b).count();
+            last = optimum;
+            println!("  episode {k}: rounds {rounds:?}, optimal tasks moved {moved}");
+            all.push(rounds.unwrap_or(max_rounds) as f64);
+        }
+        all.sort_by(f64::total_cmp);
+        if let Some(median) = all.get(all.len() / 2) {
+            println!("  median {median}");
+        }
+    }
+}
