@@ -69,12 +69,12 @@ const DEAD_NODE_SCAN_EVERY: Duration = Duration::from_millis(500);
 /// How often an agent of a team of `agents` without a launcher scans the run's nodes for a
 /// dead one while it waits, at start-up and in rounds: a scan reads every node of the run
 /// and every waiting agent scans, so the interval grows with the team (0.5 s per 20
-/// agents): the team scans as often in all at any size. (With a
-/// fixed 0.5 s, 200 agents scanning took most of the 2 cores while the last agents started,
-/// and a standing team of 200 sidecars whose rounds once took over 0.5 s, at the start of
-/// an episode, never recovered: every agent waited, so every agent scanned, so every round
-/// waited; its episode went from 30 s to over 10 minutes.) One agent that finds a dead node
-/// marks it on the board for all, so the team still looks far more often than each agent.
+/// agents): the team scans as often in all at any size. (With a fixed 0.5 s, 200 agents
+/// scanning took most of the 2 cores while the last agents started, and in a standing team
+/// of 200 sidecars a round that took over 0.5 s set every agent scanning, which kept the
+/// rounds that slow: episodes of 35 s took 290 s, 371 s and once over 10 minutes,
+/// bench/README.md.) One agent that finds a dead node marks it on the board for all, so the
+/// team still looks far more often than each agent.
 fn dead_node_scan_every(agents: usize) -> Duration {
     DEAD_NODE_SCAN_EVERY * (agents / 20).max(1) as u32
 }
