@@ -23,15 +23,15 @@ use admm_ta_transport::sim::process::LockstepSim;
 use common::Problems;
 
 /// Runs the team to every robot's certificate; the rounds it took (None: not within
-/// `max_rounds`). Panics if the certified assignment is not the oracle's optimum.
+/// `max_rounds`). Panics if the certified assignment costs more than `optimum`.
 fn episode(
     agents: Vec<MethodAgent>,
     graph: &Graph,
     problem: &TaskAssignmentProblem,
+    optimum: f64,
     tol: f64,
     max_rounds: usize,
 ) -> (Vec<MethodAgent>, Option<usize>) {
-    let optimum = oracle::solve(problem).unwrap();
     let mut sim = LockstepSim::new(agents, graph);
     for round in 1..=max_rounds {
         sim.step_round();
@@ -39,7 +39,7 @@ fn episode(
             let decisions: Vec<usize> = sim.agents().iter().map(|a| a.decide()).collect();
             assert!(
                 problem.is_feasible(&decisions)
-                    && problem.cost_of(&decisions).unwrap() <= optimum.cost + 1e-9,
+                    && problem.cost_of(&decisions).unwrap() <= optimum + 1e-9,
                 "wrong certificate at round {round}"
             );
             return (sim.into_agents(), Some(round));
@@ -96,26 +96,27 @@ fn main() {
         .unwrap()
         * scale;
     let params = common::params(first, &graph, rho);
-    let tol = params.tolerance / problems[0].robots() as f64;
+    let tol = params.tolerance / first.robots() as f64;
+    // The oracle's optimum of every episode, once for the warm and the cold team.
+    let optima: Vec<_> = problems.iter().map(|p| oracle::solve(p).unwrap()).collect();
     println!("ρ₀ {rho:.4e}");
     for warm in [true, false] {
         let agents = common::agents(setup.as_ref(), first, &graph, params);
-        let (mut agents, rounds) = episode(agents, &graph, first, tol, max_rounds);
+        let (mut agents, rounds) = episode(agents, &graph, first, optima[0].cost, tol, max_rounds);
         println!(
             "{}: first episode {rounds:?}",
             if warm { "warm" } else { "cold" }
         );
-        let mut last = oracle::solve(first).unwrap().assignment;
         let mut all = Vec::new();
         for (k, problem) in problems.iter().enumerate().skip(1) {
             for (i, agent) in agents.iter_mut().enumerate() {
                 agent.set_costs(problem.costs().row(i), warm).unwrap();
             }
-            let (next, rounds) = episode(agents, &graph, problem, tol, max_rounds);
+            let optimum = optima[k].cost;
+            let (next, rounds) = episode(agents, &graph, problem, optimum, tol, max_rounds);
             agents = next;
-            let optimum = oracle::solve(problem).unwrap().assignment;
-            let moved = optimum.iter().zip(&last).filter(|(a, b)| a != b).count();
-            last = optimum;
+            let (now, before) = (&optima[k].assignment, &optima[k - 1].assignment);
+            let moved = now.iter().zip(before).filter(|(a, b)| a != b).count();
             println!("  episode {k}: rounds {rounds:?}, optimal tasks moved {moved}");
             all.push(rounds.unwrap_or(max_rounds) as f64);
         }

@@ -58,7 +58,7 @@ mod connect;
 
 type RoundSample = Sample<Svc, [f64], RoundHeader>;
 
-/// A waiting agent of a team of up to 20 scans the run's iceoryx2 nodes for dead ones once
+/// A waiting agent of a team of fewer than 40 scans the run's iceoryx2 nodes for dead ones once
 /// it has waited this long for a round, and again at this interval (larger teams: see
 /// [`dead_node_scan_every`]). Scans read every node of the run, so they are kept off the
 /// normal path: with 100 agents on 2 cores, scanning after 100 ms slowed rounds a

@@ -170,7 +170,7 @@ mod tests {
         // as for distance costs of small teams.
         let n = 120;
         let uniform = CostMatrix::uniform(n, n, 3).unwrap();
-        let (small, large) = (geometric(120, 120, 2), geometric(400, 400, 2));
+        let (small, large) = (geometric(n, n, 2), geometric(400, 400, 2));
         let (small, large) = (small.unwrap(), large.unwrap());
         let (a, b) = (structure_factor(&small), structure_factor(&large));
         assert!(b < 0.2 && b < a / 2.0, "{a} {b}");
