@@ -6,8 +6,9 @@
 //! The robots' agents are kept from episode to episode (`set_costs`, then every robot's
 //! iterate sent again, as a standing team starts an episode); every episode must certify
 //! the oracle's optimum. Prints each episode's rounds and how many robots' optimal tasks
-//! moved since the last. `RHO_SCALE=F` multiplies the one-shot default ρ (a standing team
-//! of private costs has no structure factor: `RHO_SCALE=0.333` for uniform costs).
+//! moved since the last. `RHO_SCALE=F` multiplies the one-shot default ρ; `RHO0=shape`
+//! takes a standing team's instead (its robots see no other row: spread 1, no structure
+//! factor; for uniform costs about `RHO_SCALE=0.333`).
 //! `cargo run --release -p admm-ta-runtime --example dual_warm -- ROBOTS TASKS TOPOLOGY uniform|distance EPISODES SEED [ROUNDS]`.
 mod common;
 
@@ -91,10 +92,18 @@ fn main() {
     let setup = setup.unwrap();
     let scale: f64 = std::env::var("RHO_SCALE").map_or(1.0, |v| v.parse().unwrap());
     let first = &problems[0];
-    let rho = setup
-        .default_rho(first.costs(), graph.mean_degree())
-        .unwrap()
-        * scale;
+    // `RHO0=shape`: the ρ₀ of a standing team of private costs, which reads nothing of the
+    // rows (a matrix of their shape: spread 1, no structure factor).
+    let shape = CostMatrix::new(
+        first.robots(),
+        first.tasks(),
+        vec![0.0; first.costs().values().len()],
+    );
+    let costs = match std::env::var("RHO0").as_deref() {
+        Ok("shape") => &shape.unwrap(),
+        _ => first.costs(),
+    };
+    let rho = setup.default_rho(costs, graph.mean_degree()).unwrap() * scale;
     let params = common::params(first, &graph, rho);
     let tol = params.tolerance / first.robots() as f64;
     // The oracle's optimum of every episode, once for the warm and the cold team.
