@@ -26,7 +26,7 @@ def rounds_of(spec, seed):
             into = cold
         elif "episode" in line and "rounds" in line and into is not None:
             value = line.split("rounds ")[1].split(",")[0]
-            into.append(5000 if value == "None" else int(value.strip("Some()")))
+            into.append(5000 if value == "none" else int(value))
     return warm, cold
 
 

@@ -51,6 +51,13 @@ fn episode(
     (sim.into_agents(), None)
 }
 
+/// Every robot's row of `problem`, warm-started or from zero.
+fn set_costs(agents: &mut [MethodAgent], problem: &TaskAssignmentProblem, warm: bool) {
+    for (i, agent) in agents.iter_mut().enumerate() {
+        agent.set_costs(problem.costs().row(i), warm).unwrap();
+    }
+}
+
 /// The episodes' cost matrices: `ROWS`, or `first` drifted `episodes` times.
 fn matrices(first: &CostMatrix, episodes: usize, seed: u64) -> Vec<CostMatrix> {
     if let Ok(file) = std::env::var("ROWS") {
@@ -96,13 +103,13 @@ fn main() {
     let first = &problems[0];
     // `RHO0=shape`: the ρ₀ of a standing team of private costs, which reads nothing of the
     // rows (a matrix of their shape: spread 1, no structure factor).
-    let shape = CostMatrix::new(
-        first.robots(),
-        first.tasks(),
-        vec![0.0; first.costs().values().len()],
-    );
+    let shape;
     let costs = match std::env::var("RHO0").as_deref() {
-        Ok("shape") => &shape.unwrap(),
+        Ok("shape") => {
+            let zeros = vec![0.0; first.costs().values().len()];
+            shape = CostMatrix::new(first.robots(), first.tasks(), zeros).unwrap();
+            &shape
+        }
         _ => first.costs(),
     };
     let rho = setup.default_rho(costs, graph.mean_degree()).unwrap() * scale;
@@ -117,14 +124,13 @@ fn main() {
         let (mut agents, rounds) = episode(agents, &graph, first, optima[0].cost, tol, max_rounds);
         let first_rounds = rounds;
         println!(
-            "{}: first episode {rounds:?}",
-            if warm { "warm" } else { "cold" }
+            "{}: first episode {}",
+            if warm { "warm" } else { "cold" },
+            rounds.map_or("none".to_string(), |r| r.to_string())
         );
         let mut all = Vec::new();
         for (k, problem) in problems.iter().enumerate().skip(1) {
-            for (i, agent) in agents.iter_mut().enumerate() {
-                agent.set_costs(problem.costs().row(i), warm).unwrap();
-            }
+            set_costs(&mut agents, problem, warm);
             let optimum = optima[k].cost;
             let cap = match (warm, hedge, first_rounds) {
                 (true, Some(h), Some(r)) => ((h * r as f64) as usize).max(1),
@@ -133,16 +139,15 @@ fn main() {
             let (next, mut rounds) = episode(agents, &graph, problem, optimum, tol, cap);
             agents = next;
             if rounds.is_none() && cap < max_rounds {
-                for (i, agent) in agents.iter_mut().enumerate() {
-                    agent.set_costs(problem.costs().row(i), false).unwrap();
-                }
+                set_costs(&mut agents, problem, false);
                 let (next, more) = episode(agents, &graph, problem, optimum, tol, max_rounds);
                 agents = next;
                 rounds = more.map(|r| r + cap);
             }
             let (now, before) = (&optima[k].assignment, &optima[k - 1].assignment);
             let moved = now.iter().zip(before).filter(|(a, b)| a != b).count();
-            println!("  episode {k}: rounds {rounds:?}, optimal tasks moved {moved}");
+            let shown = rounds.map_or("none".to_string(), |r| r.to_string());
+            println!("  episode {k}: rounds {shown}, optimal tasks moved {moved}");
             all.push(rounds.unwrap_or(max_rounds) as f64);
         }
         all.sort_by(f64::total_cmp);
