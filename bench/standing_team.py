@@ -87,6 +87,18 @@ def check(answers, what):
         raise SystemExit(f"{what}: not certified or robots disagree: {answers[0]}")
 
 
+def costs_of(seed, n, episodes):
+    """The base costs, the drift episodes and the redrawn ones of `seed`'s team of `n`."""
+    rng = random.Random(seed * 1000 + n)
+    base = [[rng.random() for _ in range(n)] for _ in range(n)]
+    drift, rows = [], base
+    for _ in range(episodes):
+        rows = [[min(1.0, max(0.0, v + rng.uniform(-0.01, 0.01))) for v in r] for r in rows]
+        drift.append(rows)
+    redrawn = [[[rng.random() for _ in range(n)] for _ in range(n)] for _ in range(episodes)]
+    return base, drift, redrawn
+
+
 def run_sequence(team, sequences):
     """Latencies and rounds per named sequence of episodes."""
     out = {}
@@ -124,14 +136,7 @@ def main():
           f"| warm / one-shot | sent per robot per episode (warm drift p50) |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for n in [int(x) for x in args.robots.split(",")]:
-        rng = random.Random(args.seed * 1000 + n)
-        base = [[rng.random() for _ in range(n)] for _ in range(n)]
-        drift, rows = [], base
-        for _ in range(args.episodes):
-            rows = [[min(1.0, max(0.0, v + rng.uniform(-0.01, 0.01))) for v in r] for r in rows]
-            drift.append(rows)
-        redrawn = [[[rng.random() for _ in range(n)] for _ in range(n)]
-                   for _ in range(args.episodes)]
+        base, drift, redrawn = costs_of(args.seed, n, args.episodes)
         sequences = [("drift", drift), ("redrawn", redrawn)]
         results = {}
         for warm in (True, False):
