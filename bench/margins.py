@@ -51,16 +51,20 @@ def margin(costs):
         except ValueError:  # no assignment without that pair
             continue
         second = min(second, d[r, k].sum())
-    return second - best
+    # An exact tie gives 0 (never less but for rounding).
+    return max(second - best, 0.0)
 
 
 def summary(name, margins, rounds):
-    """Spearman, the fit and the bands of one group."""
+    """Spearman, the fit and the bands of one group (a margin of 0, a tie, fits as 1e-12)."""
+    if len(rounds) < 2:
+        print(f"{name}: {len(rounds)} problem(s), too few to fit")
+        return
     logs = np.log10(np.maximum(margins, 1e-12))
     slope, at_one = np.polyfit(logs, rounds, 1)
     print(f"{name}: {len(rounds)} problems, median margin {statistics.median(margins):.2e}, "
           f"median rounds {statistics.median(rounds):.0f}, Spearman "
-          f"{spearmanr(rounds, margins).statistic:+.2f}, rounds ≈ {at_one:.0f} "
+          f"{spearmanr(rounds, margins)[0]:+.2f}, rounds ≈ {at_one:.0f} "
           f"{slope:+.0f}·log10(margin)")
     for lo, hi in BANDS:
         band = [r for r, m in zip(rounds, margins) if lo <= m < hi]
@@ -76,6 +80,8 @@ def rounds_of(path):
         for line in f:
             hit = re.match(r"(\d+) robots, (warm|cold) team, drift rounds: ([\d ]+)", line)
             if hit:
+                if n is not None and n != int(hit.group(1)):
+                    raise SystemExit(f"{path}: more than one team size (run one --robots N)")
                 n = int(hit.group(1))
                 found[hit.group(2)] = [int(x) for x in hit.group(3).split()]
     if set(found) != {"warm", "cold"}:
@@ -87,6 +93,8 @@ def standing(args):
     margins, rounds = [], {"warm": [], "cold": []}
     for run in args.runs:
         seed, _, path = run.partition(":")
+        if not seed.isdigit() or not path:
+            raise SystemExit(f"{run}: not SEED:FILE")
         n, found = rounds_of(path)
         drift = costs_of(int(seed), n, args.episodes)[1]
         if any(len(v) != len(drift) for v in found.values()):
@@ -102,9 +110,13 @@ def standing(args):
 
 
 def one_shot(args):
-    directory = tempfile.mkdtemp(prefix="admm-ta-margins-")
+    with tempfile.TemporaryDirectory(prefix="admm-ta-margins-") as directory:
+        one_shot_in(args, directory)
+
+
+def one_shot_in(args, directory):
     sizes = [int(x) for x in args.robots.split(",")]
-    every = ([], [])
+    every = ([], [], [])
     for n in sizes:
         margins, rounds = [], []
         for seed in range(1, args.seeds + 1):
@@ -114,7 +126,7 @@ def one_shot(args):
             done = subprocess.run(
                 [args.binary, "solve", "--costs", path, "--method", args.method, "--transport",
                  "sim", "--topology", args.topology, "--seed", str(seed), "--json"],
-                capture_output=True, text=True)
+                capture_output=True, text=True, timeout=args.timeout)
             if not done.stdout:
                 raise SystemExit(f"solve failed (exit {done.returncode}): {done.stderr}")
             report = json.loads(done.stdout)
@@ -127,8 +139,25 @@ def one_shot(args):
         summary(f"{n} robots", margins, rounds)
         every[0].extend(margins)
         every[1].extend(rounds)
+        every[2].extend([n] * len(rounds))
     if len(sizes) > 1:
-        summary("every size", *every)
+        summary("every size", every[0], every[1])
+        with_size(*every)
+
+
+def with_size(margins, rounds, sizes):
+    """The fit of rounds to the margin and the team size together, against each alone."""
+    r = np.array(rounds, dtype=float)
+    columns = {"margin": np.log10(np.maximum(margins, 1e-12)), "n": np.log10(sizes)}
+
+    def fit(names):
+        x = np.column_stack([np.ones(len(r))] + [columns[k] for k in names])
+        coef = np.linalg.lstsq(x, r, rcond=None)[0]
+        return coef, 1 - ((r - x @ coef) ** 2).sum() / ((r - r.mean()) ** 2).sum()
+
+    (a, b, c), both = fit(["margin", "n"])
+    print(f"  rounds ≈ {a:.0f} {b:+.0f}·log10(margin) {c:+.0f}·log10(n): R² {both:.2f} "
+          f"(margin alone {fit(['margin'])[1]:.2f}, n alone {fit(['n'])[1]:.2f})")
 
 
 def main():
@@ -144,6 +173,7 @@ def main():
     once.add_argument("--seeds", type=int, default=10)
     once.add_argument("--method", default="dual")
     once.add_argument("--topology", default="random:0.1")
+    once.add_argument("--timeout", type=float, default=3600.0, help="seconds per solve")
     args = parser.parse_args()
     {"standing": standing, "one-shot": one_shot}[args.mode](args)
 

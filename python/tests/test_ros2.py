@@ -49,6 +49,13 @@ rclpy.shutdown()
 """
 
 
+# The signals of a crash (not of someone stopping the node).
+CRASHES = {signal.SIGSEGV, signal.SIGBUS, signal.SIGABRT, signal.SIGILL, signal.SIGFPE}
+
+# What robot_node.py's watchdog prints when the ROS 2 teardown hangs (faulthandler's dump).
+STUCK_IN_TEARDOWN = "Timeout (0:00:10)!"
+
+
 def ros_env():
     """A domain of this test's own, discovery on this machine."""
     env = dict(os.environ)
@@ -71,7 +78,7 @@ class Team:
 
     def __init__(self, tmp_path, robots, tasks, episodes, robot_args=None, extra="",
                  nodes_first=False):
-        self.tmp_path, self.robots = tmp_path, robots
+        self.tmp_path, self.robots, self.episodes = tmp_path, robots, episodes
         self.team = write_team(tmp_path, robots, tasks, extra)
         self.env = ros_env()
         self.members, self.nodes = [], []
@@ -103,24 +110,29 @@ class Team:
             env=self.env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
     def wait_for_nodes(self, episodes, robot_args):
-        """Until another ROS 2 node of the domain sees every robot's node. A node killed by
-        a signal before any member is up is started again, once: Fast DDS 3.2 (the wheels'
-        DDS) crashed in its TypeLookup thread now and then while eight nodes discovered
-        each other (a general protection fault in `dds.tls.replies`, no member involved)."""
-        restarted = set()
+        """Until another ROS 2 node of the domain sees every robot's node. A node that
+        crashes (SIGSEGV, SIGBUS, SIGABRT) before any member is up is started again, once:
+        Fast DDS 3.2 (the wheels' DDS) crashed in its TypeLookup thread now and then while
+        eight nodes discovered each other (a general protection fault in `dds.tls.replies`,
+        no member involved). The tests that start the members first have no such retry."""
+        crashes = {}
         while True:
             crashed = self.watch_nodes()
             if not crashed:
                 return
-            again = [i for i in crashed if i not in restarted]
-            assert again, f"robot nodes {crashed} crashed twice before any member started"
-            for i in again:
-                self.nodes[i].stderr.read()
+            twice = [i for i in crashed if i in crashes]
+            for i in crashed:
+                crashes[i] = (f"robot node {i} crashed (exit {self.nodes[i].returncode}):\n"
+                              f"{self.nodes[i].stderr.read()}")
+            # Shown with the test's output if it fails.
+            print("\n".join(crashes.values()))
+            assert not twice, f"robot nodes {twice} crashed twice:\n" + "\n".join(
+                crashes.values())
+            for i in crashed:
                 self.nodes[i] = self.start_node(i, episodes, robot_args)
-            restarted.update(again)
 
     def watch_nodes(self):
-        """Waits for every robot's node on the graph; the nodes killed by a signal if any."""
+        """Waits for every robot's node on the graph; the nodes that crashed meanwhile, if any."""
         wanted = [(f"/robot{i}", "robot") for i in range(self.robots)]
         waiting = subprocess.Popen([sys.executable, "-c", WAIT_FOR_NODES, json.dumps(wanted)],
                                    env=self.env, stderr=subprocess.PIPE, text=True)
@@ -130,7 +142,7 @@ class Team:
             if dead or time.monotonic() > deadline:
                 waiting.kill()
                 waiting.wait()
-                if dead and all(self.nodes[i].returncode < 0 for i in dead):
+                if dead and all(-self.nodes[i].returncode in CRASHES for i in dead):
                     return dead
                 why = "".join(f"robot node {i} exited with {self.nodes[i].returncode}: "
                               f"{self.nodes[i].stderr.read()}\n" for i in dead)
@@ -151,7 +163,19 @@ class Team:
     def wait(self, timeout=300):
         codes = [p.wait(timeout=timeout) for p in self.nodes + self.members]
         errors = [p.stderr.read() for p in self.nodes + self.members]
+        # A robot node whose ROS 2 teardown hung after its work (Fast DDS 3.2, see
+        # robot_node.py) did what the tests ask of it: its log says what it got.
+        for i, error in enumerate(errors[:len(self.nodes)]):
+            if codes[i] == 1 and STUCK_IN_TEARDOWN in error and self.answered_all(i):
+                print(f"robot node {i}: its ROS 2 teardown hung (taken as done):\n{error}")
+                codes[i] = 0
         return codes, errors
+
+    def answered_all(self, i):
+        """Whether robot i's log has an answer of every episode it was started for."""
+        episodes = {e["answer"].get("episode") for e in self.entries(i) if "answer" in e
+                    and "error" not in e["answer"]}
+        return episodes == set(range(self.episodes))
 
     def kill(self):
         for p in self.members + self.nodes:
