@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """How the dual's rounds follow the optimum's margin: how much more the runner-up costs.
 
-    # the drift episodes of a standing team (bench/standing_team.py's `--rounds` output)
+    # the drift episodes of standing teams (bench/standing_team.py's `--rounds` lines)
     python3 bench/standing_team.py --robots 50 --episodes 20 --method dual \
-        --topology random:0.1 --seed S --rounds 2> rounds-S.txt
-    python3 bench/margins.py standing --episodes 20 S:rounds-S.txt [S:rounds-S.txt ...]
+        --topology random:0.1 --seed S --rounds rounds.jsonl
+    python3 bench/margins.py standing rounds.jsonl [more.jsonl ...]
 
     # one-shot solves of uniform costs in [0, 1) (sim), --seeds per team size
     python3 bench/margins.py one-shot --binary target/release/admm-ta --robots 50,100,200 \
@@ -21,7 +21,6 @@ import argparse
 import json
 import math
 import os
-import re
 import statistics
 import subprocess
 import sys
@@ -73,38 +72,28 @@ def summary(name, margins, rounds):
                   f"{statistics.median(band):.0f}")
 
 
-def rounds_of(path):
-    """n and {"warm": [...], "cold": [...]} from standing_team.py's `--rounds` lines."""
-    found, n = {}, None
+def runs_of(path):
+    """standing_team.py's `--rounds` lines: {"seed", "robots", "warm": [...], "cold": [...]}."""
     with open(path, encoding="utf-8") as f:
-        for line in f:
-            hit = re.match(r"(\d+) robots, (warm|cold) team, drift rounds: ([\d ]+)", line)
-            if hit:
-                if n is not None and n != int(hit.group(1)):
-                    raise SystemExit(f"{path}: more than one team size (run one --robots N)")
-                n = int(hit.group(1))
-                found[hit.group(2)] = [int(x) for x in hit.group(3).split()]
-    if set(found) != {"warm", "cold"}:
-        raise SystemExit(f"{path}: no warm and cold '--rounds' lines of standing_team.py")
-    return n, found
+        runs = [json.loads(line) for line in f if line.strip()]
+    for run in runs:
+        if not {"seed", "robots", "warm", "cold"} <= set(run) or \
+                len(run["warm"]) != len(run["cold"]):
+            raise SystemExit(f"{path}: not a line of standing_team.py --rounds: {run}")
+    return runs
 
 
 def standing(args):
     margins, rounds = [], {"warm": [], "cold": []}
-    for run in args.runs:
-        seed, _, path = run.partition(":")
-        if not seed.isdigit() or not path:
-            raise SystemExit(f"{run}: not SEED:FILE")
-        n, found = rounds_of(path)
-        drift = costs_of(int(seed), n, args.episodes)[1]
-        if any(len(v) != len(drift) for v in found.values()):
-            raise SystemExit(f"{path}: not {len(drift)} drift episodes (--episodes?)")
+    for run in (run for path in args.files for run in runs_of(path)):
+        seed, n = run["seed"], run["robots"]
+        drift = costs_of(seed, n, len(run["warm"]))[1]
         for k, costs in enumerate(drift):
             margins.append(margin(costs))
-            print(f"seed {seed} episode {k}: margin {margins[-1]:.2e}, rounds warm "
-                  f"{found['warm'][k]} cold {found['cold'][k]}")
+            print(f"seed {seed}, {n} robots, episode {k}: margin {margins[-1]:.2e}, rounds "
+                  f"warm {run['warm'][k]} cold {run['cold'][k]}")
             for team in rounds:
-                rounds[team].append(found[team][k])
+                rounds[team].append(run[team][k])
     for team, r in rounds.items():
         summary(team, margins, r)
 
@@ -164,9 +153,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     modes = parser.add_subparsers(dest="mode", required=True)
     drift = modes.add_parser("standing", help="standing_team.py's drift episodes")
-    drift.add_argument("--episodes", type=int, required=True,
-                       help="the --episodes standing_team.py was given")
-    drift.add_argument("runs", nargs="+", help="SEED:FILE, FILE holding that run's stderr")
+    drift.add_argument("files", nargs="+", help="files standing_team.py --rounds wrote")
     once = modes.add_parser("one-shot", help="one-shot solves in the sim")
     once.add_argument("--binary", default="target/release/admm-ta")
     once.add_argument("--robots", default="50,100,200")

@@ -3,7 +3,7 @@
 `solve` of the same problem (start-up included). Standard library only.
 
     python3 bench/standing_team.py --binary target/release/admm-ta --robots 10,20,50 \
-        [--episodes 30] [--topology random:0.2] [--transport ipc] [--solves 5] [--rounds]
+        [--episodes 30] [--topology random:0.2] [--transport ipc] [--solves 5] [--rounds FILE]
 
 For each team size N (N robots, N tasks) it writes a private team file (costs = "private"),
 starts N `admm-ta agent --serve` sidecars and feeds them, as robot programs would:
@@ -21,8 +21,9 @@ assignment (else the script says so and exits 1).
 
 Prints one table row per team size: episode p50/p99 (warm drift), p50 (warm redrawn), rounds
 per episode p50 warm against cold (drift, redrawn), the agreement's rounds, the one-shot
-solve's p50 wall time and the warm episode's share of it. `--rounds` also prints every
-drift episode's rounds, warm team and cold team (standard error).
+solve's p50 wall time and the warm episode's share of it. `--rounds FILE` also appends,
+per team size, one JSON line with every drift episode's rounds of the warm and the cold team
+({"seed", "robots", "warm": [...], "cold": [...]}; `bench/margins.py standing` reads it).
 """
 
 import argparse
@@ -123,8 +124,8 @@ def main():
     parser.add_argument("--transport", default="ipc")
     parser.add_argument("--solves", type=int, default=5)
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--rounds", action="store_true",
-                        help="also print every drift episode's rounds, warm team and cold team")
+    parser.add_argument("--rounds", metavar="FILE",
+                        help="append the drift episodes' rounds, warm and cold (JSON lines)")
     parser.add_argument("--method", default="primal",
                         help="the team's method (and the one-shot solve's): primal, dual, inexact-dual")
     parser.add_argument("--team-key", action="append", default=[],
@@ -167,11 +168,10 @@ def main():
                 raise SystemExit(f"solve failed: {done.stderr}")
         warm_drift, warm_rounds, agreement, warm_sent = results[True]["drift"]
         if args.rounds:
-            for warm in (True, False):
-                rounds = results[warm]["drift"][1]
-                print(f"{n} robots, {'warm' if warm else 'cold'} team, drift rounds: "
-                      f"{' '.join(map(str, rounds))} (mean {statistics.mean(rounds):.1f})",
-                      file=sys.stderr)
+            with open(args.rounds, "a", encoding="utf-8") as f:
+                f.write(json.dumps({"seed": args.seed, "robots": n,
+                                    "warm": results[True]["drift"][1],
+                                    "cold": results[False]["drift"][1]}) + "\n")
         warm_redrawn = results[True]["redrawn"]
         cold_drift = results[False]["drift"]
         cold_redrawn = results[False]["redrawn"]

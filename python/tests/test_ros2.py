@@ -9,6 +9,7 @@ either the tests are skipped with the reason. DDS discovery stays on this machin
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -52,8 +53,9 @@ rclpy.shutdown()
 # The signals of a crash (not of someone stopping the node).
 CRASHES = {signal.SIGSEGV, signal.SIGBUS, signal.SIGABRT, signal.SIGILL, signal.SIGFPE}
 
-# What robot_node.py's watchdog prints when the ROS 2 teardown hangs (faulthandler's dump).
-STUCK_IN_TEARDOWN = "Timeout (0:00:10)!"
+# What robot_node.py's watchdog prints when the ROS 2 teardown hangs: faulthandler's dump,
+# "Timeout (H:MM:SS)!" first.
+STUCK_IN_TEARDOWN = re.compile(r"^Timeout \(\d+:\d\d:\d\d\)!", re.MULTILINE)
 
 
 def ros_env():
@@ -79,13 +81,14 @@ class Team:
     def __init__(self, tmp_path, robots, tasks, episodes, robot_args=None, extra="",
                  nodes_first=False):
         self.tmp_path, self.robots, self.episodes = tmp_path, robots, episodes
+        self.robot_args = robot_args or {}
         self.team = write_team(tmp_path, robots, tasks, extra)
         self.env = ros_env()
         self.members, self.nodes = [], []
         if nodes_first:
-            self.start_nodes(episodes, robot_args)
+            self.start_nodes()
             try:
-                self.wait_for_nodes(episodes, robot_args)
+                self.wait_for_nodes()
             except BaseException:
                 self.kill()
                 raise
@@ -96,20 +99,20 @@ class Team:
                 [ADMM_TA, "agent", "--team", str(self.team), "--robot", str(i), "--ros2"],
                 env=self.env, stderr=subprocess.PIPE, text=True, process_group=group))
         if not nodes_first:
-            self.start_nodes(episodes, robot_args)
+            self.start_nodes()
 
-    def start_nodes(self, episodes, robot_args):
-        self.nodes = [self.start_node(i, episodes, robot_args) for i in range(self.robots)]
+    def start_nodes(self):
+        self.nodes = [self.start_node(i) for i in range(self.robots)]
 
-    def start_node(self, i, episodes, robot_args):
+    def start_node(self, i):
         # -X faulthandler: a crash inside the DDS says where on the node's stderr.
         return subprocess.Popen(
             [sys.executable, "-X", "faulthandler", ROBOT_NODE, "--team", str(self.team),
-             "--robot", str(i), "--episodes", str(episodes), "--range", "1.5",
-             "--timeout", "90", "--log", str(self.log(i)), *(robot_args or {}).get(i, [])],
+             "--robot", str(i), "--episodes", str(self.episodes), "--range", "1.5",
+             "--timeout", "90", "--log", str(self.log(i)), *self.robot_args.get(i, [])],
             env=self.env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
-    def wait_for_nodes(self, episodes, robot_args):
+    def wait_for_nodes(self):
         """Until another ROS 2 node of the domain sees every robot's node. A node that
         crashes (SIGSEGV, SIGBUS, SIGABRT) before any member is up is started again, once:
         Fast DDS 3.2 (the wheels' DDS) crashed in its TypeLookup thread now and then while
@@ -129,7 +132,7 @@ class Team:
             assert not twice, f"robot nodes {twice} crashed twice:\n" + "\n".join(
                 crashes.values())
             for i in crashed:
-                self.nodes[i] = self.start_node(i, episodes, robot_args)
+                self.nodes[i] = self.start_node(i)
 
     def watch_nodes(self):
         """Waits for every robot's node on the graph; the nodes that crashed meanwhile, if any."""
@@ -166,7 +169,7 @@ class Team:
         # A robot node whose ROS 2 teardown hung after its work (Fast DDS 3.2, see
         # robot_node.py) did what the tests ask of it: its log says what it got.
         for i, error in enumerate(errors[:len(self.nodes)]):
-            if codes[i] == 1 and STUCK_IN_TEARDOWN in error and self.answered_all(i):
+            if codes[i] == 1 and STUCK_IN_TEARDOWN.search(error) and self.answered_all(i):
                 print(f"robot node {i}: its ROS 2 teardown hung (taken as done):\n{error}")
                 codes[i] = 0
         return codes, errors
