@@ -8,12 +8,16 @@
 
     # one-shot solves of uniform costs in [0, 1) (sim), --seeds per team size
     python3 bench/margins.py one-shot --binary target/release/admm-ta --robots 50,100,200 \
-        [--seeds 10] [--method dual] [--topology random:0.1]
+        [--seeds 10] [--method dual] [--topology random:0.1] [--out solves.jsonl]
+    python3 bench/margins.py fit solves.jsonl [more.jsonl ...]   # the summary again
 
 A problem's *margin* is the second-best assignment's cost less the optimum's (the optimum
-with one of its pairs forbidden, the cheapest over its pairs), in the costs' units. Prints
-each problem's margin and rounds, then per group the rank correlation of rounds and margin
-(Spearman), a fit `rounds ≈ a + b·log10(margin)` and the median rounds per band of margins.
+with one of its pairs forbidden, the cheapest over its pairs), in the costs' units, and
+*moved* the number of robots whose task the second-best changes (the length of the
+exchange that turns the optimum into it). Prints each problem's margin and rounds, then
+per group the rank correlation of rounds and margin (Spearman), fits `rounds ≈ a +
+b·log10(margin)` and the same with the margin per moved robot, and the median rounds per
+band of margins; over several team sizes, the fits with `log10(n)` as a second term.
 Needs numpy and scipy (the virtual environment `./test` makes has both).
 """
 
@@ -37,11 +41,12 @@ BANDS = [(0.0, 1e-4), (1e-4, 3e-4), (3e-4, 1e-3), (1e-3, 3e-3), (3e-3, 1e-2), (1
 
 
 def margin(costs):
-    """The second-best assignment's cost less the optimum's (square or wide costs)."""
+    """The second-best assignment's cost less the optimum's (square or wide costs), and how
+    many robots the second-best moves off their optimal tasks (`moved`)."""
     c = np.array(costs, dtype=float)
     rows, cols = linear_sum_assignment(c)
     best = c[rows, cols].sum()
-    second = math.inf
+    second, moved = math.inf, 0
     for i, j in zip(rows, cols):
         d = c.copy()
         d[i, j] = math.inf
@@ -49,27 +54,47 @@ def margin(costs):
             r, k = linear_sum_assignment(d)
         except ValueError:  # no assignment without that pair
             continue
-        second = min(second, d[r, k].sum())
+        if d[r, k].sum() < second:
+            second = d[r, k].sum()
+            moved = int((tasks_of(r, k, len(c)) != tasks_of(rows, cols, len(c))).sum())
     # An exact tie gives 0 (never less but for rounding).
-    return max(second - best, 0.0)
+    return max(second - best, 0.0), moved
 
 
-def summary(name, margins, rounds):
-    """Spearman, the fit and the bands of one group (a margin of 0, a tie, fits as 1e-12)."""
+def tasks_of(rows, cols, robots):
+    """Each robot's task in an assignment (-1: none)."""
+    tasks = np.full(robots, -1)
+    tasks[rows] = cols
+    return tasks
+
+
+def summary(name, margins, rounds, moved):
+    """Spearman, the fits and the bands of one group (a margin of 0, a tie, fits as 1e-12):
+    against the margin, and against the margin per moved robot."""
     if len(rounds) < 2:
         print(f"{name}: {len(rounds)} problem(s), too few to fit")
         return
-    logs = np.log10(np.maximum(margins, 1e-12))
-    slope, at_one = np.polyfit(logs, rounds, 1)
+    per_robot = [m / max(k, 1) for m, k in zip(margins, moved)]
     print(f"{name}: {len(rounds)} problems, median margin {statistics.median(margins):.2e}, "
-          f"median rounds {statistics.median(rounds):.0f}, Spearman "
-          f"{spearmanr(rounds, margins)[0]:+.2f}, rounds ≈ {at_one:.0f} "
-          f"{slope:+.0f}·log10(margin)")
+          f"median moved {statistics.median(moved):.0f}, median rounds "
+          f"{statistics.median(rounds):.0f}")
+    for label, values in (("margin", margins), ("margin/moved", per_robot)):
+        logs = np.log10(np.maximum(values, 1e-12))
+        slope, at_one = np.polyfit(logs, rounds, 1)
+        print(f"  {label}: Spearman {spearmanr(rounds, values)[0]:+.2f}, rounds ≈ "
+              f"{at_one:.0f} {slope:+.0f}·log10({label}), R² {r_squared(logs, rounds):.2f}")
     for lo, hi in BANDS:
         band = [r for r, m in zip(rounds, margins) if lo <= m < hi]
         if band:
             print(f"  margin in [{lo:g}, {hi:g}): {len(band)}, median rounds "
                   f"{statistics.median(band):.0f}")
+
+
+def r_squared(x, y):
+    """R² of the least-squares line through (x, y)."""
+    y = np.array(y, dtype=float)
+    line = np.polyval(np.polyfit(x, y, 1), x)
+    return 1 - ((y - line) ** 2).sum() / ((y - y.mean()) ** 2).sum()
 
 
 def runs_of(path):
@@ -84,30 +109,32 @@ def runs_of(path):
 
 
 def standing(args):
-    margins, rounds = [], {"warm": [], "cold": []}
+    margins, moved, rounds = [], [], {"warm": [], "cold": []}
     for run in (run for path in args.files for run in runs_of(path)):
         seed, n = run["seed"], run["robots"]
         drift = costs_of(seed, n, len(run["warm"]))[1]
         for k, costs in enumerate(drift):
-            margins.append(margin(costs))
-            print(f"seed {seed}, {n} robots, episode {k}: margin {margins[-1]:.2e}, rounds "
-                  f"warm {run['warm'][k]} cold {run['cold'][k]}")
+            m, robots_moved = margin(costs)
+            margins.append(m)
+            moved.append(robots_moved)
+            print(f"seed {seed}, {n} robots, episode {k}: margin {m:.2e} ({robots_moved} moved), "
+                  f"rounds warm {run['warm'][k]} cold {run['cold'][k]}")
             for team in rounds:
                 rounds[team].append(run[team][k])
     for team, r in rounds.items():
-        summary(team, margins, r)
+        summary(team, margins, r, moved)
 
 
 def one_shot(args):
     with tempfile.TemporaryDirectory(prefix="admm-ta-margins-") as directory:
-        one_shot_in(args, directory)
+        report(one_shot_in(args, directory))
 
 
 def one_shot_in(args, directory):
-    sizes = [int(x) for x in args.robots.split(",")]
-    every = ([], [], [])
-    for n in sizes:
-        margins, rounds = [], []
+    """Each seed's problem of each size solved once: a dict per certified solve, each also
+    appended to `--out` as soon as it is known."""
+    solves = []
+    for n in (int(x) for x in args.robots.split(",")):
         for seed in range(1, args.seeds + 1):
             costs = np.random.default_rng(seed * 7919 + n).random((n, n))
             path = os.path.join(directory, f"costs-{n}-{seed}.csv")
@@ -118,35 +145,62 @@ def one_shot_in(args, directory):
                 capture_output=True, text=True, timeout=args.timeout)
             if not done.stdout:
                 raise SystemExit(f"solve failed (exit {done.returncode}): {done.stderr}")
-            report = json.loads(done.stdout)
-            m = margin(costs)
-            print(f"{n} robots, seed {seed}: margin {m:.2e}, rounds {report['iterations']}"
-                  f"{'' if report['certified'] else ' (not certified: left out)'}", flush=True)
-            if report["certified"]:
-                margins.append(m)
-                rounds.append(report["iterations"])
-        summary(f"{n} robots", margins, rounds)
-        every[0].extend(margins)
-        every[1].extend(rounds)
-        every[2].extend([n] * len(rounds))
+            result = json.loads(done.stdout)
+            m, moved = margin(costs)
+            print(f"{n} robots, seed {seed}: margin {m:.2e} ({moved} moved), rounds "
+                  f"{result['iterations']}"
+                  f"{'' if result['certified'] else ' (not certified: left out)'}", flush=True)
+            if result["certified"]:
+                solves.append({"robots": n, "seed": seed, "margin": m, "moved": moved,
+                               "rounds": result["iterations"], "topology": args.topology})
+                if args.out:
+                    with open(args.out, "a", encoding="utf-8") as f:
+                        f.write(json.dumps(solves[-1]) + "\n")
+    return solves
+
+
+def fit(args):
+    solves = []
+    for path in args.files:
+        with open(path, encoding="utf-8") as f:
+            solves.extend(json.loads(line) for line in f if line.strip())
+    report(solves)
+
+
+def report(solves):
+    """The summary of every team size, then of all sizes with the size as a second term."""
+    sizes = sorted({s["robots"] for s in solves})
+    for n in sizes:
+        group = [s for s in solves if s["robots"] == n]
+        summary(f"{n} robots", *columns(group, "margin", "rounds", "moved"))
     if len(sizes) > 1:
-        summary("every size", every[0], every[1])
-        with_size(*every)
+        summary("every size", *columns(solves, "margin", "rounds", "moved"))
+        with_size(solves)
 
 
-def with_size(margins, rounds, sizes):
-    """The fit of rounds to the margin and the team size together, against each alone."""
+def columns(solves, *keys):
+    return tuple([s[k] for s in solves] for k in keys)
+
+
+def with_size(solves):
+    """The fits of rounds to the margin (or the margin per moved robot) and the team size."""
+    margins, rounds, moved, sizes = columns(solves, "margin", "rounds", "moved", "robots")
     r = np.array(rounds, dtype=float)
-    columns = {"margin": np.log10(np.maximum(margins, 1e-12)), "n": np.log10(sizes)}
+    terms = {
+        "margin": np.log10(np.maximum(margins, 1e-12)),
+        "margin/moved": np.log10(np.maximum(np.divide(margins, np.maximum(moved, 1)), 1e-12)),
+        "n": np.log10(sizes),
+    }
 
-    def fit(names):
-        x = np.column_stack([np.ones(len(r))] + [columns[k] for k in names])
+    def fit_of(names):
+        x = np.column_stack([np.ones(len(r))] + [terms[k] for k in names])
         coef = np.linalg.lstsq(x, r, rcond=None)[0]
         return coef, 1 - ((r - x @ coef) ** 2).sum() / ((r - r.mean()) ** 2).sum()
 
-    (a, b, c), both = fit(["margin", "n"])
-    print(f"  rounds ≈ {a:.0f} {b:+.0f}·log10(margin) {c:+.0f}·log10(n): R² {both:.2f} "
-          f"(margin alone {fit(['margin'])[1]:.2f}, n alone {fit(['n'])[1]:.2f})")
+    for first in ("margin", "margin/moved"):
+        (a, b, c), both = fit_of([first, "n"])
+        print(f"  rounds ≈ {a:.0f} {b:+.0f}·log10({first}) {c:+.0f}·log10(n): R² {both:.2f} "
+              f"({first} alone {fit_of([first])[1]:.2f}, n alone {fit_of(['n'])[1]:.2f})")
 
 
 def main():
@@ -161,8 +215,11 @@ def main():
     once.add_argument("--method", default="dual")
     once.add_argument("--topology", default="random:0.1")
     once.add_argument("--timeout", type=float, default=3600.0, help="seconds per solve")
+    once.add_argument("--out", help="append a JSON line per certified solve to this file")
+    again = modes.add_parser("fit", help="the summary of files one-shot --out wrote")
+    again.add_argument("files", nargs="+")
     args = parser.parse_args()
-    {"standing": standing, "one-shot": one_shot}[args.mode](args)
+    {"standing": standing, "one-shot": one_shot, "fit": fit}[args.mode](args)
 
 
 if __name__ == "__main__":

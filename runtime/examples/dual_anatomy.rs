@@ -8,7 +8,10 @@
 //! certificate does not hold yet, how many robots hold a task other than the optimum's
 //! (`wrong`) and how many a column whose largest entry is below 0.99 (`fractional`), and
 //! `FRAC=R` lists, from round R on at each traced round, every fractional robot's three
-//! largest entries, its optimal task and its decision.
+//! largest entries, its optimal task and its decision; the trace also counts the *pieces*
+//! of the decisions' difference from the optimum (how many are cycles, and the robots of
+//! the largest). `DUMP=DIR` writes each seed's costs
+//! to `DIR/costs-ROBOTS-SEED.csv` (for `bench/margins.py`'s `margin`).
 //! `cargo run --release -p admm-ta-runtime --example dual_anatomy -- ROBOTS TASKS TOPOLOGY uniform|distance SEEDS exact|inexact [ROUNDS]`.
 mod common;
 
@@ -50,6 +53,19 @@ fn main() {
                 gaps[n / 2],
                 gaps.iter().sum::<f64>() / n as f64
             );
+        }
+        if let Ok(dir) = std::env::var("DUMP") {
+            let c = problem.costs();
+            let rows: Vec<String> = (0..n)
+                .map(|i| {
+                    c.row(i)
+                        .iter()
+                        .map(|v| format!("{v:e}"))
+                        .collect::<Vec<_>>()
+                        .join(",")
+                })
+                .collect();
+            std::fs::write(format!("{dir}/costs-{n}-{seed}.csv"), rows.join("\n")).unwrap();
         }
         let optimum = oracle::solve(&problem).unwrap();
         let given = match std::env::var("VARIANT") {
@@ -151,8 +167,11 @@ fn main() {
                         }
                     }
                 }
+                let (apart, cycles) = exchanges(&decisions, &optimum.assignment);
                 println!(
-                    "  round {round}: wrong {wrong} fractional {fractional} optimal {optimal} infeasible {inf} price-slack {big} worst {worst:.2e} tol {tol:.1e} dis {disagreement:.1e}"
+                    "  round {round}: wrong {wrong} fractional {fractional} optimal {optimal} infeasible {inf} price-slack {big} worst {worst:.2e} tol {tol:.1e} dis {disagreement:.1e} pieces {} cycles {cycles} largest {:?}",
+                    apart.len(),
+                    &apart[..apart.len().min(5)]
                 );
             }
             if cert_at.is_none() && agents.iter().all(|a| a.certificate_slack() <= tol) {
@@ -179,4 +198,47 @@ fn main() {
         median(&mut settled),
         median(&mut certified)
     );
+}
+
+/// How the decisions differ from the optimum: the robots of each connected piece of the
+/// difference (robots and tasks joined by the robots' decided and optimal tasks), largest
+/// first, and how many pieces are cycles (as many tasks as robots: an exchange of tasks
+/// among its robots; the others are chains that end at a task claimed twice).
+fn exchanges(decisions: &[usize], optimal: &[usize]) -> (Vec<usize>, usize) {
+    let robots = decisions.len();
+    let tasks = optimal.iter().chain(decisions).max().map_or(0, |t| t + 1);
+    let mut parent: Vec<usize> = (0..robots + tasks).collect();
+    fn root(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    let wrong: Vec<usize> = (0..robots)
+        .filter(|&i| decisions[i] != optimal[i])
+        .collect();
+    for &i in &wrong {
+        for task in [decisions[i], optimal[i]] {
+            let (a, b) = (root(&mut parent, i), root(&mut parent, robots + task));
+            parent[a] = b;
+        }
+    }
+    // Per piece: its robots and its tasks.
+    let mut pieces = std::collections::HashMap::new();
+    for &i in &wrong {
+        pieces.entry(root(&mut parent, i)).or_insert((0, 0)).0 += 1;
+    }
+    let mut seen = vec![false; tasks];
+    for &i in &wrong {
+        for task in [decisions[i], optimal[i]] {
+            if !std::mem::replace(&mut seen[task], true) {
+                pieces.get_mut(&root(&mut parent, robots + task)).unwrap().1 += 1;
+            }
+        }
+    }
+    let cycles = pieces.values().filter(|(r, t)| r == t).count();
+    let mut sizes: Vec<usize> = pieces.into_values().map(|(r, _)| r).collect();
+    sizes.sort_unstable_by(|a, b| b.cmp(a));
+    (sizes, cycles)
 }
