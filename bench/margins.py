@@ -159,11 +159,25 @@ def one_shot_in(args, directory):
     return solves
 
 
+KEYS = {"robots", "seed", "margin", "moved", "rounds", "topology"}
+
+
 def fit(args):
     solves = []
     for path in args.files:
-        with open(path, encoding="utf-8") as f:
-            solves.extend(json.loads(line) for line in f if line.strip())
+        try:
+            with open(path, encoding="utf-8") as f:
+                lines = [line for line in f if line.strip()]
+            solves.extend(json.loads(line) for line in lines)
+        except (OSError, ValueError) as e:
+            raise SystemExit(f"{path}: {e}")
+        if not all(isinstance(s, dict) and KEYS <= set(s) for s in solves):
+            raise SystemExit(f"{path}: not the lines of margins.py one-shot --out")
+    for n in {s["robots"] for s in solves}:
+        graphs = {s["topology"] for s in solves if s["robots"] == n}
+        if len(graphs) > 1:
+            raise SystemExit(f"{n} robots solved on several topologies ({', '.join(graphs)}): "
+                             "one fit would mix them")
     report(solves)
 
 
@@ -172,7 +186,8 @@ def report(solves):
     sizes = sorted({s["robots"] for s in solves})
     for n in sizes:
         group = [s for s in solves if s["robots"] == n]
-        summary(f"{n} robots", *columns(group, "margin", "rounds", "moved"))
+        summary(f"{n} robots ({group[0]['topology']})",
+                *columns(group, "margin", "rounds", "moved"))
     if len(sizes) > 1:
         summary("every size", *columns(solves, "margin", "rounds", "moved"))
         with_size(solves)

@@ -203,7 +203,8 @@ fn main() {
 /// How the decisions differ from the optimum: the robots of each connected piece of the
 /// difference (robots and tasks joined by the robots' decided and optimal tasks), largest
 /// first, and how many pieces are cycles (as many tasks as robots: an exchange of tasks
-/// among its robots; the others are chains that end at a task claimed twice).
+/// among its robots; the others are chains that end at a task claimed twice). The cycle
+/// count means that in Case 1 only: in Case 2 robots share tasks.
 fn exchanges(decisions: &[usize], optimal: &[usize]) -> (Vec<usize>, usize) {
     let robots = decisions.len();
     let tasks = optimal.iter().chain(decisions).max().map_or(0, |t| t + 1);
