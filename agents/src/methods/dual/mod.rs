@@ -10,6 +10,7 @@ pub mod agent;
 pub mod column;
 pub mod coupled_box;
 pub mod fast;
+pub mod finish;
 pub mod snapshot;
 pub mod structure;
 

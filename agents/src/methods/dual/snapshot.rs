@@ -53,12 +53,21 @@
 //! of the ADMM iteration do not enter the proof at all: they only steer the robots to an
 //! optimal `π`, and the proof follows within a few rounds of the claims settling.
 //!
+//! # Lent potentials
+//! In Case 1 the augmenting finish ([`crate::methods::dual::finish`]) sends its labels in
+//! the potentials' place while it computes them: every robot knows those steps, keeps its
+//! potentials standing (neither merged nor relaxed) and proves nothing meanwhile; a finish
+//! that reaches a full assignment hands over prices that price it ([`Snapshot::seed`]).
+//!
 //! # Layout of the payload section
 //! `[ȳ_0 … ȳ_{m−1}, packed claims]`. A claim is a code: 0 when nobody claimed the task yet,
 //! `r + 1` for robot `r`. Codes take `b` bits, enough for `n` (`b` = 7 for 100 robots), and
 //! [`claims_per_word`] of them share one value as the integer `Σ_j code_j 2^{jb} < 2^53`
 //! (exact in an `f64`, finite, the same on every transport): `⌈m/k⌉` values instead of `m`
 //! (15 instead of 100 for 100 robots and tasks).
+//!
+//! Size: one certificate — the packing, the claims and the potentials share one robot's
+//! state; about 150 lines are its unit tests.
 
 use crate::problem::AssignmentCase;
 
@@ -83,16 +92,26 @@ pub const fn claims_per_word(robots: usize) -> usize {
 /// No claim yet (claims of robot `r` are `r + 1`).
 const UNCLAIMED: u64 = 0;
 
-/// How a team's claim codes are packed into payload values.
+/// How codes `0..=max` are packed into payload values (a team's claims: `max` = robots).
 #[derive(Debug, Clone, Copy)]
-struct Packing {
+pub(super) struct Packing {
     robots: usize,
     bits: u32,
     per_word: usize,
 }
 
 impl Packing {
-    fn new(robots: usize) -> Self {
+    /// Whether codes up to `max` fit the 53 bits of an `f64` at all.
+    pub(super) const fn fits(max: usize) -> bool {
+        code_bits(max) <= f64::MANTISSA_DIGITS
+    }
+
+    /// Values needed for `codes` codes up to `max`.
+    pub(super) const fn words(max: usize, codes: usize) -> usize {
+        codes.div_ceil(claims_per_word(max))
+    }
+
+    pub(super) fn new(robots: usize) -> Self {
         assert!(
             code_bits(robots) <= f64::MANTISSA_DIGITS,
             "claim codes of {robots} robots do not fit an f64"
@@ -105,12 +124,12 @@ impl Packing {
     }
 
     /// Code `j` of a packed value (read as an integer; `as` saturates, never panics).
-    fn code(self, word: u64, j: usize) -> u64 {
+    pub(super) fn code(self, word: u64, j: usize) -> u64 {
         (word >> (j as u32 * self.bits)) & ((1u64 << self.bits) - 1)
     }
 
     /// The packed value of up to `per_word` codes: an integer below 2^53, exact.
-    fn pack(self, codes: &[u64]) -> f64 {
+    pub(super) fn pack(self, codes: &[u64]) -> f64 {
         let word = codes
             .iter()
             .enumerate()
@@ -118,8 +137,13 @@ impl Packing {
         word as f64
     }
 
+    /// Codes in one value.
+    pub(super) fn per_word(self) -> usize {
+        self.per_word
+    }
+
     /// Whether `word` is what [`Packing::pack`] writes for `codes` codes of this team.
-    fn holds(self, word: f64, codes: usize) -> bool {
+    pub(super) fn holds(self, word: f64, codes: usize) -> bool {
         let used = codes as u32 * self.bits;
         let bits = word as u64;
         word >= 0.0
@@ -144,6 +168,9 @@ pub struct Snapshot {
     potentials: Vec<f64>,
     before: Vec<f64>,
     stable: bool,
+    /// This step's messages carry something else in the potentials' place (Case 1's
+    /// finish, [`crate::methods::dual::finish`]): the potentials stand, unproven.
+    lent: bool,
     flooding: Claims,
     settled: Claims,
 }
@@ -189,6 +216,7 @@ impl Snapshot {
             potentials: vec![0.0; tasks],
             before: vec![0.0; tasks],
             stable: false,
+            lent: false,
             flooding: Claims::empty(tasks),
             settled: Claims::empty(tasks),
         }
@@ -204,9 +232,12 @@ impl Snapshot {
         self.index as u64 + 1
     }
 
-    /// Starts a step: remembers the potentials the neighbours saw.
-    pub fn begin(&mut self) {
+    /// Starts a step: remembers the potentials the neighbours saw. `lent`: the messages of
+    /// this step carry the finish's labels in the potentials' place (every robot lends at
+    /// the same steps): the potentials are neither merged nor relaxed, and prove nothing.
+    pub fn begin(&mut self, lent: bool) {
         self.before.copy_from_slice(&self.potentials);
+        self.lent = lent;
     }
 
     /// Checks a neighbour's section: finite potentials, and packed claims that are integers
@@ -232,8 +263,10 @@ impl Snapshot {
     pub fn merge(&mut self, step: u64, theirs: &[f64]) {
         let tasks = self.potentials.len();
         debug_assert_eq!(theirs.len(), words(self.packing.robots, tasks));
-        for (mine, &v) in self.potentials.iter_mut().zip(&theirs[..tasks]) {
-            *mine = mine.min(v);
+        if !self.lent {
+            for (mine, &v) in self.potentials.iter_mut().zip(&theirs[..tasks]) {
+                *mine = mine.min(v);
+            }
         }
         if step == 0 {
             return;
@@ -249,6 +282,14 @@ impl Snapshot {
                 }
             }
         }
+    }
+
+    /// Starts the potentials from `prices` (Case 1, where any solution proves: the
+    /// augmenting finish's labels, [`crate::methods::dual::finish`]), at a step every robot
+    /// seeds the same vector.
+    pub fn seed(&mut self, prices: &[f64]) {
+        debug_assert!(self.reset.is_none(), "Case 2 potentials start at 0");
+        self.potentials.copy_from_slice(prices);
     }
 
     /// Forgets everything of the last episode (its potentials were lowered for other
@@ -277,6 +318,8 @@ impl Snapshot {
             // The neighbours' values merged in this step are dropped: not stable.
             self.potentials.fill(0.0);
             self.stable = false;
+        } else if self.lent {
+            self.stable = false;
         } else {
             if let Some(task) = task {
                 let best = (0..costs.len())
@@ -302,6 +345,17 @@ impl Snapshot {
             next.claims[task] = code;
         }
         next.task = task;
+    }
+
+    /// The claims of the last settled snapshot (per task its smallest claimer's code,
+    /// robot + 1, or 0) and the robot's own task when that snapshot started.
+    pub fn settled(&self) -> (&[u64], Option<usize>) {
+        (&self.settled.claims, self.settled.task)
+    }
+
+    /// Snapshots settle every this many steps.
+    pub fn period(&self) -> u64 {
+        self.period
     }
 
     /// A relay's slack: 0 when its potentials stood still and the settled snapshot claims
@@ -378,7 +432,7 @@ mod tests {
             let gathered = sections.clone();
             let mut round = Vec::new();
             for (i, robot) in robots.iter_mut().enumerate() {
-                robot.begin();
+                robot.begin(false);
                 for j in [i.wrapping_sub(1), i + 1] {
                     if j < n {
                         robot.merge(step, &gathered[j]);

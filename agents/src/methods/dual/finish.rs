@@ -1,0 +1,871 @@
+//! The fast dual's augmenting finish (Case 1, `n = m`): when the claims stall with tasks
+//! claimed twice and tasks claimed by nobody, the robots freeze the claims and move whole
+//! chains of robots at once along augmenting paths of successive shortest paths, found by
+//! a distributed Bellman–Ford in which every robot relaxes only its own cost row.
+//!
+//! # Why
+//! At 1000 robots the ADMM's last hundreds of rounds (bench/README, "Where the dual's rounds
+//! go at 1000 robots") are spent on *chains*: robots each one task along from their optimal
+//! one, ending at a task two robots claim, with a task claimed by nobody. The prices move
+//! such a chain one robot every ~20 rounds; an augmenting path moves all of it at once.
+//!
+//! # The labels
+//! The claims of a settled snapshot are frozen (every robot holds them, at the same step):
+//! each task's smallest claimer *owns* it, the other claimers are *excess*. `L_s` is the
+//! least change of cost that frees task `s` by moving owners, each to another task, along a
+//! path that ends at an unclaimed task:
+//!
+//! ```text
+//! L_f = 0  (f unclaimed),     L_s = min over t ≠ s allowed to s's owner j:  α_{j,t} − α_{j,s} + L_t
+//! ```
+//!
+//! Every robot keeps the vector `L` with, per task, the *tag* `(j, t)` of the relaxation
+//! that set it; it takes the elementwise minimum with its neighbours' (ties to the smaller
+//! tag: a min-flood, exact and idempotent) and an owner relaxes its own task's entry by
+//! more than `ε` (the certificate's). Values only fall; the owners' claims are the
+//! cheapest for the tasks they cover when there is no negative cycle, and then the labels
+//! stop, the same at every robot (the potentials of successive shortest paths).
+//!
+//! # Agreement, entries, the move
+//! As in [`crate::certify::local_stop`], a window of bits (one packed value) tells every
+//! robot, at the same step `r`, that every robot's labels and tags stood still at step
+//! `r − D`: then all held the same vector (the graph is connected) and it is a fixed point,
+//! so every robot holds it still. Each excess robot `e` then names its *entry*
+//! `t_e = argmin_t α_{e,t} + L_t` (the tag `(e, t_e)` at its task), and the entries flood
+//! for `D` steps (a min-flood of fixed values; of several excess claimers of one task the
+//! smallest code enters). At `r + D` every robot traces the same paths: from each entry,
+//! in the order of the tasks, tag by tag to an unclaimed task, keeping a path only when it
+//! enters no task a path kept before entered. The entry's robot moves to the task it
+//! enters, each owner on the path to the task its tag names.
+//!
+//! Every robot's new claim is then its cheapest under the prices `L` (within `ε`): an owner
+//! that stays meets its relaxation, a moved owner moves along a tight tag, an excess robot
+//! to its entry. So when the kept paths fill every unclaimed task the assignment is optimal
+//! and `L` proves it: the certificate starts from `L` ([`Finish::prices`]) and holds within
+//! a few rounds. When tasks are left unclaimed the moved claims are frozen at once (every
+//! robot traced the paths, so it knows the new owners and unclaimed tasks) and the labels
+//! start again: the owners' claims are still the cheapest under `L`, so no negative cycle
+//! appears (successive shortest paths), and the robots keep claiming their rounded
+//! columns meanwhile.
+//!
+//! # Never wrong, never stuck
+//! The finish only chooses claims: the certificate ([`crate::methods::dual::snapshot`])
+//! still proves them optimal or not, and the ADMM iterates go on underneath. While the
+//! labels are computed the robots claim their rounded columns, and when a settling
+//! snapshot of those claims leaves fewer tasks unclaimed than the frozen ones (having
+//! stood still a period) the finish freezes them instead: the
+//! ADMM resolves many short chains at once, the finish a few long ones. Labels that do
+//! not settle (a negative cycle among the frozen claims: the ADMM's claims need not be the
+//! cheapest for what they cover) are given up: at once when a robot finds the cycle in
+//! the tags (an OR-flooded *alarm* window tells every robot at one step), else after a
+//! budget; so is a full assignment the certificate does not prove within one. The robots
+//! claim their rounded columns again, and the finish waits `64 P` steps before it
+//! freezes again (after an alarm only `P`: the claims had tasks unclaimed, so the
+//! certificate lost nothing while it rested, and the ADMM's next claims may be the
+//! cheapest for what they cover). Every transition happens
+//! at a step every robot knows, from what every robot holds.
+//!
+//! # Layout of the payload
+//! The labels `L_0 … L_{m−1}` travel in the certificate's potentials' place: while the
+//! finish computes them the potentials stand (every robot at the same steps) and prove
+//! nothing, so the ADMM's own claims cannot be certified meanwhile; an unreached label is
+//! `f64::MAX`. Once the labels settled every robot holds them, and the entries
+//! `e·m + t + 1` (0: none) travel in their place. The finish's own section is
+//! `[packed tags, window, alarm]`: a tag is `t + 1` (0: none; the mover is the task's
+//! owner), packed as the claims are. Case 1 only (`robots = tasks`, at least 2, diameter at most 53):
+//! other teams carry no section, or zeros.
+//!
+//! Size: one protocol — its phases share one robot's state (labels, tags, entries, the
+//! window and the frozen claims) and every transition reads the others; about 70 lines
+//! are these docs and 230 its unit tests.
+
+use crate::methods::dual::snapshot::{Packing, Snapshot};
+use crate::problem::AssignmentCase;
+
+/// A label no path reaches yet.
+const UNREACHED: f64 = f64::MAX;
+/// Bits of the agreement window (one packed value).
+const WINDOW_BITS: usize = f64::MANTISSA_DIGITS as usize;
+/// Snapshot periods the labels may take to settle before the finish gives up.
+pub const LABEL_PERIODS: u64 = 64;
+/// Snapshot periods a full assignment of the finish is claimed for the certificate.
+pub const CLAIM_PERIODS: u64 = 16;
+
+/// Values of the finish's own payload section for `robots` robots and `tasks` tasks: its
+/// labels travel in the certificate's potentials' place. A team of more robots than tasks
+/// carries it too (zeros): a standing team's episode where some robots take no part may be
+/// a Case 1 problem inside the team's messages.
+pub const fn words(robots: usize, tasks: usize) -> usize {
+    if robots < tasks || tasks < 2 {
+        return 0;
+    }
+    match robots.checked_mul(tasks) {
+        Some(max) if Packing::fits(max) => Packing::words(tasks, tasks) + 2,
+        _ => 0,
+    }
+}
+
+/// The largest entry code (`robots · tasks`, exact in an `f64`), where the finish can run.
+const fn entry_max(robots: usize, tasks: usize) -> Option<usize> {
+    if robots != tasks || words(robots, tasks) == 0 {
+        return None;
+    }
+    Some(robots * tasks)
+}
+
+/// Where a robot is in the finish.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// It claims its rounded column.
+    Idle,
+    /// The claims were frozen at step `since`, in which it claims `task` (none: a relay);
+    /// the labels settled at step `settled`.
+    Labelling {
+        since: u64,
+        task: Option<usize>,
+        settled: Option<u64>,
+    },
+    /// It moved (or stayed) at step `at` and claims `task`.
+    Claiming { at: u64, task: Option<usize> },
+}
+
+/// One robot's side of the augmenting finish.
+#[derive(Debug, Clone)]
+pub struct Finish {
+    index: usize,
+    tasks: usize,
+    /// The largest entry code.
+    entry_max: u64,
+    /// The diameter `D`, where the finish runs.
+    diameter: Option<u64>,
+    period: u64,
+    epsilon: f64,
+    packing: Packing,
+    phase: Phase,
+    /// It owns its frozen task (else it is an excess claimer, or a relay).
+    owner: bool,
+    /// No freezing from the rounded claims before this step (after a finish given up).
+    quiet_until: u64,
+    /// It never freezes (a standing team's episodes, [`Finish::restart`]); its section
+    /// stays zeros.
+    resting: bool,
+    labels: Vec<f64>,
+    tags: Vec<u64>,
+    entries: Vec<u64>,
+    /// The window sent last step, and the AND of the neighbours' this step.
+    window: u64,
+    heard: u64,
+    /// It found a negative cycle among the frozen claims; the alarm window it sent last
+    /// step (bit `k`: a robot within `k + 1` hops had found one `k + 1` steps before), and
+    /// the OR of the neighbours' this step.
+    cycle: bool,
+    alarm: u64,
+    alarmed: u64,
+    changed: bool,
+    /// It moved along settled labels this step to a full assignment.
+    moved: bool,
+    /// The robot is on one of the last paths traced.
+    entered: bool,
+    /// The last paths traced left no task unclaimed.
+    complete: bool,
+    /// Tasks nobody claims in the frozen claims.
+    free: Vec<bool>,
+    /// The claims settled at the last snapshot.
+    last_claims: Vec<u64>,
+    /// Paths moved since the costs were set.
+    paths: u64,
+    // Scratch of the tracing.
+    used: Vec<bool>,
+    /// `(from, whether this robot moves, to)` of each hop of a path.
+    path: Vec<(usize, bool, usize)>,
+}
+
+impl Finish {
+    /// Robot `index` of `robots`' side for `tasks` tasks on a graph of diameter `diameter`,
+    /// relaxing by more than `epsilon`. It runs in Case 1 on graphs of diameter 1 to 53.
+    pub fn new(
+        index: usize,
+        robots: usize,
+        tasks: usize,
+        case: AssignmentCase,
+        diameter: usize,
+        epsilon: f64,
+    ) -> Self {
+        let runs = case == AssignmentCase::One && (1..=WINDOW_BITS).contains(&diameter);
+        let max = entry_max(robots, tasks).filter(|_| runs);
+        let len = if max.is_some() { tasks } else { 0 };
+        Self {
+            index,
+            tasks,
+            entry_max: max.unwrap_or(0) as u64,
+            diameter: max.map(|_| diameter as u64),
+            period: diameter.max(1) as u64,
+            epsilon,
+            packing: Packing::new(tasks.max(1)),
+            phase: Phase::Idle,
+            owner: false,
+            quiet_until: 0,
+            resting: false,
+            labels: vec![0.0; len],
+            tags: vec![0; len],
+            entries: vec![0; len],
+            window: 0,
+            heard: 0,
+            cycle: false,
+            alarm: 0,
+            alarmed: 0,
+            changed: false,
+            moved: false,
+            entered: false,
+            complete: false,
+            free: vec![false; len],
+            last_claims: vec![0; len],
+            paths: 0,
+            used: vec![false; len],
+            path: Vec::with_capacity(len),
+        }
+    }
+
+    /// Whether the finish runs for this team (Case 1 on a diameter of 1 to 53).
+    pub fn runs(&self) -> bool {
+        self.diameter.is_some()
+    }
+
+    /// Paths moved since the costs were last set.
+    pub fn paths(&self) -> u64 {
+        self.paths
+    }
+
+    /// Whether it is computing labels (the claims frozen).
+    pub fn labelling(&self) -> bool {
+        matches!(self.phase, Phase::Labelling { .. })
+    }
+
+    /// Forgets the last episode: the state of new costs. A standing team's episodes run
+    /// without the finish: a warm episode starts from the last optimum, a full assignment
+    /// that is not the cheapest for the new costs; the finish moves chains to unclaimed
+    /// tasks but cancels no cycles, so it sped cold episodes up and not warm ones (50
+    /// robots, `random:0.1`, drifting distances: cold 429 → 194 rounds on average, warm 376
+    /// → 383, bench/README.md), and warm starts would lose to cold ones.
+    pub fn restart(&mut self) {
+        self.resting = true;
+        self.phase = Phase::Idle;
+        self.quiet_until = 0;
+        self.last_claims.fill(0);
+        self.paths = 0;
+        self.clear();
+    }
+
+    fn clear(&mut self) {
+        self.labels.fill(0.0);
+        self.tags.fill(0);
+        self.entries.fill(0);
+        self.window = 0;
+        self.cycle = false;
+        self.alarm = 0;
+    }
+
+    /// Checks a neighbour's section: tags of `tasks` tasks and windows of 53 bits (a
+    /// finish that does not run reads nothing of it). Returns the offending value's index
+    /// within the section.
+    pub fn check(&self, theirs: &[f64]) -> Result<(), usize> {
+        let m = self.tasks;
+        if theirs.is_empty() {
+            return Ok(());
+        }
+        let per = self.packing.per_word();
+        let words = m.div_ceil(per);
+        for (k, &word) in theirs[..words].iter().enumerate() {
+            let codes = (m - k * per).min(per);
+            if !self.packing.holds(word, codes) {
+                return Err(k);
+            }
+        }
+        for k in [words, words + 1] {
+            if !Packing::new(1).holds(theirs[k], WINDOW_BITS) {
+                return Err(k);
+            }
+        }
+        Ok(())
+    }
+
+    /// Starts a step: nothing heard yet.
+    pub fn begin(&mut self) {
+        self.changed = false;
+        self.heard = u64::MAX;
+        self.alarmed = 0;
+    }
+
+    /// Merges a neighbour's `labels` (the potentials' place of its message) and section,
+    /// only while labelling: labels and tags, or once the labels settled the entries sent
+    /// in the labels' place.
+    pub fn merge(&mut self, labels: &[f64], theirs: &[f64]) {
+        let Phase::Labelling { settled, .. } = self.phase else {
+            return;
+        };
+        let m = self.tasks;
+        if settled.is_some() {
+            for (mine, &value) in self.entries.iter_mut().zip(labels) {
+                // Codes outside 1..=robots·tasks (only a faulty sender writes them) name
+                // nobody.
+                let code = value as u64;
+                let valid = value.fract() == 0.0 && (1..=self.entry_max).contains(&code);
+                if valid && (*mine == 0 || code < *mine) {
+                    *mine = code;
+                }
+            }
+            return;
+        }
+        let (packing, per) = (self.packing, self.packing.per_word());
+        let words = &theirs[..m.div_ceil(per)];
+        let chunks = self.labels.chunks_mut(per).zip(self.tags.chunks_mut(per));
+        for (((mine, tags), values), &word) in chunks.zip(labels.chunks(per)).zip(words) {
+            for (j, ((label, tag), &value)) in mine.iter_mut().zip(tags).zip(values).enumerate() {
+                // Most labels are equal or larger: the tag is read only then.
+                if value > *label {
+                    continue;
+                }
+                let theirs = packing.code(word as u64, j);
+                if value < *label || theirs < *tag {
+                    (*label, *tag) = (value, theirs);
+                    self.changed = true;
+                }
+            }
+        }
+        self.heard &= theirs[words.len()] as u64;
+        self.alarmed |= theirs[words.len() + 1] as u64;
+    }
+
+    /// The task the robot claims this step: its `rounded` one (none: a relay) unless the
+    /// finish moved its claim. While labelling an owner relaxes its frozen task's label
+    /// with its (centred) `costs` on its `allowed` tasks; once the labels settled an excess
+    /// claimer names its entry, and `D` steps later the robots move.
+    pub fn claim(
+        &mut self,
+        step: u64,
+        rounded: Option<usize>,
+        costs: &[f64],
+        allowed: &[bool],
+    ) -> Option<usize> {
+        self.moved = false;
+        let (since, task, settled) = match self.phase {
+            Phase::Idle => return rounded,
+            Phase::Claiming { task, .. } => return task,
+            Phase::Labelling {
+                since,
+                task,
+                settled,
+            } => (since, task, settled),
+        };
+        let diameter = self.diameter.expect("labelling only where the finish runs");
+        match settled {
+            None => {
+                if let Some(s) = task.filter(|_| self.owner) {
+                    self.relax(s, costs, allowed);
+                }
+                let (heard, alarmed) = (self.window & self.heard, self.alarm | self.alarmed);
+                let bits = (1 << WINDOW_BITS) - 1;
+                self.window = u64::from(!self.changed) | ((heard << 1) & bits);
+                self.alarm = u64::from(self.cycle) | ((alarmed << 1) & bits);
+                if step > since && alarmed >> (diameter - 1) & 1 == 1 {
+                    // Some robot found a negative cycle: the labels would fall forever. The
+                    // claims have tasks unclaimed, so the certificate lost nothing by
+                    // resting: the next claims that stand still a period may try again.
+                    self.give_up(step, 1);
+                    return rounded;
+                }
+                if step > since && heard >> (diameter - 1) & 1 == 1 {
+                    if let Some(s) = task.filter(|_| !self.owner) {
+                        self.enter(s, costs, allowed);
+                    }
+                    self.phase = Phase::Labelling {
+                        since,
+                        task,
+                        settled: Some(step),
+                    };
+                }
+                rounded
+            }
+            Some(at) if step >= at + diameter => self.traced(step, task, rounded),
+            Some(_) => rounded,
+        }
+    }
+
+    /// Lowers the label of the robot's own task `s` to its best move by more than `ε`, and
+    /// notes a negative cycle when the tags lead from there back to `s`: each label on the
+    /// way was set from a value at least its successor's now, so the moves around the
+    /// cycle cost less than `−ε` in all (as in Bellman–Ford's predecessor graph).
+    fn relax(&mut self, s: usize, costs: &[f64], allowed: &[bool]) {
+        if let Some((value, t)) = self.best(costs, allowed, Some(s))
+            && value - costs[s] < self.labels[s] - self.epsilon
+        {
+            self.labels[s] = value - costs[s];
+            self.tags[s] = t as u64 + 1;
+            self.changed = true;
+            let mut at = t;
+            for _ in 0..self.tasks {
+                if at == s {
+                    self.cycle = true;
+                    break;
+                }
+                if self.free[at] || self.tags[at] == 0 {
+                    break;
+                }
+                at = self.tags[at] as usize - 1;
+            }
+        }
+    }
+
+    /// An excess claimer of task `s` names its entry (its cheapest task under the labels).
+    fn enter(&mut self, s: usize, costs: &[f64], allowed: &[bool]) {
+        if let Some((_, t)) = self.best(costs, allowed, None) {
+            let entry = (self.index * self.tasks + t + 1) as u64;
+            if self.entries[s] == 0 || entry < self.entries[s] {
+                self.entries[s] = entry;
+            }
+        }
+    }
+
+    /// The reached allowed task `t` (other than `except`) of least `costs[t] + L_t`.
+    fn best(&self, costs: &[f64], allowed: &[bool], except: Option<usize>) -> Option<(f64, usize)> {
+        let mut best: Option<(f64, usize)> = None;
+        for t in 0..self.tasks {
+            if Some(t) != except && allowed[t] && self.labels[t] != UNREACHED {
+                let value = self.labels[t] + costs[t];
+                if best.is_none_or(|(b, _)| value < b) {
+                    best = Some((value, t));
+                }
+            }
+        }
+        best
+    }
+
+    /// Moves along the traced paths: to a full assignment, claimed for the certificate;
+    /// else the moved claims are frozen at once and the labels start again (every robot
+    /// knows the paths, so the new owners and unclaimed tasks). Gives up without a path.
+    fn traced(&mut self, step: u64, task: Option<usize>, rounded: Option<usize>) -> Option<usize> {
+        let Some(claim) = self.trace(task) else {
+            self.give_up(step, LABEL_PERIODS);
+            return rounded;
+        };
+        if self.complete {
+            self.phase = Phase::Claiming {
+                at: step,
+                task: claim,
+            };
+            self.moved = true;
+            return claim;
+        }
+        // A robot on a kept path owns the task it entered (its owner moved on; an excess
+        // robot may enter its own task).
+        self.owner |= self.entered;
+        self.clear();
+        for t in 0..self.tasks {
+            self.free[t] &= !self.used[t];
+            self.labels[t] = if self.free[t] { 0.0 } else { UNREACHED };
+        }
+        self.phase = Phase::Labelling {
+            since: step,
+            task: claim,
+            settled: None,
+        };
+        rounded
+    }
+
+    /// Traces the paths of the settled labels from the entries (module docs) and returns
+    /// the robot's claim after moving along them (its `task` if it is on none), or `None`
+    /// when no path leads to an unclaimed task. Every robot traces the same paths.
+    fn trace(&mut self, task: Option<usize>) -> Option<Option<usize>> {
+        let m = self.tasks;
+        self.used.fill(false);
+        self.entered = false;
+        let (mut claim, mut found) = (task, 0);
+        for d in (0..m).filter(|&d| self.entries[d] != 0) {
+            self.path.clear();
+            // The entry's robot enters a task; from there each task's owner moves on.
+            let entry = self.entries[d] as usize - 1;
+            let (mut from, mut me, mut to) = (d, entry / m == self.index, entry % m);
+            let mut ends = false;
+            for _ in 0..=m {
+                if self.used[to] || self.path.iter().any(|&(_, _, t)| t == to) {
+                    break;
+                }
+                self.path.push((from, me, to));
+                if self.free[to] || self.tags[to] == 0 {
+                    ends = self.free[to];
+                    break;
+                }
+                (from, me) = (to, self.owner && task == Some(to));
+                to = self.tags[to] as usize - 1;
+            }
+            if !ends {
+                continue;
+            }
+            found += 1;
+            for &(from, me, to) in &self.path {
+                self.used[to] = true;
+                if me && task == Some(from) {
+                    claim = Some(to);
+                    self.entered = true;
+                }
+            }
+        }
+        self.paths += found;
+        self.complete = self
+            .free
+            .iter()
+            .zip(&self.used)
+            .all(|(&free, &used)| !free || used);
+        (found > 0).then_some(claim)
+    }
+
+    /// The settled labels when the robots moved along them this step to a full assignment
+    /// (every task reached): prices under which every robot's new claim is its cheapest
+    /// task within `ε` (module docs), so the certificate starts from them instead of
+    /// finding its potentials again.
+    pub fn prices(&self) -> Option<&[f64]> {
+        let full = self.moved && !self.labels.contains(&UNREACHED);
+        full.then_some(&self.labels[..])
+    }
+
+    /// The robots claim their rounded columns again, and wait `periods` snapshot periods
+    /// before freezing again.
+    fn give_up(&mut self, step: u64, periods: u64) {
+        self.phase = Phase::Idle;
+        self.quiet_until = step + periods * self.period;
+        self.clear();
+    }
+
+    /// After the snapshot advanced at `step`: gives up what ran out of its budget, and
+    /// freezes the claims of a settling snapshot that has unclaimed tasks when they stood
+    /// still a whole period (or came of a move). Every robot does the same at the same step.
+    pub fn observe(&mut self, step: u64, snapshot: &Snapshot) {
+        if self.diameter.is_none() || self.resting {
+            return;
+        }
+        let period = self.period;
+        match self.phase {
+            Phase::Labelling { since, .. } if step >= since + LABEL_PERIODS * period => {
+                self.give_up(step, LABEL_PERIODS);
+            }
+            Phase::Claiming { at, .. } if step >= at + CLAIM_PERIODS * period => {
+                self.give_up(step, LABEL_PERIODS);
+            }
+            _ => {}
+        }
+        if step == 0 || !step.is_multiple_of(period) {
+            return;
+        }
+        let (claims, task) = snapshot.settled();
+        let unclaimed = claims.iter().filter(|&&c| c == 0).count();
+        let freeze = match self.phase {
+            Phase::Idle => unclaimed > 0 && claims == self.last_claims && step >= self.quiet_until,
+            // The settling snapshot started after the move.
+            Phase::Claiming { at, .. } => unclaimed > 0 && step >= at + period,
+            // The rounded claims left fewer tasks unclaimed than the frozen ones.
+            Phase::Labelling { settled: None, .. } => {
+                let frozen = self.free.iter().filter(|&&free| free).count();
+                unclaimed > 0 && unclaimed < frozen && claims == self.last_claims
+            }
+            Phase::Labelling { .. } => false,
+        };
+        self.last_claims.copy_from_slice(claims);
+        if freeze {
+            self.freeze(step, claims, task);
+        }
+    }
+
+    /// Freezes `claims` (per task its smallest claimer's code, 0: none) at `step`, the
+    /// robot claiming `task` in them: labels 0 at unclaimed tasks, unreached elsewhere.
+    fn freeze(&mut self, step: u64, claims: &[u64], task: Option<usize>) {
+        self.clear();
+        for (t, &claim) in claims.iter().enumerate() {
+            self.free[t] = claim == 0;
+            self.labels[t] = if claim == 0 { 0.0 } else { UNREACHED };
+        }
+        self.owner = task.is_some_and(|s| claims[s] == self.index as u64 + 1);
+        self.phase = Phase::Labelling {
+            since: step,
+            task,
+            settled: None,
+        };
+    }
+
+    /// Writes its section of the message (zeros unless labelling) and, while labelling, the
+    /// `labels` in the potentials' place: the labels, or once they settled the entries
+    /// (codes `e·m + t + 1`, 0: none).
+    pub fn write(&self, labels: &mut [f64], out: &mut [f64]) {
+        let Phase::Labelling { settled, .. } = self.phase else {
+            out.fill(0.0);
+            return;
+        };
+        if settled.is_some() {
+            for (o, &entry) in labels.iter_mut().zip(&self.entries) {
+                *o = entry as f64;
+            }
+        } else {
+            labels.copy_from_slice(&self.labels);
+        }
+        let chunks = self.tags.chunks(self.packing.per_word());
+        for (o, chunk) in out.iter_mut().zip(chunks) {
+            *o = self.packing.pack(chunk);
+        }
+        out[out.len() - 2] = self.window as f64;
+        out[out.len() - 1] = self.alarm as f64;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use admm_ta_topologies::rng::SeededRng;
+
+    /// A robot's claim after a step, and whether it still labels.
+    type Step = (Option<usize>, bool);
+
+    /// The robots of a path graph `0 − 1 − … − (n−1)` run the finish on `claims` frozen at
+    /// step 0 (each robot's task in `tasks`) with their `costs`, for at most `limit` steps.
+    /// Returns per step every robot's claim and whether it still labels, and the robots.
+    fn run(costs: &[Vec<f64>], tasks: &[usize], limit: u64) -> (Vec<Vec<Step>>, Vec<Finish>) {
+        let n = costs.len();
+        let mut claims = vec![0u64; n];
+        for (i, &t) in tasks.iter().enumerate().rev() {
+            claims[t] = i as u64 + 1;
+        }
+        let mut robots: Vec<Finish> = (0..n)
+            .map(|i| Finish::new(i, n, n, AssignmentCase::One, n - 1, 1e-12))
+            .collect();
+        // A robot's labels (the potentials' place) and its section.
+        let mut sections = vec![vec![0.0; n + words(n, n)]; n];
+        for (i, robot) in robots.iter_mut().enumerate() {
+            assert!(robot.runs());
+            robot.freeze(0, &claims, Some(tasks[i]));
+            let (labels, section) = sections[i].split_at_mut(n);
+            robot.write(labels, section);
+        }
+        let allowed = vec![true; n];
+        let mut trace = Vec::new();
+        for step in 1..=limit {
+            let gathered = sections.clone();
+            let mut round = Vec::new();
+            for (i, robot) in robots.iter_mut().enumerate() {
+                robot.begin();
+                for j in [i.wrapping_sub(1), i + 1] {
+                    if j < n {
+                        let (labels, section) = gathered[j].split_at(n);
+                        assert!(labels.iter().all(|v| v.is_finite()));
+                        assert_eq!(robot.check(section), Ok(()));
+                        robot.merge(labels, section);
+                    }
+                }
+                let claim = robot.claim(step, Some(tasks[i]), &costs[i], &allowed);
+                if robot.moved {
+                    let prices = robot.prices().unwrap_or_else(|| {
+                        panic!("a full assignment is priced: {:?} {tasks:?}", robot.labels)
+                    });
+                    let reduced = |t: usize| costs[i][t] + prices[t];
+                    let best = (0..n).map(reduced).fold(f64::INFINITY, f64::min);
+                    assert!(reduced(claim.unwrap()) <= best + 1e-9, "robot {i}");
+                }
+                let (labels, section) = sections[i].split_at_mut(n);
+                robot.write(labels, section);
+                round.push((claim, robot.labelling()));
+            }
+            trace.push(round);
+        }
+        (trace, robots)
+    }
+
+    /// The cheapest assignment of `robots` to distinct `tasks` (brute force).
+    fn cheapest(costs: &[Vec<f64>], robots: &[usize], tasks: &[usize]) -> (f64, Vec<usize>) {
+        fn go(
+            costs: &[Vec<f64>],
+            robots: &[usize],
+            free: &mut Vec<usize>,
+            chosen: &mut Vec<usize>,
+            best: &mut (f64, Vec<usize>),
+        ) {
+            if chosen.len() == robots.len() {
+                let cost = robots
+                    .iter()
+                    .zip(chosen.iter())
+                    .map(|(&r, &t)| costs[r][t])
+                    .sum();
+                if cost < best.0 {
+                    *best = (cost, chosen.clone());
+                }
+                return;
+            }
+            for k in 0..free.len() {
+                let t = free.remove(k);
+                chosen.push(t);
+                go(costs, robots, free, chosen, best);
+                chosen.pop();
+                free.insert(k, t);
+            }
+        }
+        let mut best = (f64::INFINITY, Vec::new());
+        go(
+            costs,
+            robots,
+            &mut tasks.to_vec(),
+            &mut Vec::new(),
+            &mut best,
+        );
+        best
+    }
+
+    /// Claims that are the cheapest for all robots but one or two (excess robots, each
+    /// claiming a task beside a smaller owner) and all tasks but as many: the settled
+    /// labels move every robot at one step to the optimal assignment (successive shortest
+    /// paths, one batch of paths or two), with prices that price every robot's new task as
+    /// its cheapest.
+    #[test]
+    fn settled_labels_move_to_the_optimum_at_one_step() {
+        let mut rng = SeededRng::new(11);
+        let mut tried = 0;
+        for trial in 0..300 {
+            let n = 2 + trial % 5;
+            let costs: Vec<Vec<f64>> = (0..n)
+                .map(|_| (0..n).map(|_| rng.uniform()).collect())
+                .collect();
+            // k excess robots (the last k of a rotation) and k unclaimed tasks.
+            let k = if n >= 4 { 1 + trial % 2 } else { 1 };
+            let excess: Vec<usize> = (0..k).map(|j| (trial + n - 1 - j) % n).collect();
+            let unclaimed: Vec<usize> = (0..k).map(|j| (trial / 3 + j) % n).collect();
+            let robots: Vec<usize> = (0..n).filter(|r| !excess.contains(r)).collect();
+            let free: Vec<usize> = (0..n).filter(|t| !unclaimed.contains(t)).collect();
+            let (_, matched) = cheapest(&costs, &robots, &free);
+            let mut tasks = vec![0; n];
+            for (&r, &t) in robots.iter().zip(&matched) {
+                tasks[r] = t;
+            }
+            // Each excess robot claims a task beside a smaller owner: the owners are the
+            // matched robots.
+            let mut skip = false;
+            for &e in &excess {
+                let beside: Vec<usize> = robots
+                    .iter()
+                    .filter(|&&r| r < e)
+                    .map(|&r| tasks[r])
+                    .collect();
+                skip |= beside.is_empty();
+                if !skip {
+                    tasks[e] = beside[trial % beside.len()];
+                }
+            }
+            if skip {
+                continue;
+            }
+            tried += 1;
+            let (trace, _) = run(&costs, &tasks, 40 * n as u64);
+            let moved = trace
+                .iter()
+                .position(|round| round.iter().any(|&(_, labelling)| !labelling))
+                .unwrap_or_else(|| {
+                    panic!("trial {trial}: the labels never settle: {tasks:?} {costs:?}")
+                });
+            assert!(
+                trace[moved].iter().all(|&(_, l)| !l),
+                "trial {trial}: one step"
+            );
+            let after: Vec<usize> = trace[moved].iter().map(|&(c, _)| c.unwrap()).collect();
+            let mut sorted = after.clone();
+            sorted.sort_unstable();
+            assert_eq!(
+                sorted,
+                (0..n).collect::<Vec<_>>(),
+                "trial {trial}: {after:?}"
+            );
+            let cost: f64 = after.iter().enumerate().map(|(i, &t)| costs[i][t]).sum();
+            let all: Vec<usize> = (0..n).collect();
+            let (optimum, _) = cheapest(&costs, &all, &all);
+            assert!(
+                (cost - optimum).abs() < 1e-9,
+                "trial {trial}: {cost} > {optimum}"
+            );
+        }
+        assert!(tried > 150, "{tried} trials");
+    }
+
+    /// Claims with a negative cycle (robots 0 and 1 each on the other's cheap task) never
+    /// settle: a robot finds the cycle in the tags, the alarm reaches every robot, and all
+    /// give up at the same step, long before the budget, nobody having moved; they claim
+    /// their rounded tasks again. Labels that fall with no robot noticing are given up at
+    /// the budget.
+    #[test]
+    fn labels_that_never_settle_are_given_up() {
+        let costs = vec![
+            vec![0.0, 5.0, 9.0],
+            vec![5.0, 0.0, 9.0],
+            vec![9.0, 9.0, 9.0],
+        ];
+        let tasks = [1, 0, 0];
+        let (trace, mut robots) = run(&costs, &tasks, 40);
+        let given_up = trace
+            .iter()
+            .position(|round| round.iter().any(|&(_, labelling)| !labelling))
+            .expect("the alarm stops the labels");
+        assert!(given_up < 20, "after {given_up} steps");
+        for round in &trace[given_up..] {
+            assert_eq!(
+                round,
+                &vec![(Some(1), false), (Some(0), false), (Some(0), false)]
+            );
+        }
+        assert!(trace[..given_up].iter().flatten().all(|&(_, l)| l));
+        assert!(
+            robots
+                .iter()
+                .all(|r| r.paths() == 0 && r.prices().is_none())
+        );
+        // The budget, for labels that fall unnoticed.
+        let snapshot = Snapshot::new(0, 3, 3, AssignmentCase::One, 2, 1e-12);
+        let claims = [2, 1, 0];
+        let budget = LABEL_PERIODS * 2;
+        for (i, robot) in robots.iter_mut().enumerate() {
+            robot.freeze(0, &claims, Some(tasks[i]));
+            robot.observe(budget - 1, &snapshot);
+            assert!(robot.labelling());
+            robot.observe(budget, &snapshot);
+            assert!(!robot.labelling());
+            assert_eq!(
+                robot.claim(budget + 1, Some(2), &costs[i], &[true; 3]),
+                Some(2)
+            );
+        }
+    }
+
+    /// A section is accepted as written and refused, at the right value, when a packed
+    /// value holds more tags than tasks or is not an integer, or the window is too wide.
+    #[test]
+    fn bad_sections_are_refused_at_their_value() {
+        let costs = vec![vec![0.0, 1.0, 2.0]; 3];
+        let (_, robots) = run(&costs, &[0, 0, 1], 1);
+        let mut section = vec![0.0; words(3, 3)];
+        // 3 tags of 2 bits (26 to a value), the window, the alarm; the labels go in the
+        // potentials' place.
+        assert_eq!(section.len(), 1 + 1 + 1);
+        robots[0].write(&mut [0.0; 3], &mut section);
+        assert_eq!(robots[0].check(&section), Ok(()));
+        let bad = |k: usize, v: f64| {
+            let mut s = section.clone();
+            s[k] = v;
+            robots[0].check(&s)
+        };
+        assert_eq!(bad(0, 3.0), Ok(())); // a tag of task 2 at task 0
+        assert_eq!(bad(0, 4.0 + 64.0), Err(0)); // a 4th code
+        assert_eq!(bad(0, 0.5), Err(0));
+        assert_eq!(bad(0, f64::NAN), Err(0));
+        assert_eq!(bad(1, 2f64.powi(53)), Err(1));
+        assert_eq!(bad(1, 2f64.powi(52)), Ok(()));
+        assert_eq!(bad(2, -1.0), Err(2));
+        let idle = Finish::new(0, 3, 3, AssignmentCase::Two, 2, 1e-12);
+        assert!(!idle.runs());
+        assert_eq!(idle.check(&[0.0; 3]), Ok(()));
+        assert_eq!(idle.check(&[0.5, 1.0, 0.0]), Err(0));
+        // More robots than tasks carry the section too (a Case 1 part of a standing team
+        // may run in it); a team of fewer robots carries none.
+        assert_eq!((words(4, 3), words(2, 3), words(3, 1)), (3, 0, 0));
+    }
+}
