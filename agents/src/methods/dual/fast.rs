@@ -52,9 +52,11 @@
 //!
 //! The payload is `m` multipliers and the certificate's `m` potentials and `m` claims,
 //! several claims packed into one value ([`snapshot::claims_per_word`]: 7 for 100
-//! robots): `2m + ⌈m/k⌉`, 215 values at 100 × 100 (the paper's is `n + m`); in Case 1
-//! the finish adds its `m` tags packed alike and one value (its labels travel in the
-//! potentials' place while it computes them): 231 at 100 × 100.
+//! robots): `2m + ⌈m/k⌉`, 215 values at 100 × 100 (the paper's is `n + m`); the finish
+//! adds its `m` tags packed alike and two values, its window and alarm (its labels travel
+//! in the potentials' place while it computes them): 232 at 100 × 100. Teams of more
+//! robots than tasks carry that section too, as zeros: a standing team's episode with
+//! robots away may be a Case 1 problem inside the team's messages.
 //!
 //! Size: one agent — its equations, both x-updates and the step share its private state;
 //! about 150 lines are its unit tests.

@@ -58,7 +58,8 @@
 //! not settle (a negative cycle among the frozen claims: the ADMM's claims need not be the
 //! cheapest for what they cover) are given up: at once when a robot finds the cycle in
 //! the tags (an OR-flooded *alarm* window tells every robot at one step), else after a
-//! budget; so is a full assignment the certificate does not prove within one. The robots
+//! budget of `64 P` steps; so is a full assignment the certificate does not prove within
+//! `16 P` steps ([`CLAIM_PERIODS`]). The robots
 //! claim their rounded columns again, and the finish waits `64 P` steps before it
 //! freezes again (after an alarm only `P`: the claims had tasks unclaimed, so the
 //! certificate lost nothing while it rested, and the ADMM's next claims may be the
@@ -76,8 +77,8 @@
 //! other teams carry no section, or zeros.
 //!
 //! Size: one protocol — its phases share one robot's state (labels, tags, entries, the
-//! window and the frozen claims) and every transition reads the others; about 70 lines
-//! are these docs and 230 its unit tests.
+//! window and the frozen claims) and every transition reads the others; about 80 lines
+//! are these docs and 250 its unit tests.
 
 use crate::methods::dual::snapshot::{Packing, Snapshot};
 use crate::problem::AssignmentCase;
@@ -156,8 +157,8 @@ pub struct Finish {
     window: u64,
     heard: u64,
     /// It found a negative cycle among the frozen claims; the alarm window it sent last
-    /// step (bit `k`: a robot within `k + 1` hops had found one `k + 1` steps before), and
-    /// the OR of the neighbours' this step.
+    /// step (bit `k`: a robot within `k` hops had found one `k + 1` steps before), and the
+    /// OR of the neighbours' this step.
     cycle: bool,
     alarm: u64,
     alarmed: u64,
