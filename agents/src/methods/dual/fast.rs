@@ -413,12 +413,14 @@ impl ConsensusAgent for FastDualAgent {
             part,
             value: payload[k],
         };
-        self.snapshot
-            .check(&payload[m..end])
-            .map_err(|k| match k < m {
-                true => bad(m + k, PayloadPart::at("potential of task", k)),
-                false => bad(m + k, PayloadPart::at("packed claims", k - m)),
-            })?;
+        self.snapshot.check(&payload[m..end]).map_err(|k| {
+            let part = if k < m {
+                PayloadPart::at("potential of task", k)
+            } else {
+                PayloadPart::at("packed claims", k - m)
+            };
+            bad(m + k, part)
+        })?;
         self.finish
             .check(&payload[end..])
             .map_err(|k| bad(end + k, PayloadPart::at("finish value", k)))
@@ -466,8 +468,8 @@ impl ConsensusAgent for FastDualAgent {
             .advance(self.episode_steps, own, costs, allowed);
         self.finish.observe(self.episode_steps, &self.snapshot);
         self.snapshot.write(&mut out[m..end]);
-        let (potentials, rest) = out[m..].split_at_mut(m);
-        self.finish.write(potentials, &mut rest[end - 2 * m..]);
+        let (head, section) = out.split_at_mut(end);
+        self.finish.write(&mut head[m..2 * m], section);
         self.slack = match own {
             Some(task) => self.snapshot.slack(task, costs, allowed, self.case),
             None => self.snapshot.relay_slack(),

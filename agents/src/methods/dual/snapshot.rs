@@ -353,11 +353,6 @@ impl Snapshot {
         (&self.settled.claims, self.settled.task)
     }
 
-    /// Snapshots settle every this many steps.
-    pub fn period(&self) -> u64 {
-        self.period
-    }
-
     /// A relay's slack: 0 when its potentials stood still and the settled snapshot claims
     /// every task (it has no constraint of its own to meet), ∞ otherwise.
     pub fn relay_slack(&self) -> f64 {
