@@ -69,8 +69,9 @@ pub fn solve_simplex_box(
 /// `Σ_t x_t(τ) = 1` without jumps, `x_t = max(offset_t − τ, 0)` (`offset_t = −∞`: fixed at
 /// 0): the Euclidean projection of the offsets onto the simplex, by Michelot's method: `τ`
 /// is the mean excess over 1 of the entries above the last `τ`, until they stay the same
-/// (`τ` only grows, the entries above it only drop out, and the largest never does). A few
-/// passes of `O(m)` instead of a sort of the breakpoints.
+/// (`τ` only grows, the entries above it only drop out, and the largest never does). Two
+/// passes of `O(m)` (the largest offset, the entries above it less 1), then a few over
+/// the entries left, instead of a sort of the breakpoints.
 fn project_onto_simplex(
     tasks: usize,
     offset: impl Fn(usize) -> f64,
@@ -80,23 +81,50 @@ fn project_onto_simplex(
     scratch.clear();
     scratch.extend((0..tasks).map(offset));
     // The entries above τ set the next τ; when they are the same as last time, τ is the root.
-    // Every pass but the last drops an entry (a bound against rounding all the same).
-    let (mut tau, mut above) = (f64::NEG_INFINITY, usize::MAX);
+    // Every pass but the last drops an entry (a bound against rounding all the same). The
+    // entries above τ are kept, in order, in the second half of the scratch: each pass reads
+    // only those of the last (the same sums as over all entries, in the same order).
+    scratch.extend_from_within(..tasks);
+    let (offsets, above_tau) = scratch.split_at_mut(tasks);
+    // τ starts at the largest offset less 1, below the root (the largest entry is at most
+    // 1): the first pass keeps only the few entries above it (Condat's start).
+    let top = largest(offsets);
+    let (mut tau, mut above, mut live) = (top - 1.0, usize::MAX, tasks);
     for _ in 0..=tasks {
         let (mut sum, mut count) = (0.0, 0usize);
-        for &o in scratch.iter().filter(|&&o| o > tau) {
-            sum += o;
-            count += 1;
+        for k in 0..live {
+            let o = above_tau[k];
+            if o > tau {
+                above_tau[count] = o;
+                sum += o;
+                count += 1;
+            }
         }
+        live = count;
         if count == above {
             break;
         }
         above = count;
         tau = (sum - 1.0) / count as f64;
     }
-    for (slot, &o) in x.iter_mut().zip(scratch.iter()) {
+    for (slot, &o) in x.iter_mut().zip(offsets.iter()) {
         *slot = (o - tau).clamp(0.0, 1.0);
     }
+}
+
+/// The largest of `values`, by four running maxima (they do not wait on each other).
+fn largest(values: &[f64]) -> f64 {
+    let mut top = [f64::NEG_INFINITY; 4];
+    let chunks = values.chunks_exact(4);
+    for &v in chunks.remainder() {
+        top[0] = top[0].max(v);
+    }
+    for chunk in chunks {
+        for (top, &v) in top.iter_mut().zip(chunk) {
+            *top = top.max(v);
+        }
+    }
+    top.into_iter().fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// `G(τ) = slope · τ − base − Σ_t x_t(τ)` on `[lo, hi]`, with `G(lo) ≤ 0`.

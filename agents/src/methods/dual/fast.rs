@@ -292,10 +292,7 @@ impl FastDualAgent {
                 payload_len(self.robots, m),
                 "neighbour payload has the wrong length"
             );
-            for ((sum, mine), v) in self.kappa.iter_mut().zip(&self.y).zip(&theirs[..m]) {
-                *sum += v;
-                disagreement = disagreement.max((mine - v).abs());
-            }
+            disagreement = disagreement.max(add_and_spread(&mut self.kappa, &self.y, &theirs[..m]));
         }
         let degree = if inbox.is_empty() {
             // A lone robot (n = 1) is its own neighbour, as in the other agents.
@@ -384,6 +381,35 @@ impl FastDualAgent {
             max: RHO_MAX_GROWTH,
         }
     }
+}
+
+/// Adds `theirs` to `sums` and returns the largest `|mine − theirs|`: four running maxima,
+/// not one, so that the maxima do not wait on each other (a fifth of the fast dual's round
+/// at 500 robots was the one chain of them).
+fn add_and_spread(sums: &mut [f64], mine: &[f64], theirs: &[f64]) -> f64 {
+    const LANES: usize = 4;
+    let mut spread = [0.0f64; LANES];
+    let mut sum_chunks = sums.chunks_exact_mut(LANES);
+    let (mut mine_chunks, mut their_chunks) =
+        (mine.chunks_exact(LANES), theirs.chunks_exact(LANES));
+    for ((sum, mine), theirs) in (&mut sum_chunks)
+        .zip(&mut mine_chunks)
+        .zip(&mut their_chunks)
+    {
+        for k in 0..LANES {
+            sum[k] += theirs[k];
+            spread[k] = spread[k].max((mine[k] - theirs[k]).abs());
+        }
+    }
+    let rest = sum_chunks.into_remainder().iter_mut();
+    for ((sum, mine), theirs) in rest
+        .zip(mine_chunks.remainder())
+        .zip(their_chunks.remainder())
+    {
+        *sum += theirs;
+        spread[0] = spread[0].max((mine - theirs).abs());
+    }
+    spread.into_iter().fold(0.0, f64::max)
 }
 
 /// `θ_t = ±x_t/ρ + κ_t` (`−` for Case 2's coverage rows).

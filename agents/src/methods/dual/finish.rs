@@ -46,7 +46,9 @@
 //! robot traced the paths, so it knows the new owners and unclaimed tasks) and the labels
 //! start again: the owners' claims are still the cheapest under `L`, so no negative cycle
 //! appears (successive shortest paths), and the robots keep claiming their rounded
-//! columns meanwhile.
+//! columns meanwhile. A label whose tags lead to a task still unclaimed over tasks no path
+//! touched is kept (the cost of a path that is still there: an upper bound, from which the
+//! relaxations fall as from unreached), the others start unreached.
 //!
 //! # Never wrong, never stuck
 //! The finish only chooses claims: the certificate ([`crate::methods::dual::snapshot`])
@@ -152,6 +154,8 @@ pub struct Finish {
     resting: bool,
     labels: Vec<f64>,
     tags: Vec<u64>,
+    /// The tags packed as they are sent (merging skips a neighbour's equal tags).
+    packed: Vec<u64>,
     entries: Vec<u64>,
     /// The window sent last step, and the AND of the neighbours' this step.
     window: u64,
@@ -177,6 +181,9 @@ pub struct Finish {
     paths: u64,
     // Scratch of the tracing.
     used: Vec<bool>,
+    /// Per task whether its label is kept after a move, and the tasks of one walk.
+    keep: Vec<u8>,
+    walk: Vec<usize>,
     /// `(from, whether this robot moves, to)` of each hop of a path.
     path: Vec<(usize, bool, usize)>,
 }
@@ -209,6 +216,7 @@ impl Finish {
             resting: false,
             labels: vec![0.0; len],
             tags: vec![0; len],
+            packed: vec![0; len.div_ceil(Packing::new(tasks.max(1)).per_word())],
             entries: vec![0; len],
             window: 0,
             heard: 0,
@@ -223,6 +231,8 @@ impl Finish {
             last_claims: vec![0; len],
             paths: 0,
             used: vec![false; len],
+            keep: vec![0; len],
+            walk: Vec::with_capacity(len + 1),
             path: Vec::with_capacity(len),
         }
     }
@@ -260,6 +270,7 @@ impl Finish {
     fn clear(&mut self) {
         self.labels.fill(0.0);
         self.tags.fill(0);
+        self.packed.fill(0);
         self.entries.fill(0);
         self.window = 0;
         self.cycle = false;
@@ -319,22 +330,37 @@ impl Finish {
         }
         let (packing, per) = (self.packing, self.packing.per_word());
         let words = &theirs[..m.div_ceil(per)];
+        self.heard &= theirs[words.len()] as u64;
+        self.alarmed |= theirs[words.len() + 1] as u64;
+        // Most neighbours hold the robot's own tags and no lower label: one pass over the
+        // whole vectors tells.
+        let same = words.iter().zip(&self.packed).all(|(&w, &p)| w as u64 == p);
+        if same && !lower(labels, &self.labels) {
+            return;
+        }
         let chunks = self.labels.chunks_mut(per).zip(self.tags.chunks_mut(per));
-        for (((mine, tags), values), &word) in chunks.zip(labels.chunks(per)).zip(words) {
+        let chunks = chunks
+            .zip(labels.chunks(per))
+            .zip(words)
+            .zip(&mut self.packed);
+        for ((((mine, tags), values), &word), packed) in chunks {
+            let word = word as u64;
+            if word == *packed && !lower(values, mine) {
+                continue;
+            }
             for (j, ((label, tag), &value)) in mine.iter_mut().zip(tags).zip(values).enumerate() {
                 // Most labels are equal or larger: the tag is read only then.
                 if value > *label {
                     continue;
                 }
-                let theirs = packing.code(word as u64, j);
+                let theirs = packing.code(word, j);
                 if value < *label || theirs < *tag {
                     (*label, *tag) = (value, theirs);
+                    *packed = packing.with_code(*packed, j, theirs);
                     self.changed = true;
                 }
             }
         }
-        self.heard &= theirs[words.len()] as u64;
-        self.alarmed |= theirs[words.len() + 1] as u64;
     }
 
     /// The task the robot claims this step: its `rounded` one (none: a relay) unless the
@@ -402,6 +428,8 @@ impl Finish {
         {
             self.labels[s] = value - costs[s];
             self.tags[s] = t as u64 + 1;
+            let (c, j) = (s / self.packing.per_word(), s % self.packing.per_word());
+            self.packed[c] = self.packing.with_code(self.packed[c], j, t as u64 + 1);
             self.changed = true;
             let mut at = t;
             for _ in 0..self.tasks {
@@ -442,8 +470,9 @@ impl Finish {
     }
 
     /// Moves along the traced paths: to a full assignment, claimed for the certificate;
-    /// else the moved claims are frozen at once and the labels start again (every robot
-    /// knows the paths, so the new owners and unclaimed tasks). Gives up without a path.
+    /// else the moved claims are frozen at once and the labels the move changed start again
+    /// (every robot knows the paths, so the new owners and unclaimed tasks). Gives up
+    /// without a path.
     fn traced(&mut self, step: u64, task: Option<usize>, rounded: Option<usize>) -> Option<usize> {
         let Some(claim) = self.trace(task) else {
             self.give_up(step, LABEL_PERIODS);
@@ -460,17 +489,69 @@ impl Finish {
         // A robot on a kept path owns the task it entered (its owner moved on; an excess
         // robot may enter its own task).
         self.owner |= self.entered;
-        self.clear();
         for t in 0..self.tasks {
             self.free[t] &= !self.used[t];
-            self.labels[t] = if self.free[t] { 0.0 } else { UNREACHED };
         }
+        self.keep_untouched_labels();
         self.phase = Phase::Labelling {
             since: step,
             task: claim,
             settled: None,
         };
         rounded
+    }
+
+    /// After a move that left tasks unclaimed: keeps every label whose path (its tags) still
+    /// leads to an unclaimed task over tasks no kept path touched (its owners and their
+    /// costs are the same, so it is the cost of a path there is: an upper bound, from
+    /// which the relaxations fall to the new labels as from unreached), and makes the
+    /// others unreached. Every robot held the same settled tags and traced the same paths,
+    /// so all keep the same labels. The labels computed anew are those the move changed.
+    fn keep_untouched_labels(&mut self) {
+        const UNKNOWN: u8 = 0;
+        const KEPT: u8 = 1;
+        const DROPPED: u8 = 2;
+        let m = self.tasks;
+        self.keep.fill(UNKNOWN);
+        for s in 0..m {
+            // Walk the tags from `s` to a task whose fate is known; all on the way share it.
+            self.walk.clear();
+            let mut at = s;
+            let fate = loop {
+                if self.keep[at] != UNKNOWN {
+                    break self.keep[at];
+                }
+                if self.free[at] {
+                    break KEPT;
+                }
+                if self.used[at] || self.tags[at] == 0 || self.walk.len() > m {
+                    break DROPPED;
+                }
+                self.walk.push(at);
+                at = self.tags[at] as usize - 1;
+            };
+            if self.keep[at] == UNKNOWN {
+                self.keep[at] = fate;
+            }
+            for &t in &self.walk {
+                self.keep[t] = fate;
+            }
+        }
+        let per = self.packing.per_word();
+        for t in 0..m {
+            if self.free[t] {
+                (self.labels[t], self.tags[t]) = (0.0, 0);
+            } else if self.keep[t] == DROPPED {
+                (self.labels[t], self.tags[t]) = (UNREACHED, 0);
+            }
+        }
+        for (word, chunk) in self.packed.iter_mut().zip(self.tags.chunks(per)) {
+            *word = self.packing.pack(chunk) as u64;
+        }
+        self.entries.fill(0);
+        self.window = 0;
+        self.cycle = false;
+        self.alarm = 0;
     }
 
     /// Traces the paths of the settled labels from the entries (module docs) and returns
@@ -608,12 +689,25 @@ impl Finish {
             labels.copy_from_slice(&self.labels);
         }
         let chunks = self.tags.chunks(self.packing.per_word());
-        for (o, chunk) in out.iter_mut().zip(chunks) {
-            *o = self.packing.pack(chunk);
+        for ((o, &word), chunk) in out.iter_mut().zip(&self.packed).zip(chunks) {
+            debug_assert_eq!(
+                word as f64,
+                self.packing.pack(chunk),
+                "packed tags out of date"
+            );
+            *o = word as f64;
         }
         out[out.len() - 2] = self.window as f64;
         out[out.len() - 1] = self.alarm as f64;
     }
+}
+
+/// Whether any of `theirs` is below `mine` (no early exit: the loop vectorises).
+fn lower(theirs: &[f64], mine: &[f64]) -> bool {
+    theirs
+        .iter()
+        .zip(mine)
+        .fold(false, |any, (theirs, mine)| any | (theirs < mine))
 }
 
 #[cfg(test)]

@@ -128,6 +128,12 @@ impl Packing {
         (word >> (j as u32 * self.bits)) & ((1u64 << self.bits) - 1)
     }
 
+    /// `word` with its code `j` replaced by `code`.
+    pub(super) fn with_code(self, word: u64, j: usize, code: u64) -> u64 {
+        let shift = j as u32 * self.bits;
+        (word & !(((1u64 << self.bits) - 1) << shift)) | code << shift
+    }
+
     /// The packed value of up to `per_word` codes: an integer below 2^53, exact.
     pub(super) fn pack(self, codes: &[u64]) -> f64 {
         let word = codes
@@ -180,16 +186,31 @@ pub struct Snapshot {
 struct Claims {
     /// Per task the smallest claimer's code (robot + 1), or [`UNCLAIMED`].
     claims: Vec<u64>,
+    /// The claims packed as they are sent (merging skips a neighbour's equal value).
+    packed: Vec<u64>,
     /// The robot's own task when the snapshot started.
     task: Option<usize>,
 }
 
 impl Claims {
-    fn empty(tasks: usize) -> Self {
+    fn empty(tasks: usize, packing: Packing) -> Self {
         Self {
             claims: vec![UNCLAIMED; tasks],
+            packed: vec![0; tasks.div_ceil(packing.per_word)],
             task: None,
         }
+    }
+
+    /// Claims nothing but `task`, with the robot's `code`.
+    fn start(&mut self, task: Option<usize>, code: u64, packing: Packing) {
+        self.claims.fill(UNCLAIMED);
+        self.packed.fill(0);
+        if let Some(task) = task {
+            self.claims[task] = code;
+            let (c, j) = (task / packing.per_word, task % packing.per_word);
+            self.packed[c] = packing.with_code(0, j, code);
+        }
+        self.task = task;
     }
 }
 
@@ -207,9 +228,10 @@ impl Snapshot {
         assert!(epsilon > 0.0 && epsilon.is_finite(), "ε must be positive");
         assert!(index < robots, "robot {index} of {robots}");
         let period = diameter.max(1) as u64;
+        let packing = Packing::new(robots);
         Self {
             index,
-            packing: Packing::new(robots),
+            packing,
             period,
             reset: (case == AssignmentCase::Two).then_some(period * (tasks as u64 + 2)),
             epsilon,
@@ -217,8 +239,8 @@ impl Snapshot {
             before: vec![0.0; tasks],
             stable: false,
             lent: false,
-            flooding: Claims::empty(tasks),
-            settled: Claims::empty(tasks),
+            flooding: Claims::empty(tasks, packing),
+            settled: Claims::empty(tasks, packing),
         }
     }
 
@@ -272,13 +294,34 @@ impl Snapshot {
             return;
         }
         let packing = self.packing;
-        let words = theirs[tasks..].iter();
-        for (chunk, &word) in self.flooding.claims.chunks_mut(packing.per_word).zip(words) {
+        let flooding = &mut self.flooding;
+        debug_assert!(
+            (flooding
+                .claims
+                .chunks(packing.per_word)
+                .map(|c| packing.pack(c)))
+            .eq(flooding.packed.iter().map(|&word| word as f64)),
+            "packed claims out of date"
+        );
+        let chunks = flooding.claims.chunks_mut(packing.per_word);
+        for ((chunk, packed), &word) in chunks.zip(&mut flooding.packed).zip(&theirs[tasks..]) {
             let word = word as u64;
-            for (j, mine) in chunk.iter_mut().enumerate() {
-                let claim = packing.code(word, j);
-                if claim != UNCLAIMED && (*mine == UNCLAIMED || claim < *mine) {
-                    *mine = claim;
+            // Most of a snapshot's flood is values equal to the robot's own.
+            if word == *packed {
+                continue;
+            }
+            // The smaller code of each, unclaimed (0) the largest: `code − 1`, wrapping.
+            let mut merged = *packed;
+            for j in 0..chunk.len() {
+                let (claim, mine) = (packing.code(word, j), packing.code(merged, j));
+                if claim.wrapping_sub(1) < mine.wrapping_sub(1) {
+                    merged = packing.with_code(merged, j, claim);
+                }
+            }
+            if merged != *packed {
+                *packed = merged;
+                for (j, mine) in chunk.iter_mut().enumerate() {
+                    *mine = packing.code(merged, j);
                 }
             }
         }
@@ -298,8 +341,8 @@ impl Snapshot {
         self.potentials.fill(0.0);
         self.before.fill(0.0);
         self.stable = false;
-        self.flooding = Claims::empty(self.potentials.len());
-        self.settled = Claims::empty(self.potentials.len());
+        self.flooding = Claims::empty(self.potentials.len(), self.packing);
+        self.settled = Claims::empty(self.potentials.len(), self.packing);
     }
 
     /// After merging step `step`'s messages and deciding the robot's `task` (`None`: it
@@ -339,12 +382,7 @@ impl Snapshot {
             std::mem::swap(&mut self.settled, &mut self.flooding);
         }
         let code = self.own_code();
-        let next = &mut self.flooding;
-        next.claims.fill(UNCLAIMED);
-        if let Some(task) = task {
-            next.claims[task] = code;
-        }
-        next.task = task;
+        self.flooding.start(task, code, self.packing);
     }
 
     /// The claims of the last settled snapshot (per task its smallest claimer's code,
@@ -516,6 +554,11 @@ mod tests {
             reader.merge(1, &section);
             assert_eq!(
                 reader.flooding.claims, writer.flooding.claims,
+                "{robots} robots"
+            );
+            let packed = reader.flooding.packed.iter().map(|&word| word as f64);
+            assert!(
+                packed.eq(section[tasks..].iter().copied()),
                 "{robots} robots"
             );
         }
