@@ -92,6 +92,20 @@ impl std::fmt::Display for PayloadPart {
     }
 }
 
+/// The index of the first value of `values` that is not finite, if any: one pass without
+/// an early exit (the compiler makes it a vector loop: a neighbour's payload is checked
+/// every round), and a second only when there is one to find.
+pub fn first_not_finite(values: &[f64]) -> Option<usize> {
+    let finite = values
+        .iter()
+        .fold(true, |all, v| all & (v.abs() < f64::INFINITY));
+    if finite {
+        None
+    } else {
+        values.iter().position(|v| !v.is_finite())
+    }
+}
+
 /// `Err` unless `payload` has `expected` values.
 pub fn check_length(payload: &[f64], expected: usize) -> Result<(), PayloadError> {
     if payload.len() == expected {
@@ -127,7 +141,7 @@ pub trait ConsensusAgent {
     /// `payload_len` finite numbers; methods with sentinels override it.
     fn check_payload(&self, payload: &[f64]) -> Result<(), PayloadError> {
         check_length(payload, self.payload_len())?;
-        match payload.iter().position(|v| !v.is_finite()) {
+        match first_not_finite(payload) {
             Some(index) => Err(PayloadError::NotFinite {
                 index,
                 value: payload[index],

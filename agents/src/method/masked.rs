@@ -21,7 +21,9 @@
 //!   in place. A relay is the method's own ([`crate::method::team::TeamBuilder::relay`]):
 //!   it takes part in the consensus on prices with no column of its own.
 
-use crate::agent::{ConsensusAgent, Inbox, NewCostsError, PayloadError, StepReport, check_length};
+use crate::agent::{
+    ConsensusAgent, Inbox, NewCostsError, PayloadError, StepReport, check_length, first_not_finite,
+};
 use crate::method::agent::MethodAgent;
 pub use crate::method::team::PartLayout;
 
@@ -180,7 +182,7 @@ impl ConsensusAgent for MaskedAgent {
         if inner > 0 {
             self.inner.check_payload(&payload[..inner])?;
         }
-        match payload[inner..].iter().position(|v| !v.is_finite()) {
+        match first_not_finite(&payload[inner..]) {
             Some(k) => Err(PayloadError::NotFinite {
                 index: inner + k,
                 value: payload[inner + k],

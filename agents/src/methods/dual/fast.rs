@@ -63,6 +63,7 @@
 
 use crate::agent::{
     AgentAlgorithm, ConsensusAgent, Inbox, NewCostsError, PayloadError, PayloadPart, StepReport,
+    first_not_finite,
 };
 use crate::methods::dual::agent::{DualParams, DualUpdate};
 use crate::methods::dual::column;
@@ -428,7 +429,7 @@ impl ConsensusAgent for FastDualAgent {
     fn check_payload(&self, payload: &[f64]) -> Result<(), PayloadError> {
         crate::agent::check_length(payload, self.payload_len())?;
         let m = self.tasks;
-        if let Some(t) = payload[..m].iter().position(|v| !v.is_finite()) {
+        if let Some(t) = first_not_finite(&payload[..m]) {
             return Err(PayloadError::NotFinite {
                 index: t,
                 value: payload[t],

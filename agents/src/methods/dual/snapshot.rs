@@ -69,6 +69,7 @@
 //! Size: one certificate — the packing, the claims and the potentials share one robot's
 //! state; about 150 lines are its unit tests.
 
+use crate::agent::first_not_finite;
 use crate::problem::AssignmentCase;
 
 /// Values of the certificate's payload section for `robots` robots and `tasks` tasks.
@@ -151,11 +152,14 @@ impl Packing {
     /// Whether `word` is what [`Packing::pack`] writes for `codes` codes of this team.
     pub(super) fn holds(self, word: f64, codes: usize) -> bool {
         let used = codes as u32 * self.bits;
+        // An integer from 0 to 2^64 survives the round trip (`as` saturates; NaN is 0).
         let bits = word as u64;
-        word >= 0.0
-            && word.fract() == 0.0
-            && word < 2f64.powi(used as i32)
-            && (0..codes).all(|j| self.code(bits, j) <= self.robots as u64)
+        if bits as f64 != word || bits.checked_shr(used).is_some_and(|above| above != 0) {
+            return false;
+        }
+        // Every code of `bits` bits is one of this team's when the largest is.
+        let all_codes = (1u64 << self.bits) - 1 <= self.robots as u64;
+        all_codes || (0..codes).all(|j| self.code(bits, j) <= self.robots as u64)
     }
 }
 
@@ -267,7 +271,7 @@ impl Snapshot {
     /// within the section.
     pub fn check(&self, theirs: &[f64]) -> Result<(), usize> {
         let tasks = self.potentials.len();
-        if let Some(t) = theirs[..tasks].iter().position(|v| !v.is_finite()) {
+        if let Some(t) = first_not_finite(&theirs[..tasks]) {
             return Err(t);
         }
         let per_word = self.packing.per_word;
@@ -587,6 +591,12 @@ mod tests {
         assert_eq!(bad(tasks, 6.0), Err(tasks)); // code 6 > 5 robots
         assert_eq!(bad(tasks + 1, (1u64 << 9) as f64), Err(tasks + 1)); // a 4th code
         assert_eq!(bad(tasks + 1, f64::INFINITY), Err(tasks + 1));
+        assert_eq!(bad(tasks + 1, 2f64.powi(64)), Err(tasks + 1));
+        assert_eq!(bad(tasks + 1, -1e300), Err(tasks + 1));
         assert_eq!(bad(tasks + 1, 5.0), Ok(()));
+        // 7 robots fill their 3-bit codes: every code of a word in range is one of theirs.
+        let seven = Packing::new(7);
+        assert!(seven.holds(seven.pack(&[7, 0, 3]), 3));
+        assert!(!seven.holds(seven.pack(&[7, 0, 3]), 2));
     }
 }
