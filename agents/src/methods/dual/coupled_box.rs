@@ -69,9 +69,9 @@ pub fn solve_simplex_box(
 /// `Σ_t x_t(τ) = 1` without jumps, `x_t = max(offset_t − τ, 0)` (`offset_t = −∞`: fixed at
 /// 0): the Euclidean projection of the offsets onto the simplex, by Michelot's method: `τ`
 /// is the mean excess over 1 of the entries above the last `τ`, until they stay the same
-/// (`τ` only grows, the entries above it only drop out, and the largest never does). Two
-/// passes of `O(m)` (the largest offset, the entries above it less 1), then a few over
-/// the entries left, instead of a sort of the breakpoints.
+/// (`τ` only grows, the entries above it only drop out, and the largest never does). One
+/// pass of `O(m)` for the largest offset and one for the entries above it less 1, then a
+/// few over the entries left, instead of a sort of the breakpoints.
 fn project_onto_simplex(
     tasks: usize,
     offset: impl Fn(usize) -> f64,
@@ -101,6 +101,15 @@ fn project_onto_simplex(
             }
         }
         live = count;
+        if count == 0 {
+            // Offsets so large that `top − 1` rounds to `top`: nothing is above τ. As far as
+            // an f64 can tell, the projection is the largest entry alone.
+            x.fill(0.0);
+            if let Some(first) = offsets.iter().position(|&o| o == top) {
+                x[first] = 1.0;
+            }
+            return;
+        }
         if count == above {
             break;
         }
@@ -360,5 +369,11 @@ mod tests {
                 );
             }
         }
+        // Offsets beyond an f64's unit (a neighbour's finite but huge multipliers): the
+        // largest entry alone, never a NaN beside a disallowed task.
+        let z = [1e17, 0.0, f64::NEG_INFINITY, 5.0];
+        let mut x = vec![0.5; 4];
+        solve_simplex_box(4, |t| (f64::NEG_INFINITY, z[t]), &mut scratch, &mut x);
+        assert_eq!(x, [1.0, 0.0, 0.0, 0.0]);
     }
 }

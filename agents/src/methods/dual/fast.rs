@@ -389,6 +389,7 @@ impl FastDualAgent {
 /// at 500 robots was the one chain of them).
 fn add_and_spread(sums: &mut [f64], mine: &[f64], theirs: &[f64]) -> f64 {
     const LANES: usize = 4;
+    debug_assert!(sums.len() == mine.len() && mine.len() == theirs.len());
     let mut spread = [0.0f64; LANES];
     let mut sum_chunks = sums.chunks_exact_mut(LANES);
     let (mut mine_chunks, mut their_chunks) =

@@ -152,7 +152,9 @@ impl Packing {
     /// Whether `word` is what [`Packing::pack`] writes for `codes` codes of this team.
     pub(super) fn holds(self, word: f64, codes: usize) -> bool {
         let used = codes as u32 * self.bits;
-        // An integer from 0 to 2^64 survives the round trip (`as` saturates; NaN is 0).
+        debug_assert!(used <= f64::MANTISSA_DIGITS, "{codes} codes in one value");
+        // An integer below 2^64 survives the round trip; `as` saturates (2^64 and above
+        // come back as 2^64, refused by the shift below) and makes NaN 0.
         let bits = word as u64;
         if bits as f64 != word || bits.checked_shr(used).is_some_and(|above| above != 0) {
             return false;
