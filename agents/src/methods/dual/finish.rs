@@ -202,6 +202,7 @@ impl Finish {
         let runs = case == AssignmentCase::One && (1..=WINDOW_BITS).contains(&diameter);
         let max = entry_max(robots, tasks).filter(|_| runs);
         let len = if max.is_some() { tasks } else { 0 };
+        let packing = Packing::new(tasks.max(1));
         Self {
             index,
             tasks,
@@ -209,14 +210,14 @@ impl Finish {
             diameter: max.map(|_| diameter as u64),
             period: diameter.max(1) as u64,
             epsilon,
-            packing: Packing::new(tasks.max(1)),
+            packing,
             phase: Phase::Idle,
             owner: false,
             quiet_until: 0,
             resting: false,
             labels: vec![0.0; len],
             tags: vec![0; len],
-            packed: vec![0; len.div_ceil(Packing::new(tasks.max(1)).per_word())],
+            packed: vec![0; len.div_ceil(packing.per_word())],
             entries: vec![0; len],
             window: 0,
             heard: 0,
@@ -271,6 +272,11 @@ impl Finish {
         self.labels.fill(0.0);
         self.tags.fill(0);
         self.packed.fill(0);
+        self.clear_agreement();
+    }
+
+    /// Forgets the entries and the windows (kept labels start a new agreement).
+    fn clear_agreement(&mut self) {
         self.entries.fill(0);
         self.window = 0;
         self.cycle = false;
@@ -428,8 +434,7 @@ impl Finish {
         {
             self.labels[s] = value - costs[s];
             self.tags[s] = t as u64 + 1;
-            let (c, j) = (s / self.packing.per_word(), s % self.packing.per_word());
-            self.packed[c] = self.packing.with_code(self.packed[c], j, t as u64 + 1);
+            self.packing.set(&mut self.packed, s, t as u64 + 1);
             self.changed = true;
             let mut at = t;
             for _ in 0..self.tasks {
@@ -548,10 +553,7 @@ impl Finish {
         for (word, chunk) in self.packed.iter_mut().zip(self.tags.chunks(per)) {
             *word = self.packing.pack(chunk) as u64;
         }
-        self.entries.fill(0);
-        self.window = 0;
-        self.cycle = false;
-        self.alarm = 0;
+        self.clear_agreement();
     }
 
     /// Traces the paths of the settled labels from the entries (module docs) and returns

@@ -135,6 +135,12 @@ impl Packing {
         (word & !(((1u64 << self.bits) - 1) << shift)) | code << shift
     }
 
+    /// Sets code `index` of the packed `words` (as [`Packing::pack`] writes them) to `code`.
+    pub(super) fn set(self, words: &mut [u64], index: usize, code: u64) {
+        let word = &mut words[index / self.per_word];
+        *word = self.with_code(*word, index % self.per_word, code);
+    }
+
     /// The packed value of up to `per_word` codes: an integer below 2^53, exact.
     pub(super) fn pack(self, codes: &[u64]) -> f64 {
         let word = codes
@@ -213,8 +219,7 @@ impl Claims {
         self.packed.fill(0);
         if let Some(task) = task {
             self.claims[task] = code;
-            let (c, j) = (task / packing.per_word, task % packing.per_word);
-            self.packed[c] = packing.with_code(0, j, code);
+            packing.set(&mut self.packed, task, code);
         }
         self.task = task;
     }
