@@ -933,6 +933,47 @@ mod tests {
         }
     }
 
+    /// After a move that left tasks unclaimed, a label is kept exactly when its tags lead to
+    /// a task still unclaimed over tasks no path touched: not through a task a path used
+    /// (on the way or at its end, a task just filled), not into a task no tag leaves, not
+    /// around a cycle of tags; unclaimed tasks start at 0, and the packed tags follow.
+    #[test]
+    fn kept_labels_are_the_paths_still_there() {
+        let m = 10;
+        let mut robot = Finish::new(0, m, m, AssignmentCase::One, 2, 1e-12);
+        assert!(robot.runs());
+        // Task 0 stays unclaimed; task 1 was, and a path filled it; a path used task 7.
+        robot.free = (0..m).map(|t| t == 0).collect();
+        robot.used = (0..m).map(|t| t == 1 || t == 7).collect();
+        // Tags (task + 1, 0: none): 2 → 0, 3 → 2 → 0, 4 → 1, 5 ⇄ 6, 8 → 7 → 0, 9 unreached.
+        let tags = [0, 0, 1, 3, 2, 7, 6, 1, 8, 0];
+        robot.tags.copy_from_slice(&tags);
+        for (t, label) in robot.labels.iter_mut().enumerate() {
+            *label = if tags[t] == 0 { 0.5 } else { t as f64 / 10.0 };
+        }
+        robot.labels[9] = UNREACHED;
+        let per = robot.packing.per_word();
+        for (word, chunk) in robot.packed.iter_mut().zip(robot.tags.chunks(per)) {
+            *word = robot.packing.pack(chunk) as u64;
+        }
+        robot.entries[3] = 7;
+        robot.window = 5;
+        robot.keep_untouched_labels();
+        let kept = [2, 3];
+        let after = robot.labels.iter().zip(&robot.tags).zip(tags).enumerate();
+        for (t, ((&label, &tag), before)) in after {
+            match t {
+                0 => assert_eq!((label, tag), (0.0, 0), "the unclaimed task"),
+                _ if kept.contains(&t) => assert_eq!((label, tag), (t as f64 / 10.0, before)),
+                _ => assert_eq!((label, tag), (UNREACHED, 0), "task {t}"),
+            }
+        }
+        for (word, chunk) in robot.packed.iter().zip(robot.tags.chunks(per)) {
+            assert_eq!(*word as f64, robot.packing.pack(chunk));
+        }
+        assert!(robot.entries.iter().all(|&e| e == 0) && robot.window == 0);
+    }
+
     /// A section is accepted as written and refused, at the right value, when a packed
     /// value holds more tags than tasks or is not an integer, or the window is too wide.
     #[test]
