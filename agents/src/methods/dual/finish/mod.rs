@@ -55,8 +55,10 @@
 //! still proves them optimal or not, and the ADMM iterates go on underneath. While the
 //! labels are computed the robots claim their rounded columns, and when a settling
 //! snapshot of those claims leaves fewer tasks unclaimed than the frozen ones (having
-//! stood still a period) the finish freezes them instead: the
-//! ADMM resolves many short chains at once, the finish a few long ones. Labels that do
+//! stood still a period) the finish freezes them instead, keeping each label whose tags
+//! lead over tasks of the same owner in both to a task unclaimed in both (an upper bound,
+//! as after a move): the ADMM resolves many short chains at once, the finish a few long
+//! ones. Labels that do
 //! not settle (a negative cycle among the frozen claims: the ADMM's claims need not be the
 //! cheapest for what they cover) are given up: at once when a robot finds the cycle in
 //! the tags (an OR-flooded *alarm* window tells every robot at one step), else after a
@@ -80,7 +82,7 @@
 //!
 //! Size: one protocol — its phases share one robot's state (labels, tags, entries, the
 //! window and the frozen claims) and every transition reads the others; about 80 lines
-//! are these docs and 250 its unit tests.
+//! are these docs (its unit tests are in `tests.rs`).
 
 use crate::methods::dual::snapshot::{Packing, Snapshot};
 use crate::problem::AssignmentCase;
@@ -175,6 +177,8 @@ pub struct Finish {
     complete: bool,
     /// Tasks nobody claims in the frozen claims.
     free: Vec<bool>,
+    /// The frozen claims as the moves left them (per task its owner's code, 0: none).
+    frozen: Vec<u64>,
     /// The claims settled at the last snapshot.
     last_claims: Vec<u64>,
     /// Paths moved since the costs were set.
@@ -229,6 +233,7 @@ impl Finish {
             entered: false,
             complete: false,
             free: vec![false; len],
+            frozen: vec![0; len],
             last_claims: vec![0; len],
             paths: 0,
             used: vec![false; len],
@@ -586,6 +591,16 @@ impl Finish {
                 continue;
             }
             found += 1;
+            // Each task on the path passes to its predecessor's owner (the first to the
+            // entry's robot): from the end, so that every owner is read before it moves.
+            for k in (0..self.path.len()).rev() {
+                let (from, _, to) = self.path[k];
+                self.frozen[to] = if k == 0 {
+                    (entry / m + 1) as u64
+                } else {
+                    self.frozen[from]
+                };
+            }
             for &(from, me, to) in &self.path {
                 self.used[to] = true;
                 if me && task == Some(from) {
@@ -661,12 +676,28 @@ impl Finish {
 
     /// Freezes `claims` (per task its smallest claimer's code, 0: none) at `step`, the
     /// robot claiming `task` in them: labels 0 at unclaimed tasks, unreached elsewhere.
+    /// Claims frozen in place of claims still labelling keep every label whose tags lead,
+    /// over tasks whose owner is the same in both, to a task unclaimed in both: each hop
+    /// costs what it cost, so the label is at least the cost of a path there is (an upper
+    /// bound, as [`Finish::keep_untouched_labels`] keeps after a move).
     fn freeze(&mut self, step: u64, claims: &[u64], task: Option<usize>) {
-        self.clear();
+        if matches!(self.phase, Phase::Labelling { settled: None, .. }) {
+            for (t, &claim) in claims.iter().enumerate() {
+                self.used[t] = self.frozen[t] != claim;
+                self.free[t] &= !self.used[t];
+            }
+            self.keep_untouched_labels();
+        } else {
+            self.clear();
+            self.labels.fill(UNREACHED);
+        }
         for (t, &claim) in claims.iter().enumerate() {
             self.free[t] = claim == 0;
-            self.labels[t] = if claim == 0 { 0.0 } else { UNREACHED };
+            if claim == 0 {
+                (self.labels[t], self.tags[t]) = (0.0, 0);
+            }
         }
+        self.frozen.copy_from_slice(claims);
         self.owner = task.is_some_and(|s| claims[s] == self.index as u64 + 1);
         self.phase = Phase::Labelling {
             since: step,
@@ -713,297 +744,4 @@ fn lower(theirs: &[f64], mine: &[f64]) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use admm_ta_topologies::rng::SeededRng;
-
-    /// A robot's claim after a step, and whether it still labels.
-    type Step = (Option<usize>, bool);
-
-    /// The robots of a path graph `0 − 1 − … − (n−1)` run the finish on `claims` frozen at
-    /// step 0 (each robot's task in `tasks`) with their `costs`, for at most `limit` steps.
-    /// Returns per step every robot's claim and whether it still labels, and the robots.
-    fn run(costs: &[Vec<f64>], tasks: &[usize], limit: u64) -> (Vec<Vec<Step>>, Vec<Finish>) {
-        let n = costs.len();
-        let mut claims = vec![0u64; n];
-        for (i, &t) in tasks.iter().enumerate().rev() {
-            claims[t] = i as u64 + 1;
-        }
-        let mut robots: Vec<Finish> = (0..n)
-            .map(|i| Finish::new(i, n, n, AssignmentCase::One, n - 1, 1e-12))
-            .collect();
-        // A robot's labels (the potentials' place) and its section.
-        let mut sections = vec![vec![0.0; n + words(n, n)]; n];
-        for (i, robot) in robots.iter_mut().enumerate() {
-            assert!(robot.runs());
-            robot.freeze(0, &claims, Some(tasks[i]));
-            let (labels, section) = sections[i].split_at_mut(n);
-            robot.write(labels, section);
-        }
-        let allowed = vec![true; n];
-        let mut trace = Vec::new();
-        for step in 1..=limit {
-            let gathered = sections.clone();
-            let mut round = Vec::new();
-            for (i, robot) in robots.iter_mut().enumerate() {
-                robot.begin();
-                for j in [i.wrapping_sub(1), i + 1] {
-                    if j < n {
-                        let (labels, section) = gathered[j].split_at(n);
-                        assert!(labels.iter().all(|v| v.is_finite()));
-                        assert_eq!(robot.check(section), Ok(()));
-                        robot.merge(labels, section);
-                    }
-                }
-                let claim = robot.claim(step, Some(tasks[i]), &costs[i], &allowed);
-                if robot.moved {
-                    let prices = robot.prices().unwrap_or_else(|| {
-                        panic!("a full assignment is priced: {:?} {tasks:?}", robot.labels)
-                    });
-                    let reduced = |t: usize| costs[i][t] + prices[t];
-                    let best = (0..n).map(reduced).fold(f64::INFINITY, f64::min);
-                    assert!(reduced(claim.unwrap()) <= best + 1e-9, "robot {i}");
-                }
-                let (labels, section) = sections[i].split_at_mut(n);
-                robot.write(labels, section);
-                round.push((claim, robot.labelling()));
-            }
-            trace.push(round);
-        }
-        (trace, robots)
-    }
-
-    /// The cheapest assignment of `robots` to distinct `tasks` (brute force).
-    fn cheapest(costs: &[Vec<f64>], robots: &[usize], tasks: &[usize]) -> (f64, Vec<usize>) {
-        fn go(
-            costs: &[Vec<f64>],
-            robots: &[usize],
-            free: &mut Vec<usize>,
-            chosen: &mut Vec<usize>,
-            best: &mut (f64, Vec<usize>),
-        ) {
-            if chosen.len() == robots.len() {
-                let cost = robots
-                    .iter()
-                    .zip(chosen.iter())
-                    .map(|(&r, &t)| costs[r][t])
-                    .sum();
-                if cost < best.0 {
-                    *best = (cost, chosen.clone());
-                }
-                return;
-            }
-            for k in 0..free.len() {
-                let t = free.remove(k);
-                chosen.push(t);
-                go(costs, robots, free, chosen, best);
-                chosen.pop();
-                free.insert(k, t);
-            }
-        }
-        let mut best = (f64::INFINITY, Vec::new());
-        go(
-            costs,
-            robots,
-            &mut tasks.to_vec(),
-            &mut Vec::new(),
-            &mut best,
-        );
-        best
-    }
-
-    /// Claims that are the cheapest for all robots but one or two (excess robots, each
-    /// claiming a task beside a smaller owner) and all tasks but as many: the settled
-    /// labels move every robot at one step to the optimal assignment (successive shortest
-    /// paths, one batch of paths or two), with prices that price every robot's new task as
-    /// its cheapest.
-    #[test]
-    fn settled_labels_move_to_the_optimum_at_one_step() {
-        let mut rng = SeededRng::new(11);
-        let mut tried = 0;
-        for trial in 0..300 {
-            let n = 2 + trial % 5;
-            let costs: Vec<Vec<f64>> = (0..n)
-                .map(|_| (0..n).map(|_| rng.uniform()).collect())
-                .collect();
-            // k excess robots (the last k of a rotation) and k unclaimed tasks.
-            let k = if n >= 4 { 1 + trial % 2 } else { 1 };
-            let excess: Vec<usize> = (0..k).map(|j| (trial + n - 1 - j) % n).collect();
-            let unclaimed: Vec<usize> = (0..k).map(|j| (trial / 3 + j) % n).collect();
-            let robots: Vec<usize> = (0..n).filter(|r| !excess.contains(r)).collect();
-            let free: Vec<usize> = (0..n).filter(|t| !unclaimed.contains(t)).collect();
-            let (_, matched) = cheapest(&costs, &robots, &free);
-            let mut tasks = vec![0; n];
-            for (&r, &t) in robots.iter().zip(&matched) {
-                tasks[r] = t;
-            }
-            // Each excess robot claims a task beside a smaller owner: the owners are the
-            // matched robots.
-            let mut skip = false;
-            for &e in &excess {
-                let beside: Vec<usize> = robots
-                    .iter()
-                    .filter(|&&r| r < e)
-                    .map(|&r| tasks[r])
-                    .collect();
-                skip |= beside.is_empty();
-                if !skip {
-                    tasks[e] = beside[trial % beside.len()];
-                }
-            }
-            if skip {
-                continue;
-            }
-            tried += 1;
-            let (trace, _) = run(&costs, &tasks, 40 * n as u64);
-            let moved = trace
-                .iter()
-                .position(|round| round.iter().any(|&(_, labelling)| !labelling))
-                .unwrap_or_else(|| {
-                    panic!("trial {trial}: the labels never settle: {tasks:?} {costs:?}")
-                });
-            assert!(
-                trace[moved].iter().all(|&(_, l)| !l),
-                "trial {trial}: one step"
-            );
-            let after: Vec<usize> = trace[moved].iter().map(|&(c, _)| c.unwrap()).collect();
-            let mut sorted = after.clone();
-            sorted.sort_unstable();
-            assert_eq!(
-                sorted,
-                (0..n).collect::<Vec<_>>(),
-                "trial {trial}: {after:?}"
-            );
-            let cost: f64 = after.iter().enumerate().map(|(i, &t)| costs[i][t]).sum();
-            let all: Vec<usize> = (0..n).collect();
-            let (optimum, _) = cheapest(&costs, &all, &all);
-            assert!(
-                (cost - optimum).abs() < 1e-9,
-                "trial {trial}: {cost} > {optimum}"
-            );
-        }
-        assert!(tried > 150, "{tried} trials");
-    }
-
-    /// Claims with a negative cycle (robots 0 and 1 each on the other's cheap task) never
-    /// settle: a robot finds the cycle in the tags, the alarm reaches every robot, and all
-    /// give up at the same step, long before the budget, nobody having moved; they claim
-    /// their rounded tasks again. Labels that fall with no robot noticing are given up at
-    /// the budget.
-    #[test]
-    fn labels_that_never_settle_are_given_up() {
-        let costs = vec![
-            vec![0.0, 5.0, 9.0],
-            vec![5.0, 0.0, 9.0],
-            vec![9.0, 9.0, 9.0],
-        ];
-        let tasks = [1, 0, 0];
-        let (trace, mut robots) = run(&costs, &tasks, 40);
-        let given_up = trace
-            .iter()
-            .position(|round| round.iter().any(|&(_, labelling)| !labelling))
-            .expect("the alarm stops the labels");
-        assert!(given_up < 20, "after {given_up} steps");
-        for round in &trace[given_up..] {
-            assert_eq!(
-                round,
-                &vec![(Some(1), false), (Some(0), false), (Some(0), false)]
-            );
-        }
-        assert!(trace[..given_up].iter().flatten().all(|&(_, l)| l));
-        assert!(
-            robots
-                .iter()
-                .all(|r| r.paths() == 0 && r.prices().is_none())
-        );
-        // The budget, for labels that fall unnoticed.
-        let snapshot = Snapshot::new(0, 3, 3, AssignmentCase::One, 2, 1e-12);
-        let claims = [2, 1, 0];
-        let budget = LABEL_PERIODS * 2;
-        for (i, robot) in robots.iter_mut().enumerate() {
-            robot.freeze(0, &claims, Some(tasks[i]));
-            robot.observe(budget - 1, &snapshot);
-            assert!(robot.labelling());
-            robot.observe(budget, &snapshot);
-            assert!(!robot.labelling());
-            assert_eq!(
-                robot.claim(budget + 1, Some(2), &costs[i], &[true; 3]),
-                Some(2)
-            );
-        }
-    }
-
-    /// After a move that left tasks unclaimed, a label is kept exactly when its tags lead to
-    /// a task still unclaimed over tasks no path touched: not through a task a path used
-    /// (on the way or at its end, a task just filled), not into a task no tag leaves, not
-    /// around a cycle of tags; unclaimed tasks start at 0, and the packed tags follow.
-    #[test]
-    fn kept_labels_are_the_paths_still_there() {
-        let m = 10;
-        let mut robot = Finish::new(0, m, m, AssignmentCase::One, 2, 1e-12);
-        assert!(robot.runs());
-        // Task 0 stays unclaimed; task 1 was, and a path filled it; a path used task 7.
-        robot.free = (0..m).map(|t| t == 0).collect();
-        robot.used = (0..m).map(|t| t == 1 || t == 7).collect();
-        // Tags (task + 1, 0: none): 2 → 0, 3 → 2 → 0, 4 → 1, 5 ⇄ 6, 8 → 7 → 0, 9 unreached.
-        let tags = [0, 0, 1, 3, 2, 7, 6, 1, 8, 0];
-        robot.tags.copy_from_slice(&tags);
-        for (t, label) in robot.labels.iter_mut().enumerate() {
-            *label = if tags[t] == 0 { 0.5 } else { t as f64 / 10.0 };
-        }
-        robot.labels[9] = UNREACHED;
-        let per = robot.packing.per_word();
-        for (word, chunk) in robot.packed.iter_mut().zip(robot.tags.chunks(per)) {
-            *word = robot.packing.pack(chunk) as u64;
-        }
-        robot.entries[3] = 7;
-        robot.window = 5;
-        robot.keep_untouched_labels();
-        let kept = [2, 3];
-        let after = robot.labels.iter().zip(&robot.tags).zip(tags).enumerate();
-        for (t, ((&label, &tag), before)) in after {
-            match t {
-                0 => assert_eq!((label, tag), (0.0, 0), "the unclaimed task"),
-                _ if kept.contains(&t) => assert_eq!((label, tag), (t as f64 / 10.0, before)),
-                _ => assert_eq!((label, tag), (UNREACHED, 0), "task {t}"),
-            }
-        }
-        for (word, chunk) in robot.packed.iter().zip(robot.tags.chunks(per)) {
-            assert_eq!(*word as f64, robot.packing.pack(chunk));
-        }
-        assert!(robot.entries.iter().all(|&e| e == 0) && robot.window == 0);
-    }
-
-    /// A section is accepted as written and refused, at the right value, when a packed
-    /// value holds more tags than tasks or is not an integer, or the window is too wide.
-    #[test]
-    fn bad_sections_are_refused_at_their_value() {
-        let costs = vec![vec![0.0, 1.0, 2.0]; 3];
-        let (_, robots) = run(&costs, &[0, 0, 1], 1);
-        let mut section = vec![0.0; words(3, 3)];
-        // 3 tags of 2 bits (26 to a value), the window, the alarm; the labels go in the
-        // potentials' place.
-        assert_eq!(section.len(), 1 + 1 + 1);
-        robots[0].write(&mut [0.0; 3], &mut section);
-        assert_eq!(robots[0].check(&section), Ok(()));
-        let bad = |k: usize, v: f64| {
-            let mut s = section.clone();
-            s[k] = v;
-            robots[0].check(&s)
-        };
-        assert_eq!(bad(0, 3.0), Ok(())); // a tag of task 2 at task 0
-        assert_eq!(bad(0, 4.0 + 64.0), Err(0)); // a 4th code
-        assert_eq!(bad(0, 0.5), Err(0));
-        assert_eq!(bad(0, f64::NAN), Err(0));
-        assert_eq!(bad(1, 2f64.powi(53)), Err(1));
-        assert_eq!(bad(1, 2f64.powi(52)), Ok(()));
-        assert_eq!(bad(2, -1.0), Err(2));
-        let idle = Finish::new(0, 3, 3, AssignmentCase::Two, 2, 1e-12);
-        assert!(!idle.runs());
-        assert_eq!(idle.check(&[0.0; 3]), Ok(()));
-        assert_eq!(idle.check(&[0.5, 1.0, 0.0]), Err(0));
-        // More robots than tasks carry the section too (a Case 1 part of a standing team
-        // may run in it); a team of fewer robots carries none.
-        assert_eq!((words(4, 3), words(2, 3), words(3, 1)), (3, 0, 0));
-    }
-}
+mod tests;

@@ -1,0 +1,413 @@
+//! The finish's unit tests: robots on a path graph run it from frozen claims and are
+//! checked against a brute-force optimum.
+
+use super::*;
+use admm_ta_topologies::rng::SeededRng;
+
+/// A robot's claim after a step, and whether it still labels.
+type Step = (Option<usize>, bool);
+
+/// The robots of a path graph `0 − 1 − … − (n−1)` run the finish on `claims` frozen at
+/// step 0 (each robot's task in `tasks`) with their `costs`, for at most `limit` steps.
+/// Returns per step every robot's claim and whether it still labels, and the robots.
+fn run(costs: &[Vec<f64>], tasks: &[usize], limit: u64) -> (Vec<Vec<Step>>, Vec<Finish>) {
+    let run = run_refrozen(costs, tasks, None, limit);
+    (run.trace, run.robots)
+}
+
+/// A run of the finish: per step every robot's claim and whether it still labels, the
+/// robots, how many labels robot 0 kept at a second freeze (reached, at a task not
+/// unclaimed), and per step the paths robot 0 had moved.
+struct Run {
+    trace: Vec<Vec<Step>>,
+    robots: Vec<Finish>,
+    kept: usize,
+    paths: Vec<u64>,
+}
+
+/// Per task its smallest claimer's code (0: none) when robot `i` claims `tasks[i]`.
+fn claims_of(tasks: &[usize]) -> Vec<u64> {
+    let mut claims = vec![0u64; tasks.len()];
+    for (i, &t) in tasks.iter().enumerate().rev() {
+        claims[t] = i as u64 + 1;
+    }
+    claims
+}
+
+/// As [`run`], and at step `at` every robot freezes the claims of `then` (its rounded
+/// task from there on) in place of the first.
+fn run_refrozen(
+    costs: &[Vec<f64>],
+    tasks: &[usize],
+    refreeze: Option<(u64, &[usize])>,
+    limit: u64,
+) -> Run {
+    let n = costs.len();
+    let claims = claims_of(tasks);
+    let mut robots: Vec<Finish> = (0..n)
+        .map(|i| Finish::new(i, n, n, AssignmentCase::One, n - 1, 1e-12))
+        .collect();
+    // A robot's labels (the potentials' place) and its section.
+    let mut sections = vec![vec![0.0; n + words(n, n)]; n];
+    for (i, robot) in robots.iter_mut().enumerate() {
+        assert!(robot.runs());
+        robot.freeze(0, &claims, Some(tasks[i]));
+        let (labels, section) = sections[i].split_at_mut(n);
+        robot.write(labels, section);
+    }
+    let allowed = vec![true; n];
+    let (mut trace, mut kept, mut paths) = (Vec::new(), 0, Vec::new());
+    let mut tasks = tasks;
+    for step in 1..=limit {
+        let gathered = sections.clone();
+        let mut round = Vec::new();
+        for (i, robot) in robots.iter_mut().enumerate() {
+            robot.begin();
+            for j in [i.wrapping_sub(1), i + 1] {
+                if j < n {
+                    let (labels, section) = gathered[j].split_at(n);
+                    assert!(labels.iter().all(|v| v.is_finite()));
+                    assert_eq!(robot.check(section), Ok(()));
+                    robot.merge(labels, section);
+                }
+            }
+            let claim = robot.claim(step, Some(tasks[i]), &costs[i], &allowed);
+            if let Some((at, then)) = refreeze.filter(|&(at, _)| at == step) {
+                robot.freeze(at, &claims_of(then), Some(then[i]));
+                if i == 0 {
+                    let reached = robot.labels.iter().zip(&robot.free);
+                    kept = reached.filter(|&(&l, &f)| l != UNREACHED && !f).count();
+                }
+            }
+            if robot.moved {
+                let prices = robot.prices().unwrap_or_else(|| {
+                    panic!("a full assignment is priced: {:?} {tasks:?}", robot.labels)
+                });
+                let reduced = |t: usize| costs[i][t] + prices[t];
+                let best = (0..n).map(reduced).fold(f64::INFINITY, f64::min);
+                assert!(reduced(claim.unwrap()) <= best + 1e-9, "robot {i}");
+            }
+            let (labels, section) = sections[i].split_at_mut(n);
+            robot.write(labels, section);
+            round.push((claim, robot.labelling()));
+        }
+        if let Some((_, then)) = refreeze.filter(|&(at, _)| at == step) {
+            tasks = then;
+        }
+        trace.push(round);
+        paths.push(robots[0].paths());
+    }
+    Run {
+        trace,
+        robots,
+        kept,
+        paths,
+    }
+}
+
+/// The cheapest assignment of `robots` to distinct `tasks` (brute force).
+fn cheapest(costs: &[Vec<f64>], robots: &[usize], tasks: &[usize]) -> (f64, Vec<usize>) {
+    fn go(
+        costs: &[Vec<f64>],
+        robots: &[usize],
+        free: &mut Vec<usize>,
+        chosen: &mut Vec<usize>,
+        best: &mut (f64, Vec<usize>),
+    ) {
+        if chosen.len() == robots.len() {
+            let cost = robots
+                .iter()
+                .zip(chosen.iter())
+                .map(|(&r, &t)| costs[r][t])
+                .sum();
+            if cost < best.0 {
+                *best = (cost, chosen.clone());
+            }
+            return;
+        }
+        for k in 0..free.len() {
+            let t = free.remove(k);
+            chosen.push(t);
+            go(costs, robots, free, chosen, best);
+            chosen.pop();
+            free.insert(k, t);
+        }
+    }
+    let mut best = (f64::INFINITY, Vec::new());
+    go(
+        costs,
+        robots,
+        &mut tasks.to_vec(),
+        &mut Vec::new(),
+        &mut best,
+    );
+    best
+}
+
+/// Trial `trial`'s costs and claims: the cheapest for all robots but one or two (excess
+/// robots, each claiming a task beside a smaller owner) and all tasks but as many.
+/// `None` where an excess robot has no smaller owner.
+fn instance(rng: &mut SeededRng, trial: usize) -> Option<(Vec<Vec<f64>>, Vec<usize>)> {
+    let n = 2 + trial % 5;
+    let costs: Vec<Vec<f64>> = (0..n)
+        .map(|_| (0..n).map(|_| rng.uniform()).collect())
+        .collect();
+    // k excess robots (the last k of a rotation) and k unclaimed tasks.
+    let k = if n >= 4 { 1 + trial % 2 } else { 1 };
+    let excess: Vec<usize> = (0..k).map(|j| (trial + n - 1 - j) % n).collect();
+    let unclaimed: Vec<usize> = (0..k).map(|j| (trial / 3 + j) % n).collect();
+    let robots: Vec<usize> = (0..n).filter(|r| !excess.contains(r)).collect();
+    let free: Vec<usize> = (0..n).filter(|t| !unclaimed.contains(t)).collect();
+    let (_, matched) = cheapest(&costs, &robots, &free);
+    let mut tasks = vec![0; n];
+    for (&r, &t) in robots.iter().zip(&matched) {
+        tasks[r] = t;
+    }
+    // Each excess robot claims a task beside a smaller owner: the owners are the
+    // matched robots.
+    for &e in &excess {
+        let beside: Vec<usize> = robots
+            .iter()
+            .filter(|&&r| r < e)
+            .map(|&r| tasks[r])
+            .collect();
+        tasks[e] = *beside.get(trial % beside.len().max(1))?;
+    }
+    Some((costs, tasks))
+}
+
+/// The robots all stop labelling at one step, at which they claim an optimal
+/// assignment; returns that step.
+fn moved_to_the_optimum(trace: &[Vec<Step>], costs: &[Vec<f64>], trial: usize) -> usize {
+    let n = costs.len();
+    let moved = trace
+        .iter()
+        .position(|round| round.iter().any(|&(_, labelling)| !labelling))
+        .unwrap_or_else(|| panic!("trial {trial}: the labels never settle: {costs:?}"));
+    assert!(
+        trace[moved].iter().all(|&(_, l)| !l),
+        "trial {trial}: one step"
+    );
+    let after: Vec<usize> = trace[moved].iter().map(|&(c, _)| c.unwrap()).collect();
+    let mut sorted = after.clone();
+    sorted.sort_unstable();
+    assert_eq!(
+        sorted,
+        (0..n).collect::<Vec<_>>(),
+        "trial {trial}: {after:?}"
+    );
+    let cost: f64 = after.iter().enumerate().map(|(i, &t)| costs[i][t]).sum();
+    let all: Vec<usize> = (0..n).collect();
+    let (optimum, _) = cheapest(costs, &all, &all);
+    assert!(
+        (cost - optimum).abs() < 1e-9,
+        "trial {trial}: {cost} > {optimum}"
+    );
+    moved
+}
+
+/// Claims that are the cheapest for all robots but one or two (excess robots, each
+/// claiming a task beside a smaller owner) and all tasks but as many: the settled
+/// labels move every robot at one step to the optimal assignment (successive shortest
+/// paths, one batch of paths or two), with prices that price every robot's new task as
+/// its cheapest.
+#[test]
+fn settled_labels_move_to_the_optimum_at_one_step() {
+    let mut rng = SeededRng::new(11);
+    let mut tried = 0;
+    for trial in 0..300 {
+        let Some((costs, tasks)) = instance(&mut rng, trial) else {
+            continue;
+        };
+        tried += 1;
+        let (trace, _) = run(&costs, &tasks, 40 * costs.len() as u64);
+        moved_to_the_optimum(&trace, &costs, trial);
+    }
+    assert!(tried > 150, "{tried} trials");
+}
+
+/// Every robot of `a` holds the labels of its robot in `b`.
+fn same_labels(a: &[Finish], b: &[Finish], trial: usize) {
+    for (a, b) in a.iter().zip(b) {
+        let same = a.labels.iter().zip(&b.labels);
+        assert!(
+            same.clone().all(|(a, b)| (a - b).abs() < 1e-9),
+            "trial {trial}: {:?} against {:?}",
+            a.labels,
+            b.labels
+        );
+    }
+}
+
+/// Claims frozen in place of claims still labelling (two owners swapped, or one excess
+/// robot elsewhere) keep the labels whose paths are still there, and the robots still
+/// move at one step to the optimum, with the labels a fresh start settles on.
+#[test]
+fn claims_frozen_anew_keep_the_paths_still_there() {
+    let mut rng = SeededRng::new(12);
+    let (mut tried, mut kept, mut two_batches) = (0, 0, 0);
+    for trial in 0..300 {
+        let Some((costs, tasks)) = instance(&mut rng, trial) else {
+            continue;
+        };
+        let n = costs.len();
+        // The first claims: two robots' tasks swapped.
+        let (a, b) = (trial % n, (trial / 5 + 1 + trial % (n - 1)) % n);
+        let mut first = tasks.clone();
+        first.swap(a, b);
+        let at = 1 + (trial % (2 * n)) as u64;
+        let limit = 60 * n as u64;
+        let refrozen = run_refrozen(&costs, &first, Some((at, &tasks)), limit);
+        let moved = moved_to_the_optimum(&refrozen.trace[at as usize..], &costs, trial);
+        let fresh = run_refrozen(&costs, &tasks, None, limit);
+        let fresh_moved = moved_to_the_optimum(&fresh.trace, &costs, trial);
+        // Labels kept are upper bounds: they fall no later than unreached ones.
+        assert!(
+            moved <= fresh_moved,
+            "trial {trial}: {moved} > {fresh_moved} steps"
+        );
+        same_labels(&refrozen.robots, &fresh.robots, trial);
+        tried += 1;
+        kept += usize::from(refrozen.kept > 0);
+        // Two batches: the first batch's claims frozen again after it moved a path,
+        // where the moved owners are known only from the paths traced.
+        let Some(first_move) = fresh.paths.iter().position(|&p| p > 0) else {
+            continue;
+        };
+        if !fresh.trace[first_move][0].1 {
+            continue;
+        }
+        let at = first_move as u64 + 2;
+        let again = run_refrozen(&costs, &tasks, Some((at, &tasks)), limit);
+        moved_to_the_optimum(&again.trace[at as usize..], &costs, trial);
+        same_labels(&again.robots, &fresh.robots, trial);
+        two_batches += 1;
+    }
+    assert!(two_batches > 20, "{two_batches} two-batch trials");
+    assert!(
+        tried > 150 && kept > 50,
+        "{tried} trials, {kept} kept labels"
+    );
+}
+
+/// Claims with a negative cycle (robots 0 and 1 each on the other's cheap task) never
+/// settle: a robot finds the cycle in the tags, the alarm reaches every robot, and all
+/// give up at the same step, long before the budget, nobody having moved; they claim
+/// their rounded tasks again. Labels that fall with no robot noticing are given up at
+/// the budget.
+#[test]
+fn labels_that_never_settle_are_given_up() {
+    let costs = vec![
+        vec![0.0, 5.0, 9.0],
+        vec![5.0, 0.0, 9.0],
+        vec![9.0, 9.0, 9.0],
+    ];
+    let tasks = [1, 0, 0];
+    let (trace, mut robots) = run(&costs, &tasks, 40);
+    let given_up = trace
+        .iter()
+        .position(|round| round.iter().any(|&(_, labelling)| !labelling))
+        .expect("the alarm stops the labels");
+    assert!(given_up < 20, "after {given_up} steps");
+    for round in &trace[given_up..] {
+        assert_eq!(
+            round,
+            &vec![(Some(1), false), (Some(0), false), (Some(0), false)]
+        );
+    }
+    assert!(trace[..given_up].iter().flatten().all(|&(_, l)| l));
+    assert!(
+        robots
+            .iter()
+            .all(|r| r.paths() == 0 && r.prices().is_none())
+    );
+    // The budget, for labels that fall unnoticed.
+    let snapshot = Snapshot::new(0, 3, 3, AssignmentCase::One, 2, 1e-12);
+    let claims = [2, 1, 0];
+    let budget = LABEL_PERIODS * 2;
+    for (i, robot) in robots.iter_mut().enumerate() {
+        robot.freeze(0, &claims, Some(tasks[i]));
+        robot.observe(budget - 1, &snapshot);
+        assert!(robot.labelling());
+        robot.observe(budget, &snapshot);
+        assert!(!robot.labelling());
+        assert_eq!(
+            robot.claim(budget + 1, Some(2), &costs[i], &[true; 3]),
+            Some(2)
+        );
+    }
+}
+
+/// After a move that left tasks unclaimed, a label is kept exactly when its tags lead to
+/// a task still unclaimed over tasks no path touched: not through a task a path used
+/// (on the way or at its end, a task just filled), not into a task no tag leaves, not
+/// around a cycle of tags; unclaimed tasks start at 0, and the packed tags follow.
+#[test]
+fn kept_labels_are_the_paths_still_there() {
+    let m = 10;
+    let mut robot = Finish::new(0, m, m, AssignmentCase::One, 2, 1e-12);
+    assert!(robot.runs());
+    // Task 0 stays unclaimed; task 1 was, and a path filled it; a path used task 7.
+    robot.free = (0..m).map(|t| t == 0).collect();
+    robot.used = (0..m).map(|t| t == 1 || t == 7).collect();
+    // Tags (task + 1, 0: none): 2 → 0, 3 → 2 → 0, 4 → 1, 5 ⇄ 6, 8 → 7 → 0, 9 unreached.
+    let tags = [0, 0, 1, 3, 2, 7, 6, 1, 8, 0];
+    robot.tags.copy_from_slice(&tags);
+    for (t, label) in robot.labels.iter_mut().enumerate() {
+        *label = if tags[t] == 0 { 0.5 } else { t as f64 / 10.0 };
+    }
+    robot.labels[9] = UNREACHED;
+    let per = robot.packing.per_word();
+    for (word, chunk) in robot.packed.iter_mut().zip(robot.tags.chunks(per)) {
+        *word = robot.packing.pack(chunk) as u64;
+    }
+    robot.entries[3] = 7;
+    robot.window = 5;
+    robot.keep_untouched_labels();
+    let kept = [2, 3];
+    let after = robot.labels.iter().zip(&robot.tags).zip(tags).enumerate();
+    for (t, ((&label, &tag), before)) in after {
+        match t {
+            0 => assert_eq!((label, tag), (0.0, 0), "the unclaimed task"),
+            _ if kept.contains(&t) => assert_eq!((label, tag), (t as f64 / 10.0, before)),
+            _ => assert_eq!((label, tag), (UNREACHED, 0), "task {t}"),
+        }
+    }
+    for (word, chunk) in robot.packed.iter().zip(robot.tags.chunks(per)) {
+        assert_eq!(*word as f64, robot.packing.pack(chunk));
+    }
+    assert!(robot.entries.iter().all(|&e| e == 0) && robot.window == 0);
+}
+
+/// A section is accepted as written and refused, at the right value, when a packed
+/// value holds more tags than tasks or is not an integer, or the window is too wide.
+#[test]
+fn bad_sections_are_refused_at_their_value() {
+    let costs = vec![vec![0.0, 1.0, 2.0]; 3];
+    let (_, robots) = run(&costs, &[0, 0, 1], 1);
+    let mut section = vec![0.0; words(3, 3)];
+    // 3 tags of 2 bits (26 to a value), the window, the alarm; the labels go in the
+    // potentials' place.
+    assert_eq!(section.len(), 1 + 1 + 1);
+    robots[0].write(&mut [0.0; 3], &mut section);
+    assert_eq!(robots[0].check(&section), Ok(()));
+    let bad = |k: usize, v: f64| {
+        let mut s = section.clone();
+        s[k] = v;
+        robots[0].check(&s)
+    };
+    assert_eq!(bad(0, 3.0), Ok(())); // a tag of task 2 at task 0
+    assert_eq!(bad(0, 4.0 + 64.0), Err(0)); // a 4th code
+    assert_eq!(bad(0, 0.5), Err(0));
+    assert_eq!(bad(0, f64::NAN), Err(0));
+    assert_eq!(bad(1, 2f64.powi(53)), Err(1));
+    assert_eq!(bad(1, 2f64.powi(52)), Ok(()));
+    assert_eq!(bad(2, -1.0), Err(2));
+    let idle = Finish::new(0, 3, 3, AssignmentCase::Two, 2, 1e-12);
+    assert!(!idle.runs());
+    assert_eq!(idle.check(&[0.0; 3]), Ok(()));
+    assert_eq!(idle.check(&[0.5, 1.0, 0.0]), Err(0));
+    // More robots than tasks carry the section too (a Case 1 part of a standing team
+    // may run in it); a team of fewer robots carries none.
+    assert_eq!((words(4, 3), words(2, 3), words(3, 1)), (3, 0, 0));
+}
