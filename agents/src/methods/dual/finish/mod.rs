@@ -511,12 +511,13 @@ impl Finish {
         rounded
     }
 
-    /// After a move that left tasks unclaimed: keeps every label whose path (its tags) still
-    /// leads to an unclaimed task over tasks no kept path touched (its owners and their
-    /// costs are the same, so it is the cost of a path there is: an upper bound, from
-    /// which the relaxations fall to the new labels as from unreached), and makes the
-    /// others unreached. Every robot held the same settled tags and traced the same paths,
-    /// so all keep the same labels. The labels computed anew are those the move changed.
+    /// After a move that left tasks unclaimed (or claims frozen anew, [`Finish::freeze`]):
+    /// keeps every label whose path (its tags) still leads to an unclaimed task over tasks
+    /// no kept path touched, marked `used` (its owners and their costs are the same, so it
+    /// is at least the cost of a path there is: an upper bound, from which the relaxations
+    /// fall to the new labels as from unreached), and makes the others unreached. After a
+    /// move every robot held the same settled tags and traced the same paths, so all keep
+    /// the same labels; the labels computed anew are those the move changed.
     fn keep_untouched_labels(&mut self) {
         const UNKNOWN: u8 = 0;
         const KEPT: u8 = 1;
@@ -694,7 +695,9 @@ impl Finish {
         for (t, &claim) in claims.iter().enumerate() {
             self.free[t] = claim == 0;
             if claim == 0 {
-                (self.labels[t], self.tags[t]) = (0.0, 0);
+                // Its tag is none already: kept at a task unclaimed in both, or dropped.
+                debug_assert_eq!(self.tags[t], 0);
+                self.labels[t] = 0.0;
             }
         }
         self.frozen.copy_from_slice(claims);
