@@ -175,9 +175,8 @@ pub struct Finish {
     entered: bool,
     /// The last paths traced left no task unclaimed.
     complete: bool,
-    /// Tasks nobody claims in the frozen claims.
-    free: Vec<bool>,
-    /// The frozen claims as the moves left them (per task its owner's code, 0: none).
+    /// The frozen claims as the moves left them (per task its owner's code, 0: none, an
+    /// unclaimed task).
     frozen: Vec<u64>,
     /// The claims settled at the last snapshot.
     last_claims: Vec<u64>,
@@ -232,7 +231,6 @@ impl Finish {
             moved: false,
             entered: false,
             complete: false,
-            free: vec![false; len],
             frozen: vec![0; len],
             last_claims: vec![0; len],
             paths: 0,
@@ -447,7 +445,7 @@ impl Finish {
                     self.cycle = true;
                     break;
                 }
-                if self.free[at] || self.tags[at] == 0 {
+                if self.frozen[at] == 0 || self.tags[at] == 0 {
                     break;
                 }
                 at = self.tags[at] as usize - 1;
@@ -499,9 +497,6 @@ impl Finish {
         // A robot on a kept path owns the task it entered (its owner moved on; an excess
         // robot may enter its own task).
         self.owner |= self.entered;
-        for t in 0..self.tasks {
-            self.free[t] &= !self.used[t];
-        }
         self.keep_untouched_labels();
         self.phase = Phase::Labelling {
             since: step,
@@ -517,7 +512,8 @@ impl Finish {
     /// is at least the cost of a path there is: an upper bound, from which the relaxations
     /// fall to the new labels as from unreached), and makes the others unreached. After a
     /// move every robot held the same settled tags and traced the same paths, so all keep
-    /// the same labels; the labels computed anew are those the move changed.
+    /// the same labels; the labels computed anew are those the move changed. A `used`
+    /// task is never an end: claims frozen anew may claim a task `frozen` has unclaimed.
     fn keep_untouched_labels(&mut self) {
         const UNKNOWN: u8 = 0;
         const KEPT: u8 = 1;
@@ -532,10 +528,13 @@ impl Finish {
                 if self.keep[at] != UNKNOWN {
                     break self.keep[at];
                 }
-                if self.free[at] {
+                if self.used[at] {
+                    break DROPPED;
+                }
+                if self.frozen[at] == 0 {
                     break KEPT;
                 }
-                if self.used[at] || self.tags[at] == 0 || self.walk.len() > m {
+                if self.tags[at] == 0 || self.walk.len() > m {
                     break DROPPED;
                 }
                 self.walk.push(at);
@@ -550,7 +549,7 @@ impl Finish {
         }
         let per = self.packing.per_word();
         for t in 0..m {
-            if self.free[t] {
+            if self.frozen[t] == 0 && !self.used[t] {
                 (self.labels[t], self.tags[t]) = (0.0, 0);
             } else if self.keep[t] == DROPPED {
                 (self.labels[t], self.tags[t]) = (UNREACHED, 0);
@@ -581,8 +580,8 @@ impl Finish {
                     break;
                 }
                 self.path.push((from, me, to));
-                if self.free[to] || self.tags[to] == 0 {
-                    ends = self.free[to];
+                if self.frozen[to] == 0 || self.tags[to] == 0 {
+                    ends = self.frozen[to] == 0;
                     break;
                 }
                 (from, me) = (to, self.owner && task == Some(to));
@@ -611,11 +610,7 @@ impl Finish {
             }
         }
         self.paths += found;
-        self.complete = self
-            .free
-            .iter()
-            .zip(&self.used)
-            .all(|(&free, &used)| !free || used);
+        self.complete = !self.frozen.contains(&0);
         (found > 0).then_some(claim)
     }
 
@@ -664,7 +659,7 @@ impl Finish {
             Phase::Claiming { at, .. } => unclaimed > 0 && step >= at + period,
             // The rounded claims left fewer tasks unclaimed than the frozen ones.
             Phase::Labelling { settled: None, .. } => {
-                let frozen = self.free.iter().filter(|&&free| free).count();
+                let frozen = self.frozen.iter().filter(|&&c| c == 0).count();
                 unclaimed > 0 && unclaimed < frozen && claims == self.last_claims
             }
             Phase::Labelling { .. } => false,
@@ -685,7 +680,6 @@ impl Finish {
         if matches!(self.phase, Phase::Labelling { settled: None, .. }) {
             for (t, &claim) in claims.iter().enumerate() {
                 self.used[t] = self.frozen[t] != claim;
-                self.free[t] &= !self.used[t];
             }
             self.keep_untouched_labels();
         } else {
@@ -693,7 +687,6 @@ impl Finish {
             self.labels.fill(UNREACHED);
         }
         for (t, &claim) in claims.iter().enumerate() {
-            self.free[t] = claim == 0;
             if claim == 0 {
                 // Its tag is none already: kept at a task unclaimed in both, or dropped.
                 debug_assert_eq!(self.tags[t], 0);

@@ -83,8 +83,8 @@ fn run_refrozen(
             if let Some((at, then)) = refreeze.filter(|&(at, _)| at == step) {
                 robot.freeze(at, &claims_of(then), Some(then[i]));
                 if i == 0 {
-                    let reached = robot.labels.iter().zip(&robot.free);
-                    kept = reached.filter(|&(&l, &f)| l != UNREACHED && !f).count();
+                    let reached = robot.labels.iter().zip(&robot.frozen);
+                    kept = reached.filter(|&(&l, &c)| l != UNREACHED && c != 0).count();
                 }
             }
             let (labels, section) = sections[i].split_at_mut(n);
@@ -370,7 +370,9 @@ fn kept_labels_are_the_paths_still_there() {
     let mut robot = Finish::new(0, m, m, AssignmentCase::One, 2, 1e-12);
     assert!(robot.runs());
     // Task 0 stays unclaimed; task 1 was, and a path filled it; a path used task 7.
-    robot.free = (0..m).map(|t| t == 0).collect();
+    robot.frozen = (0..m)
+        .map(|t| if t == 0 { 0 } else { t as u64 + 1 })
+        .collect();
     robot.used = (0..m).map(|t| t == 1 || t == 7).collect();
     // Tags (task + 1, 0: none): 2 → 0, 3 → 2 → 0, 4 → 1, 5 ⇄ 6, 8 → 7 → 0, 9 unreached.
     let tags = [0, 0, 1, 3, 2, 7, 6, 1, 8, 0];
