@@ -43,11 +43,11 @@
 //!   ([`crate::methods::dual::structure_factor`]).
 //!
 //! * **An augmenting finish** (Case 1, [`crate::methods::dual::finish`]): when the
-//!   claims stall with tasks claimed twice and tasks claimed by nobody, the robots compute
+//!   claims leave tasks claimed twice and tasks claimed by nobody, the robots compute
 //!   shortest augmenting paths on the frozen claims beside the iteration and move whole
 //!   chains at once; a full assignment comes with prices that the certificate starts from.
 //!   1000 × 1000 uniform, `random:0.02`, seeds 1 / 2: 1824 / 3601 rounds to the certified
-//!   stop without it, 1141 / 1373 with it (bench/README.md). One-shot solves only: a
+//!   stop without it, 1137 / 1281 with it (bench/README.md). One-shot solves only: a
 //!   standing team's episodes (new costs) run without it ([`Finish::restart`]).
 //!
 //! The payload is `m` multipliers and the certificate's `m` potentials and `m` claims,

@@ -1,4 +1,4 @@
-//! The fast dual's augmenting finish (Case 1, `n = m`): when the claims stall with tasks
+//! The fast dual's augmenting finish (Case 1, `n = m`): when the claims leave tasks
 //! claimed twice and tasks claimed by nobody, the robots freeze the claims and move whole
 //! chains of robots at once along augmenting paths of successive shortest paths, found by
 //! a distributed Bellman–Ford in which every robot relaxes only its own cost row.
@@ -54,11 +54,13 @@
 //! The finish only chooses claims: the certificate ([`crate::methods::dual::snapshot`])
 //! still proves them optimal or not, and the ADMM iterates go on underneath. While the
 //! labels are computed the robots claim their rounded columns, and when a settling
-//! snapshot of those claims leaves fewer tasks unclaimed than the frozen ones (having
-//! stood still a period) the finish freezes them instead, keeping each label whose tags
-//! lead over tasks of the same owner in both to a task unclaimed in both (an upper bound,
-//! as after a move): the ADMM resolves many short chains at once, the finish a few long
-//! ones. Labels that do
+//! snapshot of those claims leaves fewer tasks unclaimed than the frozen ones the finish
+//! freezes them instead, keeping each label whose tags lead over tasks of the same owner
+//! in both to a task unclaimed in both (an upper bound, as after a move): the ADMM
+//! resolves many short chains at once, the finish a few long ones. Neither waits for the
+//! claims to stand still: the first snapshot with a task unclaimed is frozen, hundreds of
+//! tasks unclaimed at 1000 robots, whose first batches move chains by the hundred while
+//! the ADMM goes on (200 robots: 23 % fewer rounds, bench/README). Labels that do
 //! not settle (a negative cycle among the frozen claims: the ADMM's claims need not be the
 //! cheapest for what they cover) are given up: at once when a robot finds the cycle in
 //! the tags (an OR-flooded *alarm* window tells every robot at one step), else after a
@@ -67,7 +69,8 @@
 //! claim their rounded columns again, and the finish waits `64 P` steps before it
 //! freezes again (after an alarm only `P`: the claims had tasks unclaimed, so the
 //! certificate lost nothing while it rested, and the ADMM's next claims may be the
-//! cheapest for what they cover). Every transition happens
+//! cheapest for what they cover). A snapshot that claims every task is never frozen: the
+//! certificate proves it or the ADMM goes on. Every transition happens
 //! at a step every robot knows, from what every robot holds.
 //!
 //! # Layout of the payload
@@ -178,8 +181,6 @@ pub struct Finish {
     /// The frozen claims as the moves left them (per task its owner's code, 0: none, an
     /// unclaimed task).
     frozen: Vec<u64>,
-    /// The claims settled at the last snapshot.
-    last_claims: Vec<u64>,
     /// Paths moved since the costs were set.
     paths: u64,
     // Scratch of the tracing.
@@ -232,7 +233,6 @@ impl Finish {
             entered: false,
             complete: false,
             frozen: vec![0; len],
-            last_claims: vec![0; len],
             paths: 0,
             used: vec![false; len],
             keep: vec![0; len],
@@ -266,7 +266,6 @@ impl Finish {
         self.resting = true;
         self.phase = Phase::Idle;
         self.quiet_until = 0;
-        self.last_claims.fill(0);
         self.paths = 0;
         self.clear();
     }
@@ -406,7 +405,7 @@ impl Finish {
                 if step > since && alarmed >> (diameter - 1) & 1 == 1 {
                     // Some robot found a negative cycle: the labels would fall forever. The
                     // claims have tasks unclaimed, so the certificate lost nothing by
-                    // resting: the next claims that stand still a period may try again.
+                    // resting: the next settled claims with a task unclaimed may try again.
                     self.give_up(step, 1);
                     return rounded;
                 }
@@ -632,8 +631,8 @@ impl Finish {
     }
 
     /// After the snapshot advanced at `step`: gives up what ran out of its budget, and
-    /// freezes the claims of a settling snapshot that has unclaimed tasks when they stood
-    /// still a whole period (or came of a move). Every robot does the same at the same step.
+    /// freezes the claims of a settling snapshot that has unclaimed tasks (while labelling:
+    /// fewer than the frozen claims; after a move: a snapshot started after it). Every robot does the same at the same step.
     pub fn observe(&mut self, step: u64, snapshot: &Snapshot) {
         if self.diameter.is_none() || self.resting {
             return;
@@ -654,17 +653,16 @@ impl Finish {
         let (claims, task) = snapshot.settled();
         let unclaimed = claims.iter().filter(|&&c| c == 0).count();
         let freeze = match self.phase {
-            Phase::Idle => unclaimed > 0 && claims == self.last_claims && step >= self.quiet_until,
+            Phase::Idle => unclaimed > 0 && step >= self.quiet_until,
             // The settling snapshot started after the move.
             Phase::Claiming { at, .. } => unclaimed > 0 && step >= at + period,
             // The rounded claims left fewer tasks unclaimed than the frozen ones.
             Phase::Labelling { settled: None, .. } => {
                 let frozen = self.frozen.iter().filter(|&&c| c == 0).count();
-                unclaimed > 0 && unclaimed < frozen && claims == self.last_claims
+                unclaimed > 0 && unclaimed < frozen
             }
             Phase::Labelling { .. } => false,
         };
-        self.last_claims.copy_from_slice(claims);
         if freeze {
             self.freeze(step, claims, task);
         }

@@ -435,3 +435,77 @@ fn bad_sections_are_refused_at_their_value() {
     // may run in it); a team of fewer robots carries none.
     assert_eq!((words(4, 3), words(2, 3), words(3, 1)), (3, 0, 0));
 }
+
+/// Robots on a complete graph (diameter 1: a snapshot settles every step) whose rounded
+/// tasks at step `s` are `tasks(s)`; after each step every robot's finish observes its
+/// snapshot (no robot labels: the labels never settle). Per step, whether robot 0 labels
+/// and its frozen claims.
+fn observed(n: usize, tasks: impl Fn(u64) -> Vec<usize>, steps: u64) -> Vec<(bool, Vec<u64>)> {
+    let case = AssignmentCase::One;
+    let mut snapshots: Vec<_> = (0..n)
+        .map(|i| Snapshot::new(i, n, n, case, 1, 1e-12))
+        .collect();
+    let mut robots: Vec<_> = (0..n)
+        .map(|i| Finish::new(i, n, n, case, 1, 1e-12))
+        .collect();
+    let (costs, allowed) = (vec![0.0; n], vec![true; n]);
+    let mut seen = Vec::new();
+    for step in 0..=steps {
+        let sections: Vec<Vec<f64>> = snapshots
+            .iter()
+            .map(|snapshot| {
+                let mut section = vec![0.0; crate::methods::dual::snapshot::words(n, n)];
+                snapshot.write(&mut section);
+                section
+            })
+            .collect();
+        let now = tasks(step);
+        for (i, (snapshot, robot)) in snapshots.iter_mut().zip(&mut robots).enumerate() {
+            snapshot.begin(false);
+            for section in sections.iter().take(i).chain(sections.iter().skip(i + 1)) {
+                snapshot.merge(step, section);
+            }
+            snapshot.advance(step, Some(now[i]), &costs, &allowed);
+            robot.observe(step, snapshot);
+        }
+        seen.push((robots[0].labelling(), robots[0].frozen.clone()));
+    }
+    seen
+}
+
+/// The finish freezes the first settled claims that leave a task unclaimed, though they
+/// change every period (the ADMM's claims at 1000 robots change for hundreds of rounds
+/// with hundreds of tasks unclaimed), and while labelling freezes at once claims that
+/// leave fewer tasks unclaimed, changing or not; claims of every task are never frozen.
+#[test]
+fn claims_with_tasks_unclaimed_are_frozen_though_they_change() {
+    // Two claim sets in turn, each leaving two tasks unclaimed.
+    let turns = |s: u64| {
+        if s.is_multiple_of(2) {
+            vec![0, 0, 1, 1]
+        } else {
+            vec![2, 2, 3, 3]
+        }
+    };
+    let seen = observed(4, turns, 8);
+    let first = seen.iter().position(|(labelling, _)| *labelling);
+    let first = first.expect("changing claims with tasks unclaimed are frozen");
+    assert!(first <= 2, "frozen at step {first}");
+    let frozen = &seen[first].1;
+    assert!([claims_of(&turns(0)), claims_of(&turns(1))].contains(frozen));
+    // Later claims that leave as many tasks unclaimed do not replace them.
+    assert!(seen[first..].iter().all(|(l, f)| *l && f == frozen));
+    // Fewer tasks unclaimed, in claims that change every period, replace the frozen ones.
+    let fewer = |s: u64| match s {
+        0..=3 => turns(s),
+        _ if s.is_multiple_of(2) => vec![0, 1, 2, 2],
+        _ => vec![1, 0, 3, 3],
+    };
+    let seen = observed(4, fewer, 10);
+    let last = &seen[10].1;
+    assert_eq!(last.iter().filter(|&&c| c == 0).count(), 1, "{last:?}");
+    assert!([claims_of(&fewer(8)), claims_of(&fewer(9))].contains(last));
+    // Claims of every task: the certificate's, never frozen.
+    let full = |_| vec![3, 1, 0, 2];
+    assert!(observed(4, full, 8).iter().all(|(labelling, _)| !labelling));
+}
