@@ -57,10 +57,11 @@
 //! snapshot of those claims leaves fewer tasks unclaimed than the frozen ones the finish
 //! freezes them instead, keeping each label whose tags lead over tasks of the same owner
 //! in both to a task unclaimed in both (an upper bound, as after a move): the ADMM
-//! resolves many short chains at once, the finish a few long ones. Neither waits for the
-//! claims to stand still: the first snapshot with a task unclaimed is frozen, hundreds of
-//! tasks unclaimed at 1000 robots, whose first batches move chains by the hundred while
-//! the ADMM goes on (200 robots: 23 % fewer rounds, bench/README). Labels that do
+//! resolves many short chains at once, the finish a few long ones. Neither the first
+//! freeze nor a re-freeze waits for the claims to stand still: the first settled snapshot
+//! with a task unclaimed is frozen (hundreds unclaimed at 1000 robots), the frozen claims
+//! follow the ADMM's as long as their unclaimed tasks fall, and the batches run from where
+//! they stop falling (200 robots: 23 % fewer rounds, bench/README). Labels that do
 //! not settle (a negative cycle among the frozen claims: the ADMM's claims need not be the
 //! cheapest for what they cover) are given up: at once when a robot finds the cycle in
 //! the tags (an OR-flooded *alarm* window tells every robot at one step), else after a
@@ -69,8 +70,9 @@
 //! claim their rounded columns again, and the finish waits `64 P` steps before it
 //! freezes again (after an alarm only `P`: the claims had tasks unclaimed, so the
 //! certificate lost nothing while it rested, and the ADMM's next claims may be the
-//! cheapest for what they cover). A snapshot that claims every task is never frozen: the
-//! certificate proves it or the ADMM goes on. Every transition happens
+//! cheapest for what they cover). A snapshot that claims every task is never frozen: once
+//! the finish rests the certificate proves it or the ADMM goes on (while the finish
+//! labels, the potentials are lent and prove nothing). Every transition happens
 //! at a step every robot knows, from what every robot holds.
 //!
 //! # Layout of the payload
@@ -632,7 +634,8 @@ impl Finish {
 
     /// After the snapshot advanced at `step`: gives up what ran out of its budget, and
     /// freezes the claims of a settling snapshot that has unclaimed tasks (while labelling:
-    /// fewer than the frozen claims; after a move: a snapshot started after it). Every robot does the same at the same step.
+    /// fewer than the frozen claims; after a move to a full assignment: a snapshot started
+    /// after it). Every robot does the same at the same step.
     pub fn observe(&mut self, step: u64, snapshot: &Snapshot) {
         if self.diameter.is_none() || self.resting {
             return;

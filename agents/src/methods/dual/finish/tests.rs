@@ -1,5 +1,9 @@
 //! The finish's unit tests: robots on a path graph run it from frozen claims and are
-//! checked against a brute-force optimum.
+//! checked against a brute-force optimum; robots on a complete graph observe snapshots
+//! and freeze their claims.
+//!
+//! Size: one protocol's tests, sharing two harnesses (message rounds on a path graph, and
+//! snapshots settling on a complete graph) and a brute-force oracle.
 
 use super::*;
 use admm_ta_topologies::rng::SeededRng;
@@ -438,8 +442,8 @@ fn bad_sections_are_refused_at_their_value() {
 
 /// Robots on a complete graph (diameter 1: a snapshot settles every step) whose rounded
 /// tasks at step `s` are `tasks(s)`; after each step every robot's finish observes its
-/// snapshot (no robot labels: the labels never settle). Per step, whether robot 0 labels
-/// and its frozen claims.
+/// snapshot (no robot labels: the labels never settle), and every robot decides the same.
+/// Per step, whether robot 0 labels and its frozen claims.
 fn observed(n: usize, tasks: impl Fn(u64) -> Vec<usize>, steps: u64) -> Vec<(bool, Vec<u64>)> {
     let case = AssignmentCase::One;
     let mut snapshots: Vec<_> = (0..n)
@@ -468,6 +472,11 @@ fn observed(n: usize, tasks: impl Fn(u64) -> Vec<usize>, steps: u64) -> Vec<(boo
             snapshot.advance(step, Some(now[i]), &costs, &allowed);
             robot.observe(step, snapshot);
         }
+        // Every robot decides the same at the same step.
+        for robot in &robots[1..] {
+            assert_eq!(robot.labelling(), robots[0].labelling(), "step {step}");
+            assert_eq!(robot.frozen, robots[0].frozen, "step {step}");
+        }
         seen.push((robots[0].labelling(), robots[0].frozen.clone()));
     }
     seen
@@ -487,24 +496,29 @@ fn claims_with_tasks_unclaimed_are_frozen_though_they_change() {
             vec![2, 2, 3, 3]
         }
     };
+    // The snapshot that settles at step s holds the claims of step s − 1.
     let seen = observed(4, turns, 8);
     let first = seen.iter().position(|(labelling, _)| *labelling);
-    let first = first.expect("changing claims with tasks unclaimed are frozen");
-    assert!(first <= 2, "frozen at step {first}");
-    let frozen = &seen[first].1;
-    assert!([claims_of(&turns(0)), claims_of(&turns(1))].contains(frozen));
+    assert_eq!(
+        first,
+        Some(1),
+        "changing claims with tasks unclaimed are frozen at once"
+    );
     // Later claims that leave as many tasks unclaimed do not replace them.
-    assert!(seen[first..].iter().all(|(l, f)| *l && f == frozen));
-    // Fewer tasks unclaimed, in claims that change every period, replace the frozen ones.
+    let frozen = claims_of(&turns(0));
+    assert!(seen[1..].iter().all(|(l, f)| *l && *f == frozen));
+    // Fewer tasks unclaimed, in claims that change every period, replace the frozen ones
+    // at the first snapshot that holds them, and only then.
     let fewer = |s: u64| match s {
         0..=3 => turns(s),
         _ if s.is_multiple_of(2) => vec![0, 1, 2, 2],
         _ => vec![1, 0, 3, 3],
     };
     let seen = observed(4, fewer, 10);
-    let last = &seen[10].1;
-    assert_eq!(last.iter().filter(|&&c| c == 0).count(), 1, "{last:?}");
-    assert!([claims_of(&fewer(8)), claims_of(&fewer(9))].contains(last));
+    assert!(seen[1..=4].iter().all(|(l, f)| *l && *f == frozen));
+    let fewer_frozen = claims_of(&fewer(4));
+    assert_eq!(fewer_frozen.iter().filter(|&&c| c == 0).count(), 1);
+    assert!(seen[5..].iter().all(|(l, f)| *l && *f == fewer_frozen));
     // Claims of every task: the certificate's, never frozen.
     let full = |_| vec![3, 1, 0, 2];
     assert!(observed(4, full, 8).iter().all(|(labelling, _)| !labelling));
