@@ -58,10 +58,12 @@
 //! freezes them instead, keeping each label whose tags lead over tasks of the same owner
 //! in both to a task unclaimed in both (an upper bound, as after a move): the ADMM
 //! resolves many short chains at once, the finish a few long ones. Neither the first
-//! freeze nor a re-freeze waits for the claims to stand still: the first settled snapshot
-//! with a task unclaimed is frozen (hundreds unclaimed at 1000 robots), the frozen claims
-//! follow the ADMM's as long as their unclaimed tasks fall, and the batches run from where
-//! they stop falling (200 robots: 23 % fewer rounds, bench/README). Labels that do
+//! freeze nor a re-freeze waits for the claims to stand still: the finish freezes the
+//! first settled snapshot whose unclaimed tasks are no fewer than the last one's (the
+//! ADMM stalls on them: at 1000 robots within about 30 rounds, hundreds unclaimed; a small
+//! team whose ADMM fills tasks period by period is left to it), the frozen claims follow
+//! the ADMM's as long as their unclaimed tasks fall, and the batches run from where they
+//! stop falling (200 robots: 23 % fewer rounds, bench/README). Labels that do
 //! not settle (a negative cycle among the frozen claims: the ADMM's claims need not be the
 //! cheapest for what they cover) are given up: at once when a robot finds the cycle in
 //! the tags (an OR-flooded *alarm* window tells every robot at one step), else after a
@@ -156,6 +158,8 @@ pub struct Finish {
     owner: bool,
     /// No freezing from the rounded claims before this step (after a finish given up).
     quiet_until: u64,
+    /// Tasks the last settled snapshot left unclaimed (`usize::MAX` before the first).
+    last_unclaimed: usize,
     /// It never freezes (a standing team's episodes, [`Finish::restart`]); its section
     /// stays zeros.
     resting: bool,
@@ -220,6 +224,7 @@ impl Finish {
             phase: Phase::Idle,
             owner: false,
             quiet_until: 0,
+            last_unclaimed: usize::MAX,
             resting: false,
             labels: vec![0.0; len],
             tags: vec![0; len],
@@ -268,6 +273,7 @@ impl Finish {
         self.resting = true;
         self.phase = Phase::Idle;
         self.quiet_until = 0;
+        self.last_unclaimed = usize::MAX;
         self.paths = 0;
         self.clear();
     }
@@ -633,9 +639,10 @@ impl Finish {
     }
 
     /// After the snapshot advanced at `step`: gives up what ran out of its budget, and
-    /// freezes the claims of a settling snapshot that has unclaimed tasks (while labelling:
-    /// fewer than the frozen claims; after a move to a full assignment: a snapshot started
-    /// after it). Every robot does the same at the same step.
+    /// freezes the claims of a settling snapshot that has unclaimed tasks (idle: no fewer
+    /// than the last snapshot's; while labelling: fewer than the frozen claims; after a
+    /// move to a full assignment: a snapshot started after it). Every robot does the same
+    /// at the same step.
     pub fn observe(&mut self, step: u64, snapshot: &Snapshot) {
         if self.diameter.is_none() || self.resting {
             return;
@@ -656,7 +663,9 @@ impl Finish {
         let (claims, task) = snapshot.settled();
         let unclaimed = claims.iter().filter(|&&c| c == 0).count();
         let freeze = match self.phase {
-            Phase::Idle => unclaimed > 0 && step >= self.quiet_until,
+            Phase::Idle => {
+                unclaimed > 0 && step >= self.quiet_until && unclaimed >= self.last_unclaimed
+            }
             // The settling snapshot started after the move.
             Phase::Claiming { at, .. } => unclaimed > 0 && step >= at + period,
             // The rounded claims left fewer tasks unclaimed than the frozen ones.
@@ -666,6 +675,7 @@ impl Finish {
             }
             Phase::Labelling { .. } => false,
         };
+        self.last_unclaimed = unclaimed;
         if freeze {
             self.freeze(step, claims, task);
         }

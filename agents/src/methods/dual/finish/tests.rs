@@ -482,13 +482,16 @@ fn observed(n: usize, tasks: impl Fn(u64) -> Vec<usize>, steps: u64) -> Vec<(boo
     seen
 }
 
-/// The finish freezes the first settled claims that leave a task unclaimed, though they
-/// change every period (the ADMM's claims at 1000 robots change for hundreds of rounds
-/// with hundreds of tasks unclaimed), and while labelling freezes at once claims that
-/// leave fewer tasks unclaimed, changing or not; claims of every task are never frozen.
+/// The finish freezes the first settled claims whose unclaimed tasks did not fall since
+/// the last snapshot, though the claims change every period (the ADMM's claims at 1000
+/// robots change for hundreds of rounds with hundreds of tasks unclaimed), and while
+/// labelling freezes at once claims that leave fewer tasks unclaimed, changing or not.
+/// Claims whose unclaimed tasks fall every period are left to the ADMM, and claims of
+/// every task are never frozen.
 #[test]
 fn claims_with_tasks_unclaimed_are_frozen_though_they_change() {
-    // Two claim sets in turn, each leaving two tasks unclaimed.
+    // Two claim sets in turn, each leaving two tasks unclaimed; the snapshot that settles
+    // at step s holds the claims of step s − 1 (none before step 1).
     let turns = |s: u64| {
         if s.is_multiple_of(2) {
             vec![0, 0, 1, 1]
@@ -496,17 +499,16 @@ fn claims_with_tasks_unclaimed_are_frozen_though_they_change() {
             vec![2, 2, 3, 3]
         }
     };
-    // The snapshot that settles at step s holds the claims of step s − 1.
     let seen = observed(4, turns, 8);
     let first = seen.iter().position(|(labelling, _)| *labelling);
     assert_eq!(
         first,
-        Some(1),
-        "changing claims with tasks unclaimed are frozen at once"
+        Some(2),
+        "frozen when the unclaimed tasks stop falling"
     );
     // Later claims that leave as many tasks unclaimed do not replace them.
-    let frozen = claims_of(&turns(0));
-    assert!(seen[1..].iter().all(|(l, f)| *l && *f == frozen));
+    let frozen = claims_of(&turns(1));
+    assert!(seen[2..].iter().all(|(l, f)| *l && *f == frozen));
     // Fewer tasks unclaimed, in claims that change every period, replace the frozen ones
     // at the first snapshot that holds them, and only then.
     let fewer = |s: u64| match s {
@@ -515,10 +517,22 @@ fn claims_with_tasks_unclaimed_are_frozen_though_they_change() {
         _ => vec![1, 0, 3, 3],
     };
     let seen = observed(4, fewer, 10);
-    assert!(seen[1..=4].iter().all(|(l, f)| *l && *f == frozen));
+    assert!(seen[2..=4].iter().all(|(l, f)| *l && *f == frozen));
     let fewer_frozen = claims_of(&fewer(4));
     assert_eq!(fewer_frozen.iter().filter(|&&c| c == 0).count(), 1);
     assert!(seen[5..].iter().all(|(l, f)| *l && *f == fewer_frozen));
+    // Three tasks unclaimed, then two, then one, then none: the ADMM fills them itself.
+    let falling = |s: u64| match s {
+        0 => vec![0, 0, 0, 0],
+        1 => vec![0, 0, 1, 1],
+        2 => vec![0, 1, 2, 2],
+        _ => vec![3, 1, 0, 2],
+    };
+    assert!(
+        observed(4, falling, 8)
+            .iter()
+            .all(|(labelling, _)| !labelling)
+    );
     // Claims of every task: the certificate's, never frozen.
     let full = |_| vec![3, 1, 0, 2];
     assert!(observed(4, full, 8).iter().all(|(labelling, _)| !labelling));
