@@ -72,7 +72,8 @@
 //! claim their rounded columns again, and the finish waits `64 P` steps before it
 //! freezes again (after an alarm only `P`: the claims had tasks unclaimed, so the
 //! certificate lost nothing while it rested, and the ADMM's next claims may be the
-//! cheapest for what they cover). A snapshot that claims every task is never frozen: once
+//! cheapest for what they cover; either way it freezes only when the ADMM's count of
+//! unclaimed tasks stopped falling). A snapshot that claims every task is never frozen: once
 //! the finish rests the certificate proves it or the ADMM goes on (while the finish
 //! labels, the potentials are lent and prove nothing). Every transition happens
 //! at a step every robot knows, from what every robot holds.
@@ -413,7 +414,8 @@ impl Finish {
                 if step > since && alarmed >> (diameter - 1) & 1 == 1 {
                     // Some robot found a negative cycle: the labels would fall forever. The
                     // claims have tasks unclaimed, so the certificate lost nothing by
-                    // resting: the next settled claims with a task unclaimed may try again.
+                    // resting: the next settled claims with tasks unclaimed, no fewer than
+                    // the last snapshot's, may try again.
                     self.give_up(step, 1);
                     return rounded;
                 }
