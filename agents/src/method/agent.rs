@@ -18,8 +18,8 @@
 //! let init = AgentInit { index: 0, costs: vec![0.2, 0.7], robots: 2, case: AssignmentCase::One, degree: 1 };
 //! let agent = MethodAgent::new(team.agent(init));
 //! // 2 task prices, the certificate (2 potentials, 2 packed claims) and Case 1's finish
-//! // (2 packed tags, its window and alarm).
-//! assert_eq!(agent.payload_len(), 8);
+//! // (2 packed tags, its window, alarm and bound).
+//! assert_eq!(agent.payload_len(), 9);
 //! ```
 
 use crate::agent::{AgentAlgorithm, ConsensusAgent, Inbox, StepReport};

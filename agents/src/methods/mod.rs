@@ -15,8 +15,8 @@
 //! ```
 //! use admm_ta_agents::methods::Method;
 //! // 2 task prices + 2 potentials + 2 packed claims, and Case 1's finish: 2 packed tags,
-//! // its window and its alarm.
-//! assert_eq!(Method::Dual.payload_len(2, 2), 8);
+//! // its window, its alarm and its bound.
+//! assert_eq!(Method::Dual.payload_len(2, 2), 9);
 //! assert!(Method::Hungarian.info().team.is_none()); // solved centrally, no agents
 //! assert!(Method::Dual.info().summary.starts_with("Algorithm 2"));
 //! assert_eq!("inexact-dual".parse::<Method>(), Ok(Method::InexactDual));

@@ -45,9 +45,10 @@ fn stacked_rows_optimal(method: &str, n: usize, m: usize) {
     }
     cases.insert(2, ("distance, moved a little", drift));
     // One message of the team's size a round: the dual's prices and certificate, 2m + 1
-    // values here (and the finish's packed tags, window and alarm: 3 more; a part of the
-    // team may be Case 1), or 2n for the closing's costs and tasks (the primal's: n·m).
-    let finish = if n >= m { 3 } else { 0 };
+    // values here (and the finish's packed tags, window, alarm and bound: 4 more; a part
+    // of the team may be Case 1), or 2n for the closing's costs and tasks (the primal's:
+    // n·m).
+    let finish = if n >= m { 4 } else { 0 };
     let message = 8 * (2 * m + 1 + finish).max(2 * n) as u64;
     for (case, rows) in &cases {
         let answers = episode(&mut team_of, rows);

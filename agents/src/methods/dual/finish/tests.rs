@@ -27,6 +27,8 @@ struct Run {
     robots: Vec<Finish>,
     kept: usize,
     paths: Vec<u64>,
+    /// Labels robot 0 capped at the bound, over all its batches.
+    capped: usize,
 }
 
 /// Per task its smallest claimer's code (0: none) when robot `i` claims `tasks[i]`.
@@ -60,7 +62,7 @@ fn run_refrozen(
         robot.write(labels, section);
     }
     let allowed = vec![true; n];
-    let (mut trace, mut kept, mut paths) = (Vec::new(), 0, Vec::new());
+    let (mut trace, mut kept, mut paths, mut capped) = (Vec::new(), 0, Vec::new(), 0);
     let mut tasks = tasks;
     for step in 1..=limit {
         let gathered = sections.clone();
@@ -76,6 +78,11 @@ fn run_refrozen(
                 }
             }
             let claim = robot.claim(step, Some(tasks[i]), &costs[i], &allowed);
+            if i == 0 && robot.phase_settled_at(step) {
+                let frozen = robot.frozen.iter().zip(&robot.tags);
+                capped += frozen.filter(|&(&c, &tag)| c != 0 && tag == 0).count();
+            }
+            potentials_hold(robot, step, &costs[i], i);
             if robot.moved {
                 let prices = robot.prices().unwrap_or_else(|| {
                     panic!("a full assignment is priced: {:?} {tasks:?}", robot.labels)
@@ -106,6 +113,35 @@ fn run_refrozen(
         robots,
         kept,
         paths,
+        capped,
+    }
+}
+
+impl Finish {
+    /// Whether the labels settled at `step`.
+    fn phase_settled_at(&self, step: u64) -> bool {
+        matches!(self.phase, Phase::Labelling { settled: Some(at), .. } if at == step)
+    }
+}
+
+/// Right after a move that left tasks unclaimed, the labels moved along (capped at the
+/// bound) are potentials: an owner's task is its cheapest under them, and an excess robot
+/// notes its cheapest value as its entry's base.
+fn potentials_hold(robot: &Finish, step: u64, costs: &[f64], i: usize) {
+    let Phase::Labelling { since, task, .. } = robot.phase else {
+        return;
+    };
+    if since != step || robot.base.iter().any(|b| b.is_infinite()) {
+        return;
+    }
+    let priced = |t: usize| costs[t] + robot.base[t];
+    let cheapest = (0..costs.len()).map(priced).fold(f64::INFINITY, f64::min);
+    let s = task.expect("every robot claims a task");
+    if robot.owner {
+        assert!(priced(s) <= cheapest + 1e-9, "robot {i}: {:?}", robot.base);
+        assert_eq!(robot.entry_base, None);
+    } else {
+        assert_eq!(robot.entry_base, Some(cheapest), "robot {i}");
     }
 }
 
@@ -228,6 +264,36 @@ fn settled_labels_move_to_the_optimum_at_one_step() {
         moved_to_the_optimum(&trace, &costs, trial);
     }
     assert!(tried > 150, "{tried} trials");
+}
+
+/// Batches after a move compute only the labels up to the bound: some labels are capped,
+/// the capped labels are potentials still (checked at every move), and the robots still
+/// move to the optimum.
+#[test]
+fn labels_above_the_bound_are_capped_and_the_optimum_is_reached() {
+    let mut rng = SeededRng::new(13);
+    let (mut tried, mut capped) = (0, 0);
+    for trial in 0..600 {
+        let Some((costs, tasks)) = instance(&mut rng, trial) else {
+            continue;
+        };
+        let n = costs.len() as u64;
+        let run = run_refrozen(&costs, &tasks, None, 40 * n);
+        let Some(first_move) = run.paths.iter().position(|&p| p > 0) else {
+            panic!("trial {trial}: no path moved");
+        };
+        // Only runs of two batches have a base.
+        if !run.trace[first_move][0].1 {
+            continue;
+        }
+        tried += 1;
+        moved_to_the_optimum(&run.trace[first_move + 1..], &costs, trial);
+        capped += usize::from(run.capped > 0);
+    }
+    assert!(
+        tried > 100 && capped > 50,
+        "{tried} two-batch trials, {capped} capped"
+    );
 }
 
 /// Every robot of `a` holds the labels of its robot in `b`.
@@ -414,9 +480,9 @@ fn bad_sections_are_refused_at_their_value() {
     let costs = vec![vec![0.0, 1.0, 2.0]; 3];
     let (_, robots) = run(&costs, &[0, 0, 1], 1);
     let mut section = vec![0.0; words(3, 3)];
-    // 3 tags of 2 bits (26 to a value), the window, the alarm; the labels go in the
-    // potentials' place.
-    assert_eq!(section.len(), 1 + 1 + 1);
+    // 3 tags of 2 bits (26 to a value), the window, the alarm, the bound; the labels go
+    // in the potentials' place.
+    assert_eq!(section.len(), 1 + 1 + 1 + 1);
     robots[0].write(&mut [0.0; 3], &mut section);
     assert_eq!(robots[0].check(&section), Ok(()));
     let bad = |k: usize, v: f64| {
@@ -431,13 +497,18 @@ fn bad_sections_are_refused_at_their_value() {
     assert_eq!(bad(1, 2f64.powi(53)), Err(1));
     assert_eq!(bad(1, 2f64.powi(52)), Ok(()));
     assert_eq!(bad(2, -1.0), Err(2));
+    assert_eq!(bad(3, f64::MAX), Ok(())); // no bound
+    assert_eq!(bad(3, -1e-3), Ok(()));
+    assert_eq!(bad(3, f64::INFINITY), Err(3));
+    assert_eq!(bad(3, f64::NEG_INFINITY), Err(3));
+    assert_eq!(bad(3, f64::NAN), Err(3));
     let idle = Finish::new(0, 3, 3, AssignmentCase::Two, 2, 1e-12);
     assert!(!idle.runs());
-    assert_eq!(idle.check(&[0.0; 3]), Ok(()));
-    assert_eq!(idle.check(&[0.5, 1.0, 0.0]), Err(0));
+    assert_eq!(idle.check(&[0.0; 4]), Ok(()));
+    assert_eq!(idle.check(&[0.5, 1.0, 0.0, 0.0]), Err(0));
     // More robots than tasks carry the section too (a Case 1 part of a standing team
     // may run in it); a team of fewer robots carries none.
-    assert_eq!((words(4, 3), words(2, 3), words(3, 1)), (3, 0, 0));
+    assert_eq!((words(4, 3), words(2, 3), words(3, 1)), (4, 0, 0));
 }
 
 /// Robots on a complete graph (diameter 1: a snapshot settles every step) whose rounded
