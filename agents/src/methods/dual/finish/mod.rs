@@ -62,7 +62,11 @@
 //! bound, as deep as the shortest path is long rather than as the deepest chain of tags
 //! (1000 robots: a last path of 7 tasks took 115 rounds among tags 42 deep). An excess
 //! robot enters at its cheapest task preferring a computed label (a capped one leads
-//! nowhere); paths that reach a capped label are not kept, the others are exact. Claims
+//! nowhere); paths that reach a capped label are not kept, the others are exact. A
+//! capped batch moves the paths whose entries rose the least, often one, where a whole
+//! batch moves every disjoint shortest path: the bound is used only when a move left at
+//! most [`BOUNDED_UNCLAIMED`] tasks unclaimed (with more, costs of many ties lost up to
+//! twice the rounds: integer costs moved one path a batch instead of many). Claims
 //! frozen anew, from the rounded columns, have no base.
 //!
 //! # Never wrong, never stuck
@@ -118,6 +122,9 @@ const WINDOW_BITS: usize = f64::MANTISSA_DIGITS as usize;
 pub const LABEL_PERIODS: u64 = 64;
 /// Snapshot periods a full assignment of the finish is claimed for the certificate.
 pub const CLAIM_PERIODS: u64 = 16;
+/// The most tasks a move may leave unclaimed for the next labels to stop at the bound
+/// (module docs, "The bound").
+const BOUNDED_UNCLAIMED: usize = 2;
 
 /// Values of the finish's own payload section for `robots` robots and `tasks` tasks: its
 /// labels travel in the certificate's potentials' place. A team of more robots than tasks
@@ -624,10 +631,11 @@ impl Finish {
         // robot may enter its own task).
         self.owner |= self.entered;
         // The labels moved along are the next labels' base, and a robot still excess
-        // notes its entry under them.
+        // notes its entry under them when few tasks are left unclaimed (no bound else).
         self.base.copy_from_slice(&self.labels);
+        let left = self.frozen.iter().filter(|&&c| c == 0).count();
         self.entry_base = task
-            .filter(|_| !self.owner)
+            .filter(|_| !self.owner && left <= BOUNDED_UNCLAIMED)
             .and_then(|_| self.best(costs, allowed, None, 0.0))
             .map(|(value, _)| value);
         self.keep_untouched_labels();
