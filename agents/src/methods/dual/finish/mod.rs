@@ -30,7 +30,7 @@
 //! As in [`crate::certify::local_stop`], a window of bits (one packed value) tells every
 //! robot, at the same step `r`, that every robot's labels and tags stood still at step
 //! `r − D`: then all held the same vector (the graph is connected) and it is a fixed point,
-//! so every robot holds it still. Each excess robot `e` then names its *entry*
+//! so every robot holds it still (with a bound, the labels up to it: "The bound" below). Each excess robot `e` then names its *entry*
 //! `t_e = argmin_t α_{e,t} + L_t` (the tag `(e, t_e)` at its task), and the entries flood
 //! for `D` steps (a min-flood of fixed values; of several excess claimers of one task the
 //! smallest code enters). At `r + D` every robot traces the same paths: from each entry,
@@ -57,16 +57,19 @@
 //! robot floods how far its entry rose (a min-flood, the *bound*), and a label more than
 //! the bound above its base serves no entry that rose the least: its changes no longer
 //! hold the agreement back, and once the labels settled it is *capped* at its base plus
-//! the bound, without a tag (the Hungarian method's Dijkstra cap, so the capped labels
-//! are potentials again and the next base). The robots compute only the labels up to the
-//! bound, as deep as the shortest path is long rather than as the deepest chain of tags
-//! (1000 robots: a last path of 7 tasks took 115 rounds among tags 42 deep). An excess
-//! robot enters at its cheapest task preferring a computed label (a capped one leads
-//! nowhere); paths that reach a capped label are not kept, the others are exact. A
+//! the bound (and `ε`), without a tag (the Hungarian method's Dijkstra cap, so the capped
+//! labels are potentials again, within `ε`, and the next base). A relaxation from a label
+//! above the bound sets a label above it, so the labels below come only from labels below
+//! (within `ε` the base's reduced costs are not negative): a quiet step tells that they
+//! are the fixed point. The robots compute only the labels up to the bound, as deep as
+//! the shortest path is long rather than as the deepest chain of tags (1000 robots: a last
+//! path of 7 tasks took 115 rounds among tags 42 deep). An excess robot enters at its
+//! cheapest task preferring a computed label, and names no entry at a capped one (it
+//! leads nowhere, and would hide another excess claimer's path); the paths are exact. A
 //! capped batch moves the paths whose entries rose the least, often one, where a whole
 //! batch moves every disjoint shortest path: the bound is used only when a move left at
-//! most [`BOUNDED_UNCLAIMED`] tasks unclaimed (with more, costs of many ties lost up to
-//! twice the rounds: integer costs moved one path a batch instead of many). Claims
+//! most two tasks unclaimed (with more, costs of many ties took up to 2.2 times the
+//! rounds: integer costs moved one path a batch instead of many). Claims
 //! frozen anew, from the rounded columns, have no base.
 //!
 //! # Never wrong, never stuck
@@ -108,7 +111,7 @@
 //! other teams carry no section, or zeros.
 //!
 //! Size: one protocol — its phases share one robot's state (labels, tags, entries, the
-//! window and the frozen claims) and every transition reads the others; about 80 lines
+//! window and the frozen claims) and every transition reads the others; about 115 lines
 //! are these docs (its unit tests are in `tests.rs`).
 
 use crate::methods::dual::snapshot::{Packing, Snapshot};
@@ -330,8 +333,8 @@ impl Finish {
         self.alarm = 0;
     }
 
-    /// Checks a neighbour's section: tags of `tasks` tasks and windows of 53 bits (a
-    /// finish that does not run reads nothing of it). Returns the offending value's index
+    /// Checks a neighbour's section: tags of `tasks` tasks, windows of 53 bits and a bound
+    /// of at least 0 (a finish that does not run reads nothing of it). Returns the offending value's index
     /// within the section.
     pub fn check(&self, theirs: &[f64]) -> Result<(), usize> {
         let m = self.tasks;
@@ -351,7 +354,9 @@ impl Finish {
                 return Err(k);
             }
         }
-        if !theirs[words + 2].is_finite() {
+        // A bound is a rise (at least 0) or none (`f64::MAX`).
+        let bound = theirs[words + 2];
+        if !(bound.is_finite() && bound >= 0.0) {
             return Err(words + 2);
         }
         Ok(())
@@ -494,13 +499,23 @@ impl Finish {
     /// way was set from a value at least its successor's now, so the moves around the
     /// cycle cost less than `−ε` in all (as in Bellman–Ford's predecessor graph).
     fn relax(&mut self, s: usize, costs: &[f64], allowed: &[bool]) {
-        if let Some((value, t)) = self.best(costs, allowed, Some(s), 0.0)
+        // A label above the bound sets this one above the bound too (module docs, "The
+        // bound"): labels below it then come only from labels below it.
+        let above = self.threshold(s) + self.slack() + costs[s];
+        let from = |t: usize, value: f64| {
+            if self.labels[t] > self.threshold(t) {
+                value.max(above)
+            } else {
+                value
+            }
+        };
+        if let Some((value, t)) = self.best(costs, allowed, Some(s), from)
             && value - costs[s] < self.labels[s] - self.epsilon
         {
             self.labels[s] = value - costs[s];
             self.tags[s] = t as u64 + 1;
             self.packing.set(&mut self.packed, s, t as u64 + 1);
-            self.changed |= self.labels[s] <= self.base[s] + self.bound + self.slack();
+            self.changed |= self.labels[s] <= self.threshold(s);
             let mut at = t;
             for _ in 0..self.tasks {
                 if at == s {
@@ -520,10 +535,17 @@ impl Finish {
     /// falls below it (successive shortest paths' distances only grow), so a label more
     /// than the least rise of any excess robot above its base serves no entry that rose
     /// the least (module docs, "The bound").
+    /// At least 0 (a negative one would cap labels at their base).
     fn rise(&self, task: Option<usize>, costs: &[f64], allowed: &[bool]) -> Option<f64> {
         let base = self.entry_base.filter(|_| task.is_some() && !self.owner)?;
-        let (value, _) = self.best(costs, allowed, None, 0.0)?;
-        Some(value - base)
+        let (value, _) = self.best(costs, allowed, None, |_, v| v)?;
+        Some((value - base).max(0.0))
+    }
+
+    /// The highest value of task `t`'s label that holds the agreement back: its base plus
+    /// the bound, within the bound's tolerance (infinite without a base or a bound).
+    fn threshold(&self, t: usize) -> f64 {
+        self.base[t] + self.bound + self.slack()
     }
 
     /// The tolerance of the bound: relaxations by `ε` or less are not made.
@@ -531,11 +553,10 @@ impl Finish {
         self.epsilon
     }
 
-    /// Once the labels settled: a label above its base by more than the bound is not
-    /// computed (it may still fall) and is set to its base plus the bound, without a tag
-    /// (potentials still: every owner's claim stays its cheapest within `ε`); the labels
-    /// below are exact. Every robot holds the same labels below the bound and the same
-    /// bound, so the same capped labels.
+    /// Once the labels settled: a label above its threshold is not computed (it may still
+    /// fall) and is set to the threshold, without a tag (potentials still: every owner's
+    /// claim stays its cheapest within `ε`); the labels below are exact. Every robot holds
+    /// the same labels below the threshold and the same bound, so the same capped labels.
     fn cap(&mut self) {
         let (bound, slack) = (self.bound, self.slack());
         let mut capped = false;
@@ -544,7 +565,7 @@ impl Finish {
                 *label = if base == UNREACHED {
                     UNREACHED
                 } else {
-                    base + bound
+                    base + bound + slack
                 };
                 *tag = 0;
                 capped = true;
@@ -565,8 +586,14 @@ impl Finish {
     }
 
     /// An excess claimer of task `s` names its entry (its cheapest task under the labels).
+    /// A capped entry leads nowhere: the robot names none (its smaller code would hide
+    /// another excess claimer's path).
     fn enter(&mut self, s: usize, costs: &[f64], allowed: &[bool]) {
-        if let Some((_, t)) = self.best(costs, allowed, None, self.slack()) {
+        let slack = self.slack();
+        let computed = |t: usize, v: f64| if self.capped(t) { v + slack } else { v };
+        if let Some((_, t)) = self.best(costs, allowed, None, computed)
+            && !self.capped(t)
+        {
             let entry = (self.index * self.tasks + t + 1) as u64;
             if self.entries[s] == 0 || entry < self.entries[s] {
                 self.entries[s] = entry;
@@ -574,27 +601,27 @@ impl Finish {
         }
     }
 
-    /// The reached allowed task `t` (other than `except`) of least `costs[t] + L_t`, a
-    /// capped label's value raised by `capped` (an excess robot's entry: a computed label
-    /// wins over a capped one within the bound's tolerance, for a capped label has no tag
-    /// and leads nowhere; where the robot's entry rose by the bound, the computed label
-    /// it rose to costs the same as the capped ones).
+    /// Whether task `t`'s label was capped (claimed, with a label and no tag).
+    fn capped(&self, t: usize) -> bool {
+        self.frozen[t] != 0 && self.tags[t] == 0 && self.labels[t] != UNREACHED
+    }
+
+    /// The reached allowed task `t` (other than `except`) of least `costs[t] + L_t`, as
+    /// `adjust(t, value)` has it: an excess robot's entry prefers a computed label to a
+    /// capped one within the bound's tolerance (where its entry rose by the bound, the
+    /// computed label it rose to costs the same as the capped ones), an owner's relaxation
+    /// keeps a label above the bound from setting one below it.
     fn best(
         &self,
         costs: &[f64],
         allowed: &[bool],
         except: Option<usize>,
-        capped: f64,
+        adjust: impl Fn(usize, f64) -> f64,
     ) -> Option<(f64, usize)> {
         let mut best: Option<(f64, usize)> = None;
         for t in 0..self.tasks {
             if Some(t) != except && allowed[t] && self.labels[t] != UNREACHED {
-                let raise = if self.frozen[t] != 0 && self.tags[t] == 0 {
-                    capped
-                } else {
-                    0.0
-                };
-                let value = self.labels[t] + costs[t] + raise;
+                let value = adjust(t, self.labels[t] + costs[t]);
                 if best.is_none_or(|(b, _)| value < b) {
                     best = Some((value, t));
                 }
@@ -632,11 +659,15 @@ impl Finish {
         self.owner |= self.entered;
         // The labels moved along are the next labels' base, and a robot still excess
         // notes its entry under them when few tasks are left unclaimed (no bound else).
-        self.base.copy_from_slice(&self.labels);
         let left = self.frozen.iter().filter(|&&c| c == 0).count();
+        if left > BOUNDED_UNCLAIMED {
+            self.forget_base();
+        } else {
+            self.base.copy_from_slice(&self.labels);
+        }
         self.entry_base = task
             .filter(|_| !self.owner && left <= BOUNDED_UNCLAIMED)
-            .and_then(|_| self.best(costs, allowed, None, 0.0))
+            .and_then(|_| self.best(costs, allowed, None, |_, v| v))
             .map(|(value, _)| value);
         self.keep_untouched_labels();
         self.phase = Phase::Labelling {

@@ -29,6 +29,8 @@ struct Run {
     paths: Vec<u64>,
     /// Labels robot 0 capped at the bound, over all its batches.
     capped: usize,
+    /// Bounded batches that settled with two excess robots on one task.
+    crowded: usize,
 }
 
 /// Per task its smallest claimer's code (0: none) when robot `i` claims `tasks[i]`.
@@ -63,6 +65,7 @@ fn run_refrozen(
     }
     let allowed = vec![true; n];
     let (mut trace, mut kept, mut paths, mut capped) = (Vec::new(), 0, Vec::new(), 0);
+    let mut crowded = 0;
     let mut tasks = tasks;
     for step in 1..=limit {
         let gathered = sections.clone();
@@ -107,6 +110,7 @@ fn run_refrozen(
         }
         trace.push(round);
         paths.push(robots[0].paths());
+        crowded += usize::from(two_excess_on_one_task(&robots, step));
     }
     Run {
         trace,
@@ -114,7 +118,23 @@ fn run_refrozen(
         kept,
         paths,
         capped,
+        crowded,
     }
+}
+
+/// Whether the labels settled at `step` in a bounded batch with two excess robots
+/// claiming one task.
+fn two_excess_on_one_task(robots: &[Finish], step: u64) -> bool {
+    if !robots[0].phase_settled_at(step) || robots[0].base.iter().any(|b| b.is_infinite()) {
+        return false;
+    }
+    let mut excess = vec![0; robots.len()];
+    for robot in robots.iter().filter(|r| !r.owner) {
+        if let Phase::Labelling { task: Some(s), .. } = robot.phase {
+            excess[s] += 1;
+        }
+    }
+    excess.contains(&2)
 }
 
 impl Finish {
@@ -293,6 +313,62 @@ fn labels_above_the_bound_are_capped_and_the_optimum_is_reached() {
     assert!(
         tried > 100 && capped > 50,
         "{tried} two-batch trials, {capped} capped"
+    );
+}
+
+/// Claims cheapest for all robots but three excess robots, all claiming the task of the
+/// smallest owner, and all tasks but three: after a first batch moves one path two
+/// excess robots may claim one task in a bounded batch. `None` where an excess robot is
+/// smaller than every owner.
+fn crowded(rng: &mut SeededRng, trial: usize) -> Option<(Vec<Vec<f64>>, Vec<usize>)> {
+    let n = 5 + trial % 3;
+    let costs: Vec<Vec<f64>> = (0..n)
+        .map(|_| (0..n).map(|_| rng.uniform()).collect())
+        .collect();
+    let excess: Vec<usize> = (0..3).map(|j| (trial + n - 1 - j) % n).collect();
+    let unclaimed: Vec<usize> = (0..3).map(|j| (trial / 3 + j) % n).collect();
+    let robots: Vec<usize> = (0..n).filter(|r| !excess.contains(r)).collect();
+    let free: Vec<usize> = (0..n).filter(|t| !unclaimed.contains(t)).collect();
+    let (_, matched) = cheapest(&costs, &robots, &free);
+    let mut tasks = vec![0; n];
+    for (&r, &t) in robots.iter().zip(&matched) {
+        tasks[r] = t;
+    }
+    if excess.iter().any(|&e| e < robots[0]) {
+        return None;
+    }
+    for &e in &excess {
+        tasks[e] = tasks[robots[0]];
+    }
+    Some((costs, tasks))
+}
+
+/// Two excess robots claiming one task in a bounded batch: the one whose entry rose more
+/// than the bound names no entry at a capped label (its smaller code would hide the
+/// other's path, and the finish would give up), and the robots reach the optimum.
+#[test]
+fn an_excess_robot_at_a_capped_label_hides_no_path() {
+    let mut rng = SeededRng::new(14);
+    let (mut tried, mut crowded_batches) = (0, 0);
+    for trial in 0..400 {
+        let Some((costs, tasks)) = crowded(&mut rng, trial) else {
+            continue;
+        };
+        let n = costs.len() as u64;
+        let run = run_refrozen(&costs, &tasks, None, 60 * n);
+        tried += 1;
+        crowded_batches += run.crowded;
+        let last = run
+            .trace
+            .iter()
+            .rposition(|round| round.iter().any(|&(_, l)| l));
+        let done = last.map_or(0, |k| k + 1);
+        assert!(done < run.trace.len(), "trial {trial}: still labelling");
+        moved_to_the_optimum(&run.trace[done - 1..], &costs, trial);
+    }
+    assert!(
+        tried > 100 && crowded_batches > 100,
+        "{tried} trials, {crowded_batches} crowded"
     );
 }
 
@@ -498,7 +574,9 @@ fn bad_sections_are_refused_at_their_value() {
     assert_eq!(bad(1, 2f64.powi(52)), Ok(()));
     assert_eq!(bad(2, -1.0), Err(2));
     assert_eq!(bad(3, f64::MAX), Ok(())); // no bound
-    assert_eq!(bad(3, -1e-3), Ok(()));
+    assert_eq!(bad(3, 0.0), Ok(()));
+    assert_eq!(bad(3, 1e-3), Ok(()));
+    assert_eq!(bad(3, -1e-3), Err(3)); // a rise is at least 0
     assert_eq!(bad(3, f64::INFINITY), Err(3));
     assert_eq!(bad(3, f64::NEG_INFINITY), Err(3));
     assert_eq!(bad(3, f64::NAN), Err(3));
