@@ -30,7 +30,8 @@
 //! As in [`crate::certify::local_stop`], a window of bits (one packed value) tells every
 //! robot, at the same step `r`, that every robot's labels and tags stood still at step
 //! `r − D`: then all held the same vector (the graph is connected) and it is a fixed point,
-//! so every robot holds it still (with a bound, the labels up to it: "The bound" below). Each excess robot `e` then names its *entry*
+//! so every robot holds it still (with a bound, the labels up to it: "The bound" below). Each
+//! excess robot `e` then names its *entry*
 //! `t_e = argmin_t α_{e,t} + L_t` (the tag `(e, t_e)` at its task), and the entries flood
 //! for `D` steps (a min-flood of fixed values; of several excess claimers of one task the
 //! smallest code enters). At `r + D` every robot traces the same paths: from each entry,
@@ -59,13 +60,14 @@
 //! hold the agreement back, and once the labels settled it is *capped* at its base plus
 //! the bound (and `ε`), without a tag (the Hungarian method's Dijkstra cap, so the capped
 //! labels are potentials again, within `ε`, and the next base). A relaxation from a label
-//! above the bound sets a label above it, so the labels below come only from labels below
-//! (within `ε` the base's reduced costs are not negative): a quiet step tells that they
-//! are the fixed point. The robots compute only the labels up to the bound, as deep as
+//! above the bound (as the bound stands then) sets a label above it, so once the bound
+//! stands the labels below it come from labels below it (within `ε` the base's reduced
+//! costs are not negative): a quiet step tells that they are the fixed point. The robots
+//! compute only the labels up to the bound, as deep as
 //! the shortest path is long rather than as the deepest chain of tags (1000 robots: a last
 //! path of 7 tasks took 115 rounds among tags 42 deep). An excess robot enters at its
-//! cheapest task preferring a computed label, and names no entry at a capped one (it
-//! leads nowhere, and would hide another excess claimer's path); the paths are exact. A
+//! cheapest task preferring a computed label, and names no entry whose tags reach a
+//! capped one (it leads nowhere, and would hide another excess claimer's path). A
 //! capped batch moves the paths whose entries rose the least, often one, where a whole
 //! batch moves every disjoint shortest path: the bound is used only when a move left at
 //! most two tasks unclaimed (with more, costs of many ties took up to 2.2 times the
@@ -107,7 +109,8 @@
 //! `f64::MAX`. Once the labels settled every robot holds them, and the entries
 //! `e·m + t + 1` (0: none) travel in their place. The finish's own section is
 //! `[packed tags, window, alarm, bound]` (the bound `f64::MAX`: none): a tag is `t + 1`
-//! (0: none; the mover is the task's owner), packed as the claims are. Case 1 only (`robots = tasks`, at least 2, diameter at most 53):
+//! (0: none; the mover is the task's owner), packed as the claims are. Case 1 only (`robots =
+//! tasks`, at least 2, diameter at most 53):
 //! other teams carry no section, or zeros.
 //!
 //! Size: one protocol — its phases share one robot's state (labels, tags, entries, the
@@ -190,9 +193,9 @@ pub struct Finish {
     /// stays zeros.
     resting: bool,
     labels: Vec<f64>,
-    /// After a move that left tasks unclaimed, the labels moved along (capped at the
-    /// bound): potentials under which every owner's claim is its cheapest within `ε`;
-    /// infinite otherwise.
+    /// After a move that left at most [`BOUNDED_UNCLAIMED`] tasks unclaimed, the labels
+    /// moved along (capped at the bound): potentials under which every owner's claim is
+    /// its cheapest within `ε`; infinite otherwise.
     base: Vec<f64>,
     /// The least rise of an excess robot's entry over its entry under `base` that this robot
     /// heard of (`f64::MAX`: none): a label further above its `base` serves no entry.
@@ -334,7 +337,8 @@ impl Finish {
     }
 
     /// Checks a neighbour's section: tags of `tasks` tasks, windows of 53 bits and a bound
-    /// of at least 0 (a finish that does not run reads nothing of it). Returns the offending value's index
+    /// of at least 0 (a finish that does not run reads nothing of it). Returns the offending
+    /// value's index
     /// within the section.
     pub fn check(&self, theirs: &[f64]) -> Result<(), usize> {
         let m = self.tasks;
@@ -512,7 +516,13 @@ impl Finish {
         if let Some((value, t)) = self.best(costs, allowed, Some(s), from)
             && value - costs[s] < self.labels[s] - self.epsilon
         {
-            self.labels[s] = value - costs[s];
+            let threshold = self.threshold(s);
+            self.labels[s] = if self.labels[t] > self.threshold(t) && threshold < UNREACHED {
+                // Above it after the subtraction's rounding too.
+                (value - costs[s]).max(threshold.next_up())
+            } else {
+                value - costs[s]
+            };
             self.tags[s] = t as u64 + 1;
             self.packing.set(&mut self.packed, s, t as u64 + 1);
             self.changed |= self.labels[s] <= self.threshold(s);
@@ -543,7 +553,8 @@ impl Finish {
     }
 
     /// The highest value of task `t`'s label that holds the agreement back: its base plus
-    /// the bound, within the bound's tolerance (infinite without a base or a bound).
+    /// the bound, within the bound's tolerance (infinite without a base, about `f64::MAX`
+    /// without a bound).
     fn threshold(&self, t: usize) -> f64 {
         self.base[t] + self.bound + self.slack()
     }
@@ -586,19 +597,35 @@ impl Finish {
     }
 
     /// An excess claimer of task `s` names its entry (its cheapest task under the labels).
-    /// A capped entry leads nowhere: the robot names none (its smaller code would hide
-    /// another excess claimer's path).
+    /// An entry whose tags lead to a capped label leads nowhere: the robot names none (its
+    /// smaller code would hide another excess claimer's path).
     fn enter(&mut self, s: usize, costs: &[f64], allowed: &[bool]) {
         let slack = self.slack();
         let computed = |t: usize, v: f64| if self.capped(t) { v + slack } else { v };
         if let Some((_, t)) = self.best(costs, allowed, None, computed)
-            && !self.capped(t)
+            && self.leads_to_unclaimed(t)
         {
             let entry = (self.index * self.tasks + t + 1) as u64;
             if self.entries[s] == 0 || entry < self.entries[s] {
                 self.entries[s] = entry;
             }
         }
+    }
+
+    /// Whether task `t`'s tags lead to an unclaimed task (not to a capped label, nor round a
+    /// cycle). Every robot holds the same labels and tags up to the bound, so all agree.
+    fn leads_to_unclaimed(&self, t: usize) -> bool {
+        let mut at = t;
+        for _ in 0..=self.tasks {
+            if self.frozen[at] == 0 {
+                return true;
+            }
+            if self.tags[at] == 0 {
+                return false;
+            }
+            at = self.tags[at] as usize - 1;
+        }
+        false
     }
 
     /// Whether task `t`'s label was capped (claimed, with a label and no tag).
