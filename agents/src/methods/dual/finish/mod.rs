@@ -583,10 +583,15 @@ impl Finish {
             }
         }
         if capped {
-            let per = self.packing.per_word();
-            for (word, chunk) in self.packed.iter_mut().zip(self.tags.chunks(per)) {
-                *word = self.packing.pack(chunk) as u64;
-            }
+            self.repack();
+        }
+    }
+
+    /// Packs the tags again after tags changed outside the merge and the relaxation.
+    fn repack(&mut self) {
+        let per = self.packing.per_word();
+        for (word, chunk) in self.packed.iter_mut().zip(self.tags.chunks(per)) {
+            *word = self.packing.pack(chunk) as u64;
         }
     }
 
@@ -746,7 +751,6 @@ impl Finish {
                 self.keep[t] = fate;
             }
         }
-        let per = self.packing.per_word();
         for t in 0..m {
             if self.frozen[t] == 0 && !self.used[t] {
                 (self.labels[t], self.tags[t]) = (0.0, 0);
@@ -754,9 +758,7 @@ impl Finish {
                 (self.labels[t], self.tags[t]) = (UNREACHED, 0);
             }
         }
-        for (word, chunk) in self.packed.iter_mut().zip(self.tags.chunks(per)) {
-            *word = self.packing.pack(chunk) as u64;
-        }
+        self.repack();
         self.clear_agreement();
     }
 
