@@ -169,7 +169,7 @@ fn the_paper_variant_still_certifies() {
         // The paper's message is n + m = 24 multipliers, the fast one m prices, m
         // potentials and the m claims packed into one value (13 codes of 4 bits fit in
         // one): 25, and Case 1's finish: the m tags packed into one value, its window, its
-        // alarm and its bound (its labels travel in the potentials' place): 4.
+        // alarm and its bound (its moves travel in the potentials' place): 4.
         let (fast_values, paper_values) = (12 + 12 + 1 + 4, 12 + 12);
         assert_eq!(
             fast.message_bytes - paper.message_bytes,

@@ -47,14 +47,14 @@
 //!   shortest augmenting paths on the frozen claims beside the iteration and move whole
 //!   chains at once; a full assignment comes with prices that the certificate starts from.
 //!   1000 × 1000 uniform, `random:0.02`, seeds 1 / 2: 1824 / 3601 rounds to the certified
-//!   stop without it, 1089 / 1241 with it (bench/README.md). One-shot solves only: a
+//!   stop without it, 657 / 793 with it (bench/README.md). One-shot solves only: a
 //!   standing team's episodes (new costs) run without it ([`Finish::restart`]).
 //!
 //! The payload is `m` multipliers and the certificate's `m` potentials and `m` claims,
 //! several claims packed into one value ([`snapshot::claims_per_word`]: 7 for 100
 //! robots): `2m + ⌈m/k⌉`, 215 values at 100 × 100 (the paper's is `n + m`); the finish
 //! adds its `m` tags packed alike and three values, its window, alarm and bound (its
-//! labels travel in the potentials' place while it computes them): 233 at 100 × 100. Teams of more
+//! moves travel in the potentials' place while it computes labels): 233 at 100 × 100. Teams of more
 //! robots than tasks carry that section too, as zeros: a standing team's episode with
 //! robots away may be a Case 1 problem inside the team's messages.
 //!
@@ -465,7 +465,7 @@ impl ConsensusAgent for FastDualAgent {
         let end = m + snapshot::words(self.robots, m);
         self.rho = self.schedule().rho(self.steps);
         let disagreement = self.accumulate(inbox);
-        // While the finish computes labels they travel in the potentials' place.
+        // While the finish computes labels its moves travel in the potentials' place.
         self.snapshot.begin(self.finish.labelling());
         self.finish.begin();
         for k in 0..inbox.len() {

@@ -266,7 +266,7 @@ impl Snapshot {
     }
 
     /// Starts a step: remembers the potentials the neighbours saw. `lent`: the messages of
-    /// this step carry the finish's labels in the potentials' place (every robot lends at
+    /// this step carry the finish's moves in the potentials' place (every robot lends at
     /// the same steps): the potentials are neither merged nor relaxed, and prove nothing.
     pub fn begin(&mut self, lent: bool) {
         self.before.copy_from_slice(&self.potentials);
