@@ -54,8 +54,8 @@
 //! optimal `π`, and the proof follows within a few rounds of the claims settling.
 //!
 //! # Lent potentials
-//! In Case 1 the augmenting finish ([`crate::methods::dual::finish`]) sends its labels in
-//! the potentials' place while it computes them: every robot knows those steps, keeps its
+//! In Case 1 the augmenting finish ([`crate::methods::dual::finish`]) sends its moves in
+//! the potentials' place while it computes its labels: every robot knows those steps, keeps its
 //! potentials standing (neither merged nor relaxed) and proves nothing meanwhile; a finish
 //! that reaches a full assignment hands over prices that price it ([`Snapshot::seed`]).
 //!

@@ -30,7 +30,8 @@
 //! hears of it, with every label whose path leads through it; a Bellman–Ford that floods
 //! the labels passes the fall on one owner at a time, one flood a hop (1000 robots: labels
 //! 40–80 tags deep, 2.7 rounds a hop, 90–150 rounds a batch; with the moves 30–50).
-//! Labels only fall, each the cost of a path there is; the owners' claims are the cheapest
+//! Labels only fall (but by the bound's rounding, "The bound"), each at least the cost of
+//! a path there is, its move plus its successor's label; the owners' claims are the cheapest
 //! for the tasks they cover when there is no negative cycle, and then the labels stop,
 //! the same moves and tags at every robot, so the same labels (the potentials of
 //! successive shortest paths).
@@ -533,6 +534,7 @@ impl Finish {
             let value = self.through(s, t, change);
             if value < self.labels[s] - self.epsilon {
                 self.adopt(s, t, change, value);
+                self.note_cycle(s);
             }
         }
     }
@@ -541,23 +543,22 @@ impl Finish {
     /// label above the bound gives one above the bound too (module docs, "The bound":
     /// labels below it then come only from labels below it, above it after the addition's
     /// rounding too). Every robot computes it alike from the same values.
+    /// A sum beyond an `f64` (only a faulty sender's moves make one) reaches nothing.
     fn through(&self, s: usize, t: usize, change: f64) -> f64 {
         let from = self.labels[t];
-        if from == UNREACHED {
+        let value = change + from;
+        if from == UNREACHED || !value.is_finite() {
             return UNREACHED;
         }
         let threshold = self.threshold(s);
         if from > self.threshold(t) && threshold < UNREACHED {
-            (change + from).max(threshold.next_up())
+            value.max(threshold.next_up())
         } else {
-            change + from
+            value
         }
     }
 
-    /// Task `s`'s owner moves to `t` at a change of cost `change` for a label `value`;
-    /// notes a negative cycle when the tags lead from `t` back to `s`: each label on the
-    /// way is at least its move plus its successor's label now, so the moves around the
-    /// cycle cost less than nothing in all (as in Bellman–Ford's predecessor graph).
+    /// Task `s`'s owner moves to `t` at a change of cost `change` for a label `value`.
     fn adopt(&mut self, s: usize, t: usize, change: f64, value: f64) {
         self.labels[s] = value;
         self.moves[s] = change;
@@ -565,7 +566,14 @@ impl Finish {
         self.tags[s] = t as u64 + 1;
         self.packing.set(&mut self.packed, s, t as u64 + 1);
         self.changed |= value <= self.threshold(s);
-        let mut at = t;
+    }
+
+    /// Notes a negative cycle when the tags lead from task `s`'s back to `s`: each label on
+    /// the way is at least its move plus its successor's label now, so the moves around
+    /// the cycle cost nothing or less in all (as in Bellman–Ford's predecessor graph). The
+    /// owner notes its own at once; moves taken from neighbours are walked by `derive`.
+    fn note_cycle(&mut self, s: usize) {
+        let mut at = self.tags[s] as usize - 1;
         for _ in 0..self.tasks {
             if at == s {
                 self.cycle = true;

@@ -55,7 +55,7 @@ fn run_refrozen(
     let mut robots: Vec<Finish> = (0..n)
         .map(|i| Finish::new(i, n, n, AssignmentCase::One, n - 1, 1e-12))
         .collect();
-    // A robot's labels (the potentials' place) and its section.
+    // A robot's moves (the potentials' place) and its section.
     let mut sections = vec![vec![0.0; n + words(n, n)]; n];
     for (i, robot) in robots.iter_mut().enumerate() {
         assert!(robot.runs());
@@ -694,4 +694,31 @@ fn claims_with_tasks_unclaimed_are_frozen_though_they_change() {
     // Claims of every task: the certificate's, never frozen.
     let full = |_| vec![3, 1, 0, 2];
     assert!(observed(4, full, 8).iter().all(|(labelling, _)| !labelling));
+}
+
+/// A faulty neighbour's moves whose sums leave an `f64` reach nothing: every label stays
+/// finite (an unreached one is `f64::MAX`), so no prices handed to the certificate are
+/// infinite.
+#[test]
+fn moves_beyond_an_f64_reach_nothing() {
+    let m = 4;
+    let mut robot = Finish::new(0, m, m, AssignmentCase::One, 2, 1e-12);
+    // Task 0 unclaimed, tasks 1–3 claimed by robots 1–3.
+    robot.freeze(2, &[0, 2, 3, 4], None);
+    // Tags 1 → 0, 2 → 1, 3 → 2, each move −f64::MAX.
+    let moves = [0.0, -f64::MAX, -f64::MAX, -f64::MAX];
+    let mut section = vec![0.0; words(m, m)];
+    section[0] = robot.packing.pack(&[0, 1, 2, 3]);
+    let last = section.len() - 1;
+    section[last] = UNREACHED;
+    robot.begin();
+    robot.merge(&moves, &section);
+    robot.claim(3, None, &[0.0; 4], &[true; 4]);
+    assert!(
+        robot.labels.iter().all(|l| l.is_finite()),
+        "{:?}",
+        robot.labels
+    );
+    assert_eq!(robot.labels[1], -f64::MAX);
+    assert_eq!(robot.labels[2..], [UNREACHED, UNREACHED]);
 }
