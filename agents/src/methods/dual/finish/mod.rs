@@ -395,17 +395,17 @@ impl Finish {
         self.alarmed = 0;
     }
 
-    /// Merges a neighbour's `labels` (the potentials' place of its message) and section,
+    /// Merges a neighbour's `place` (the potentials' place of its message) and section,
     /// only while labelling: its moves (sent in the labels' place) and tags, each taken
     /// where it lowers the label as this robot's labels have it, or once the labels settled
     /// the entries sent in the labels' place.
-    pub fn merge(&mut self, labels: &[f64], theirs: &[f64]) {
+    pub fn merge(&mut self, place: &[f64], theirs: &[f64]) {
         let Phase::Labelling { settled, .. } = self.phase else {
             return;
         };
         let m = self.tasks;
         if settled.is_some() {
-            for (mine, &value) in self.entries.iter_mut().zip(labels) {
+            for (mine, &value) in self.entries.iter_mut().zip(place) {
                 // Codes outside 1..=robots·tasks (only a faulty sender writes them) name
                 // nobody.
                 let code = value as u64;
@@ -416,7 +416,7 @@ impl Finish {
             }
             return;
         }
-        let (packing, moves) = (self.packing, labels);
+        let (packing, moves) = (self.packing, place);
         let words = &theirs[..m.div_ceil(packing.per_word())];
         self.heard &= theirs[words.len()] as u64;
         self.alarmed |= theirs[words.len() + 1] as u64;
@@ -519,23 +519,13 @@ impl Finish {
 
     /// Lowers the label of the robot's own task `s` to its best move by more than `ε`.
     fn relax(&mut self, s: usize, costs: &[f64], allowed: &[bool]) {
-        // A label above the bound sets this one above the bound too (module docs, "The
-        // bound"): labels below it then come only from labels below it.
-        let above = self.threshold(s) + self.slack() + costs[s];
-        let from = |t: usize, value: f64| {
-            if self.labels[t] > self.threshold(t) {
-                value.max(above)
-            } else {
-                value
-            }
-        };
-        if let Some((_, t)) = self.best(costs, allowed, Some(s), from) {
-            let change = costs[t] - costs[s];
-            let value = self.through(s, t, change);
-            if value < self.labels[s] - self.epsilon {
-                self.adopt(s, t, change, value);
-                self.note_cycle(s);
-            }
+        // The best move as the label it gives (a label above the bound gives one above it).
+        let label = |t: usize, _| self.through(s, t, costs[t] - costs[s]);
+        if let Some((value, t)) = self.best(costs, allowed, Some(s), label)
+            && value < self.labels[s] - self.epsilon
+        {
+            self.adopt(s, t, costs[t] - costs[s], value);
+            self.note_cycle(s);
         }
     }
 
@@ -735,7 +725,7 @@ impl Finish {
     /// `adjust(t, value)` has it: an excess robot's entry prefers a computed label to a
     /// capped one within the bound's tolerance (where its entry rose by the bound, the
     /// computed label it rose to costs the same as the capped ones), an owner's relaxation
-    /// keeps a label above the bound from setting one below it.
+    /// ranks its moves by the labels they give.
     fn best(
         &self,
         costs: &[f64],
