@@ -47,8 +47,9 @@
 //!   shortest augmenting paths on the frozen claims beside the iteration and move whole
 //!   chains at once; a full assignment comes with prices that the certificate starts from.
 //!   1000 × 1000 uniform, `random:0.02`, seeds 1 / 2: 1824 / 3601 rounds to the certified
-//!   stop without it, 657 / 793 with it (bench/README.md). One-shot solves only: a
-//!   standing team's episodes (new costs) run without it ([`Finish::restart`]).
+//!   stop without it, 657 / 793 with it (bench/README.md). Owners on a negative cycle
+//!   of the frozen claims move round it, so a standing team's warm episode, which starts
+//!   from the last optimum, runs the finish too ([`Finish::restart`]).
 //!
 //! The payload is `m` multipliers and the certificate's `m` potentials and `m` claims,
 //! several claims packed into one value ([`snapshot::claims_per_word`]: 7 for 100

@@ -2,7 +2,9 @@
 //! claimed twice and tasks claimed by nobody, the robots freeze the claims and move whole
 //! chains of robots at once along augmenting paths of successive shortest paths, found by
 //! a distributed Bellman–Ford in which every robot relaxes only its own cost row and every
-//! robot computes the labels from the moves the owners chose.
+//! robot computes the labels from the moves the owners chose; owners on a negative cycle
+//! of the frozen claims move round it ("Negative cycles"), also in claims of every task
+//! that the certificate does not prove.
 //!
 //! # Why
 //! At 1000 robots the ADMM's last hundreds of rounds (bench/README, "Where the dual's rounds
@@ -99,20 +101,40 @@
 //! ADMM stalls on them: at 1000 robots within about 30 rounds, hundreds unclaimed; a small
 //! team whose ADMM fills tasks period by period is left to it), the frozen claims follow
 //! the ADMM's as long as their unclaimed tasks fall, and the batches run from where they
-//! stop falling (200 robots: 23 % fewer rounds, bench/README). Labels that do
-//! not settle (a negative cycle among the frozen claims: the ADMM's claims need not be the
-//! cheapest for what they cover) are given up: at once when a robot finds the cycle in
-//! the tags (an OR-flooded *alarm* window tells every robot at one step), else after a
-//! budget of `64 P` steps; so is a full assignment the certificate does not prove within
-//! `16 P` steps ([`CLAIM_PERIODS`]). The robots
-//! claim their rounded columns again, and the finish waits `64 P` steps before it
-//! freezes again (after an alarm only `P`: the claims had tasks unclaimed, so the
-//! certificate lost nothing while it rested, and the ADMM's next claims may be the
-//! cheapest for what they cover; either way it freezes only when the ADMM's count of
-//! unclaimed tasks stopped falling). A snapshot that claims every task is never frozen: once
-//! the finish rests the certificate proves it or the ADMM goes on (while the finish
-//! labels, the potentials are lent and prove nothing). Every transition happens
-//! at a step every robot knows, from what every robot holds.
+//! stop falling (200 robots: 23 % fewer rounds, bench/README). Labels that do not settle
+//! are given up after a budget of `64 P` steps; so is a full assignment the certificate
+//! does not prove within `16 P` steps ([`CLAIM_PERIODS`]). The robots claim their rounded
+//! columns again, and the finish waits `64 P` steps before it freezes again. Every
+//! transition happens at a step every robot knows, from what every robot holds.
+//!
+//! # Negative cycles
+//! The frozen claims need not be the cheapest for the tasks they cover: the ADMM's may
+//! not be, and a standing team's warm episode starts from the last episode's optimum, a
+//! full assignment that the new costs may make dearer than another. Then owners round a
+//! *negative cycle* could swap tasks for less, and the labels round it fall forever. A
+//! robot whose tags lead round a cycle says so in an OR-flooded *alarm* window, which
+//! tells every robot at one step `r`. Each robot then offers every cycle of its tags
+//! whose moves cost less than `−ε` in all (its tags name one task each, so its cycles are
+//! disjoint): per task on one the code `i·(m + 1) + tag` of finder `i`, min-flooded for
+//! `D` steps. At `r + D` every robot holds per task the smallest code offered, so the same
+//! cycles whole (those no smaller finder touched), and the owners on each move round it
+//! at once, each to the task its tag names. The claims' cost falls by more than `ε` a
+//! cycle, so cycles are cancelled finitely often; the labels start again (those whose
+//! tags lead off the cycles to an end are kept: upper bounds, as after a move). Without
+//! a whole cycle (only ones of cost about 0) the finish gives up, and freezes again after
+//! `P` steps (the claims had tasks unclaimed: the certificate lost nothing while it
+//! rested).
+//!
+//! Claims of every task are frozen too, once [`FULL_PERIODS`] settled snapshots in a
+//! row claimed every task and the certificate proved none (it proves an optimal one
+//! sooner than the labels would; a negative cycle keeps its potentials falling). No task
+//! is unclaimed, so the labels are *rooted*: every label starts at 0 (a path from a
+//! virtual task one move of cost 0 from every task) and only falls. Negative cycles are
+//! cancelled as above, and labels that settle price the claims: every owner's claim is
+//! its cheapest under them within `ε`, so the robots claim their frozen tasks and the
+//! certificate starts from the labels ([`Finish::prices`]). A standing team's warm
+//! episodes run the finish so (50 robots, `random:0.1`, drifting distances: median 341 →
+//! 66 rounds; a cold episode 226 → 136, bench/README.md).
 //!
 //! # Layout of the payload
 //! The moves of the tasks `0 … m−1` (0: none) travel in the certificate's potentials'
@@ -120,14 +142,15 @@
 //! same steps) and prove nothing, so the ADMM's own claims cannot be certified meanwhile;
 //! an unreached label (a claimed task without a tag) is `f64::MAX`, held by each robot,
 //! never sent. Once the labels settled every robot holds them, and the entries
-//! `e·m + t + 1` (0: none) travel in their place. The finish's own section is
+//! `e·m + t + 1` (0: none) travel in their place; for `D` steps after an alarm, the
+//! offered cycles' codes (the section then zeros). The finish's own section is
 //! `[packed tags, window, alarm, bound]` (the bound `f64::MAX`: none): a tag is `t + 1`
 //! (0: none; the mover is the task's owner), packed as the claims are. Case 1 only (`robots =
 //! tasks`, at least 2, diameter at most 53):
 //! other teams carry no section, or zeros.
 //!
 //! Size: one protocol — its phases share one robot's state (labels, tags, entries, the
-//! window and the frozen claims) and every transition reads the others; about 125 lines
+//! window and the frozen claims) and every transition reads the others; about 150 lines
 //! are these docs (its unit tests are in `tests.rs`).
 
 use crate::methods::dual::snapshot::{Packing, Snapshot};
@@ -141,6 +164,10 @@ const WINDOW_BITS: usize = f64::MANTISSA_DIGITS as usize;
 pub const LABEL_PERIODS: u64 = 64;
 /// Snapshot periods a full assignment of the finish is claimed for the certificate.
 pub const CLAIM_PERIODS: u64 = 16;
+/// Settled snapshots in a row that claim every task before the finish freezes them: the
+/// certificate proves an optimal full assignment sooner than labels found anew (10-robot
+/// rings: warm episodes 13 rounds, with the labels from the first full snapshot 25).
+pub const FULL_PERIODS: u64 = 3;
 /// The most tasks a move may leave unclaimed for the next labels to stop at the bound
 /// (module docs, "The bound").
 const BOUNDED_UNCLAIMED: usize = 2;
@@ -181,6 +208,10 @@ enum Phase {
     },
     /// It moved (or stayed) at step `at` and claims `task`.
     Claiming { at: u64, task: Option<usize> },
+    /// At step `at` every robot heard of a negative cycle among the frozen claims, in which
+    /// it claims `task`: the cycles found flood for `D` steps, then the owners on each
+    /// whole one move round it.
+    Cancelling { at: u64, task: Option<usize> },
 }
 
 /// One robot's side of the augmenting finish.
@@ -198,13 +229,15 @@ pub struct Finish {
     phase: Phase,
     /// It owns its frozen task (else it is an excess claimer, or a relay).
     owner: bool,
+    /// The frozen claims are a full assignment: every label starts at 0, a path from a
+    /// virtual task that every task is one move of cost 0 from.
+    rooted: bool,
     /// No freezing from the rounded claims before this step (after a finish given up).
     quiet_until: u64,
     /// Tasks the last settled snapshot left unclaimed (`usize::MAX` before the first).
     last_unclaimed: usize,
-    /// It never freezes (a standing team's episodes, [`Finish::restart`]); its section
-    /// stays zeros.
-    resting: bool,
+    /// Settled snapshots in a row that claimed every task.
+    full: u64,
     labels: Vec<f64>,
     /// Per task its owner's change of cost `α_{j,t} − α_{j,s}` for the move its tag names
     /// (0 without a tag): the labels follow from these and the tags.
@@ -245,6 +278,8 @@ pub struct Finish {
     frozen: Vec<u64>,
     /// Paths moved since the costs were set.
     paths: u64,
+    /// Negative cycles cancelled since the costs were set.
+    cycles: u64,
     // Scratch of the tracing.
     used: Vec<bool>,
     /// Per task whether its label is kept after a move, and the tasks of one walk.
@@ -279,9 +314,10 @@ impl Finish {
             packing,
             phase: Phase::Idle,
             owner: false,
+            rooted: false,
             quiet_until: 0,
             last_unclaimed: usize::MAX,
-            resting: false,
+            full: 0,
             labels: vec![0.0; len],
             moves: vec![0.0; len],
             base: vec![f64::INFINITY; len],
@@ -302,6 +338,7 @@ impl Finish {
             complete: false,
             frozen: vec![0; len],
             paths: 0,
+            cycles: 0,
             used: vec![false; len],
             keep: vec![0; len],
             walk: Vec::with_capacity(len + 1),
@@ -319,23 +356,30 @@ impl Finish {
         self.paths
     }
 
-    /// Whether it is computing labels (the claims frozen).
-    pub fn labelling(&self) -> bool {
-        matches!(self.phase, Phase::Labelling { .. })
+    /// Negative cycles among frozen claims cancelled since the costs were last set.
+    pub fn cycles(&self) -> u64 {
+        self.cycles
     }
 
-    /// Forgets the last episode: the state of new costs. A standing team's episodes run
-    /// without the finish: a warm episode starts from the last optimum, a full assignment
-    /// that is not the cheapest for the new costs; the finish moves chains to unclaimed
-    /// tasks but cancels no cycles, so it sped cold episodes up and not warm ones (50
-    /// robots, `random:0.1`, drifting distances: cold 429 → 194 rounds on average, warm 376
-    /// → 383, bench/README.md), and warm starts would lose to cold ones.
+    /// Whether it is computing labels (the claims frozen).
+    pub fn labelling(&self) -> bool {
+        matches!(
+            self.phase,
+            Phase::Labelling { .. } | Phase::Cancelling { .. }
+        )
+    }
+
+    /// Forgets the last episode: the state of new costs. A standing team's warm episode
+    /// starts from the last optimum, a full assignment that need not be the cheapest for
+    /// the new costs: the finish cancels its negative cycles (50 robots, `random:0.1`,
+    /// drifting distances: warm episodes 341 → 66 rounds, bench/README.md).
     pub fn restart(&mut self) {
-        self.resting = true;
         self.phase = Phase::Idle;
         self.quiet_until = 0;
         self.last_unclaimed = usize::MAX;
+        self.full = 0;
         self.paths = 0;
+        self.cycles = 0;
         self.clear();
     }
 
@@ -400,8 +444,10 @@ impl Finish {
     /// where it lowers the label as this robot's labels have it, or once the labels settled
     /// the entries sent in the labels' place.
     pub fn merge(&mut self, place: &[f64], theirs: &[f64]) {
-        let Phase::Labelling { settled, .. } = self.phase else {
-            return;
+        let settled = match self.phase {
+            Phase::Labelling { settled, .. } => settled,
+            Phase::Cancelling { .. } => return self.merge_cycles(place),
+            _ => return,
         };
         let m = self.tasks;
         if settled.is_some() {
@@ -468,6 +514,15 @@ impl Finish {
         let (since, task, settled) = match self.phase {
             Phase::Idle => return rounded,
             Phase::Claiming { task, .. } => return task,
+            Phase::Cancelling { at, task } => {
+                let diameter = self
+                    .diameter
+                    .expect("cancelling only where the finish runs");
+                if step >= at + diameter {
+                    self.cancel(step, task);
+                }
+                return rounded;
+            }
             Phase::Labelling {
                 since,
                 task,
@@ -492,12 +547,16 @@ impl Finish {
                 self.window = u64::from(!self.changed) | ((heard << 1) & bits);
                 self.alarm = u64::from(self.cycle) | ((alarmed << 1) & bits);
                 if step > since && alarmed >> (diameter - 1) & 1 == 1 {
-                    // Some robot found a negative cycle: the labels would fall forever. The
-                    // claims have tasks unclaimed, so the certificate lost nothing by
-                    // resting: the next settled claims with tasks unclaimed, no fewer than
-                    // the last snapshot's, may try again.
-                    self.give_up(step, 1);
+                    // Some robot found a negative cycle: the labels would fall forever.
+                    // The robots that hold one offer it, and the owners move round it.
+                    self.offer_cycles(step, task);
                     return rounded;
+                }
+                if step > since && heard >> (diameter - 1) & 1 == 1 && self.rooted {
+                    // No negative cycle is left: the labels price the frozen claims.
+                    self.phase = Phase::Claiming { at: step, task };
+                    self.moved = true;
+                    return task;
                 }
                 if step > since && heard >> (diameter - 1) & 1 == 1 {
                     self.cap();
@@ -515,6 +574,139 @@ impl Finish {
             Some(at) if step >= at + diameter => self.traced(step, task, rounded, costs, allowed),
             Some(_) => rounded,
         }
+    }
+
+    /// Offers, once every robot heard of a negative cycle at `step`, every cycle of its own
+    /// tags whose moves cost less than `−ε` in all (a robot's tags name one task each, so
+    /// its cycles are disjoint): per task on one the code `i·(m + 1) + tag` of finder `i`
+    /// (0 elsewhere), min-flooded for `D` steps. Then every robot holds, per task, the
+    /// smallest code offered for it, so the same cycles whole: those of which no task was
+    /// offered by a smaller finder (a smaller finder's codes are smaller on every task).
+    fn offer_cycles(&mut self, step: u64, task: Option<usize>) {
+        const UNKNOWN: u8 = 0;
+        const WALKING: u8 = 1;
+        const KNOWN: u8 = 2;
+        let first = (self.index * (self.tasks + 1)) as u64;
+        self.entries.fill(0);
+        self.keep.fill(UNKNOWN);
+        for s in 0..self.tasks {
+            let mut at = s;
+            while self.keep[at] == UNKNOWN && self.frozen[at] != 0 && self.tags[at] != 0 {
+                self.keep[at] = WALKING;
+                at = self.tags[at] as usize - 1;
+            }
+            if self.keep[at] == WALKING && self.cycle_cost(at) < -self.epsilon {
+                let start = at;
+                loop {
+                    let tag = self.tags[at];
+                    self.entries[at] = first + tag;
+                    at = tag as usize - 1;
+                    if at == start {
+                        break;
+                    }
+                }
+            }
+            let mut x = s;
+            while self.keep[x] == WALKING {
+                self.keep[x] = KNOWN;
+                x = self.tags[x] as usize - 1;
+            }
+        }
+        self.phase = Phase::Cancelling { at: step, task };
+    }
+
+    /// The moves round the cycle of tags through task `start`.
+    fn cycle_cost(&self, start: usize) -> f64 {
+        let (mut cost, mut at) = (0.0, start);
+        loop {
+            cost += self.moves[at];
+            at = self.tags[at] as usize - 1;
+            if at == start {
+                return cost;
+            }
+        }
+    }
+
+    /// Takes a neighbour's offered cycles (the potentials' place), each task's smallest
+    /// code. Codes that name no finder's tag (only a faulty sender writes them) are skipped.
+    fn merge_cycles(&mut self, place: &[f64]) {
+        let (span, max) = (self.tasks as u64 + 1, self.entry_max + self.tasks as u64);
+        for (mine, &value) in self.entries.iter_mut().zip(place) {
+            let code = value as u64;
+            let valid =
+                value.fract() == 0.0 && (1..max).contains(&code) && !code.is_multiple_of(span);
+            if valid && (*mine == 0 || code < *mine) {
+                *mine = code;
+            }
+        }
+    }
+
+    /// `D` steps after the alarm every robot holds the same offered cycles: the owners on
+    /// each whole one (disjoint: each task holds one code) move round it, each to the task
+    /// its tag names (the frozen claims' cost falls by more than `ε` a cycle, so cycles are
+    /// cancelled finitely often), and the labels start again, keeping those whose tags lead
+    /// to an unclaimed task (a rooted one: to a task without a tag) over tasks no cycle
+    /// touched (their owners and costs are the same: upper bounds). Without a whole cycle
+    /// (only ones of cost about 0 were found) the finish gives up: the claims have tasks
+    /// unclaimed, so the certificate loses nothing while it rests.
+    fn cancel(&mut self, step: u64, task: Option<usize>) {
+        let span = self.tasks as u64 + 1;
+        let mut claim = task;
+        let mut cancelled = 0;
+        self.used.fill(false);
+        self.keep.fill(0);
+        for start in 0..self.tasks {
+            let code = self.entries[start];
+            if code == 0 || self.keep[start] != 0 {
+                continue;
+            }
+            // The task its finder's tag names, while the code is that finder's.
+            let finder = code / span;
+            let entries = &self.entries;
+            let next = |s: usize| {
+                let code = entries[s];
+                (code != 0 && code / span == finder).then(|| (code % span - 1) as usize)
+            };
+            // Marks the finder's tasks walked (another finder's task ends the walk).
+            let (mut at, mut hops, mut whole) = (start, 0, true);
+            while let Some(t) = next(at).filter(|_| hops < self.tasks) {
+                self.keep[at] = 1;
+                whole &= self.frozen[at] != 0;
+                (at, hops) = (t, hops + 1);
+                if at == start || self.keep[at] != 0 {
+                    break;
+                }
+            }
+            if !whole || at != start {
+                continue;
+            }
+            let mut carried = self.frozen[start];
+            loop {
+                let t = next(at).expect("on a whole cycle");
+                std::mem::swap(&mut self.frozen[t], &mut carried);
+                self.used[t] = true;
+                if self.owner && task == Some(at) {
+                    claim = Some(t);
+                }
+                at = t;
+                if at == start {
+                    break;
+                }
+            }
+            cancelled += 1;
+        }
+        if cancelled == 0 {
+            // A full assignment's labels lend the certificate's potentials: they rest long.
+            return self.give_up(step, if self.rooted { LABEL_PERIODS } else { 1 });
+        }
+        self.cycles += cancelled;
+        self.forget_base();
+        self.keep_untouched_labels();
+        self.phase = Phase::Labelling {
+            since: step,
+            task: claim,
+            settled: None,
+        };
     }
 
     /// Lowers the label of the robot's own task `s` to its best move by more than `ε`.
@@ -818,7 +1010,7 @@ impl Finish {
                 if self.used[at] {
                     break DROPPED;
                 }
-                if self.frozen[at] == 0 {
+                if self.frozen[at] == 0 || (self.rooted && self.tags[at] == 0) {
                     break KEPT;
                 }
                 if self.tags[at] == 0 || self.walk.len() > m {
@@ -838,7 +1030,9 @@ impl Finish {
             if self.frozen[t] == 0 && !self.used[t] {
                 (self.labels[t], self.tags[t], self.moves[t]) = (0.0, 0, 0.0);
             } else if self.keep[t] == DROPPED {
-                (self.labels[t], self.tags[t], self.moves[t]) = (UNREACHED, 0, 0.0);
+                // A rooted label starts again at its root.
+                let start = if self.rooted { 0.0 } else { UNREACHED };
+                (self.labels[t], self.tags[t], self.moves[t]) = (start, 0, 0.0);
             }
         }
         self.repack();
@@ -921,7 +1115,7 @@ impl Finish {
     /// move to a full assignment: a snapshot started after it). Every robot does the same
     /// at the same step.
     pub fn observe(&mut self, step: u64, snapshot: &Snapshot) {
-        if self.diameter.is_none() || self.resting {
+        if self.diameter.is_none() {
             return;
         }
         let period = self.period;
@@ -939,9 +1133,12 @@ impl Finish {
         }
         let (claims, task) = snapshot.settled();
         let unclaimed = claims.iter().filter(|&&c| c == 0).count();
+        self.full = if unclaimed == 0 { self.full + 1 } else { 0 };
         let freeze = match self.phase {
             Phase::Idle => {
-                unclaimed > 0 && step >= self.quiet_until && unclaimed >= self.last_unclaimed
+                step >= self.quiet_until
+                    && (self.full >= FULL_PERIODS
+                        || (unclaimed > 0 && unclaimed >= self.last_unclaimed))
             }
             // The settling snapshot started after the move.
             Phase::Claiming { at, .. } => unclaimed > 0 && step >= at + period,
@@ -950,7 +1147,7 @@ impl Finish {
                 let frozen = self.frozen.iter().filter(|&&c| c == 0).count();
                 unclaimed > 0 && unclaimed < frozen
             }
-            Phase::Labelling { .. } => false,
+            Phase::Labelling { .. } | Phase::Cancelling { .. } => false,
         };
         self.last_unclaimed = unclaimed;
         if freeze {
@@ -974,7 +1171,8 @@ impl Finish {
             self.forget_base();
         } else {
             self.clear();
-            self.labels.fill(UNREACHED);
+            self.rooted = !claims.contains(&0);
+            self.labels.fill(if self.rooted { 0.0 } else { UNREACHED });
         }
         for (t, &claim) in claims.iter().enumerate() {
             if claim == 0 {
@@ -996,9 +1194,19 @@ impl Finish {
     /// potentials' place (`labels`): the moves, or once the labels settled the entries
     /// (codes `e·m + t + 1`, 0: none).
     pub fn write(&self, labels: &mut [f64], out: &mut [f64]) {
-        let Phase::Labelling { settled, .. } = self.phase else {
-            out.fill(0.0);
-            return;
+        let settled = match self.phase {
+            Phase::Labelling { settled, .. } => settled,
+            Phase::Cancelling { .. } => {
+                for (o, &code) in labels.iter_mut().zip(&self.entries) {
+                    *o = code as f64;
+                }
+                out.fill(0.0);
+                return;
+            }
+            Phase::Idle | Phase::Claiming { .. } => {
+                out.fill(0.0);
+                return;
+            }
         };
         if settled.is_some() {
             for (o, &entry) in labels.iter_mut().zip(&self.entries) {
