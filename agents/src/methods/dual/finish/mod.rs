@@ -102,7 +102,8 @@
 //! team whose ADMM fills tasks period by period is left to it), the frozen claims follow
 //! the ADMM's as long as their unclaimed tasks fall, and the batches run from where they
 //! stop falling (200 robots: 23 % fewer rounds, bench/README). Labels that do not settle
-//! are given up after a budget of `64 P` steps; so is a full assignment the certificate
+//! are given up after a budget of `64 P` steps from the last freeze, move or cancel (at
+//! most `m` cancels a freeze, "Negative cycles"); so is a full assignment the certificate
 //! does not prove within `16 P` steps ([`CLAIM_PERIODS`]). The robots claim their rounded
 //! columns again, and the finish waits `64 P` steps before it freezes again. Every
 //! transition happens at a step every robot knows, from what every robot holds.
@@ -120,14 +121,17 @@
 //! cycles whole (those no smaller finder touched), and the owners on each move round it
 //! at once, each to the task its tag names. The claims' cost falls by more than `ε` a
 //! cycle, so cycles are cancelled finitely often; the labels start again (those whose
-//! tags lead off the cycles to an end are kept: upper bounds, as after a move). Without
-//! a whole cycle (only ones of cost about 0) the finish gives up, and freezes again after
-//! `P` steps (the claims had tasks unclaimed: the certificate lost nothing while it
-//! rested).
+//! tags lead off the cycles to an end are kept: upper bounds, as after a move). At most
+//! `m` cancels follow one freeze (a cancel by a little more than `ε` where costs tie
+//! makes little progress, and a faulty neighbour could offer cycles for ever: the
+//! potentials stay lent meanwhile). Without a whole cycle, or past the `m` cancels, the
+//! finish gives up: with tasks unclaimed it may freeze again after `P` steps (the
+//! certificate lost nothing while it rested), else after `64 P`.
 //!
 //! Claims of every task are frozen too, once [`FULL_PERIODS`] settled snapshots in a
-//! row claimed every task and the certificate proved none (it proves an optimal one
-//! sooner than the labels would; a negative cycle keeps its potentials falling). No task
+//! row claimed every task (the certificate proves an optimal one, mostly within that
+//! time and sooner than labels found anew; a negative cycle keeps its potentials falling
+//! for ever). No task
 //! is unclaimed, so the labels are *rooted*: every label starts at 0 (a path from a
 //! virtual task one move of cost 0 from every task) and only falls. Negative cycles are
 //! cancelled as above, and labels that settle price the claims: every owner's claim is
@@ -190,6 +194,11 @@ pub const fn words(robots: usize, tasks: usize) -> usize {
 const fn entry_max(robots: usize, tasks: usize) -> Option<usize> {
     if robots != tasks || words(robots, tasks) == 0 {
         return None;
+    }
+    // An offered cycle's codes (module docs, "Negative cycles") reach `robots · (tasks + 1)`.
+    match robots.checked_mul(tasks + 1) {
+        Some(max) if Packing::fits(max) => {}
+        _ => return None,
     }
     Some(robots * tasks)
 }
@@ -267,7 +276,8 @@ pub struct Finish {
     changed: bool,
     /// A move, a tag or the bound changed since the labels were last computed from them.
     dirty: bool,
-    /// It moved along settled labels this step to a full assignment.
+    /// It moved along settled labels this step to a full assignment, or its rooted labels
+    /// settled this step.
     moved: bool,
     /// The robot is on one of the last paths traced.
     entered: bool,
@@ -280,6 +290,10 @@ pub struct Finish {
     paths: u64,
     /// Negative cycles cancelled since the costs were set.
     cycles: u64,
+    /// Cancels since the claims were frozen: at most `m` (a cancel by more than `ε` that
+    /// makes no real progress, or a faulty neighbour's offers, would lend the potentials
+    /// for ever).
+    cancels: usize,
     // Scratch of the tracing.
     used: Vec<bool>,
     /// Per task whether its label is kept after a move, and the tasks of one walk.
@@ -339,6 +353,7 @@ impl Finish {
             frozen: vec![0; len],
             paths: 0,
             cycles: 0,
+            cancels: 0,
             used: vec![false; len],
             keep: vec![0; len],
             walk: Vec::with_capacity(len + 1),
@@ -442,7 +457,7 @@ impl Finish {
     /// Merges a neighbour's `place` (the potentials' place of its message) and section,
     /// only while labelling: its moves (sent in the labels' place) and tags, each taken
     /// where it lowers the label as this robot's labels have it, or once the labels settled
-    /// the entries sent in the labels' place.
+    /// the entries sent in the labels' place; while cancelling, the cycles it offered.
     pub fn merge(&mut self, place: &[f64], theirs: &[f64]) {
         let settled = match self.phase {
             Phase::Labelling { settled, .. } => settled,
@@ -502,7 +517,9 @@ impl Finish {
     /// The task the robot claims this step: its `rounded` one (none: a relay) unless the
     /// finish moved its claim. While labelling an owner relaxes its frozen task's label
     /// with its (centred) `costs` on its `allowed` tasks; once the labels settled an excess
-    /// claimer names its entry, and `D` steps later the robots move.
+    /// claimer names its entry, and `D` steps later the robots move (rooted labels: the
+    /// robots claim their frozen tasks at once). At an alarm the robots offer their
+    /// negative cycles, and `D` steps later the owners on them move round them.
     pub fn claim(
         &mut self,
         step: u64,
@@ -549,7 +566,11 @@ impl Finish {
                 if step > since && alarmed >> (diameter - 1) & 1 == 1 {
                     // Some robot found a negative cycle: the labels would fall forever.
                     // The robots that hold one offer it, and the owners move round it.
-                    self.offer_cycles(step, task);
+                    if self.cancels < self.tasks {
+                        self.offer_cycles(step, task);
+                    } else {
+                        self.give_up(step, LABEL_PERIODS);
+                    }
                     return rounded;
                 }
                 if step > since && heard >> (diameter - 1) & 1 == 1 && self.rooted {
@@ -643,12 +664,12 @@ impl Finish {
 
     /// `D` steps after the alarm every robot holds the same offered cycles: the owners on
     /// each whole one (disjoint: each task holds one code) move round it, each to the task
-    /// its tag names (the frozen claims' cost falls by more than `ε` a cycle, so cycles are
-    /// cancelled finitely often), and the labels start again, keeping those whose tags lead
-    /// to an unclaimed task (a rooted one: to a task without a tag) over tasks no cycle
-    /// touched (their owners and costs are the same: upper bounds). Without a whole cycle
-    /// (only ones of cost about 0 were found) the finish gives up: the claims have tasks
-    /// unclaimed, so the certificate loses nothing while it rests.
+    /// its tag names (the frozen claims' cost falls by more than `ε` a cycle), and the
+    /// labels start again, keeping those whose tags lead to an unclaimed task (a rooted
+    /// one: to a task without a tag) over tasks no cycle touched (their owners and costs
+    /// are the same: upper bounds). Without a whole cycle (the tags may have left the cycles
+    /// found by the step of the offers) the finish gives up: with tasks unclaimed for `P` steps (the
+    /// certificate loses nothing while it rests), rooted for `64 P`.
     fn cancel(&mut self, step: u64, task: Option<usize>) {
         let span = self.tasks as u64 + 1;
         let mut claim = task;
@@ -700,6 +721,7 @@ impl Finish {
             return self.give_up(step, if self.rooted { LABEL_PERIODS } else { 1 });
         }
         self.cycles += cancelled;
+        self.cancels += 1;
         self.forget_base();
         self.keep_untouched_labels();
         self.phase = Phase::Labelling {
@@ -758,7 +780,7 @@ impl Finish {
         let mut at = self.tags[s] as usize - 1;
         for _ in 0..self.tasks {
             if at == s {
-                self.cycle = true;
+                self.cycle |= self.cycle_cost(s) < -self.epsilon;
                 break;
             }
             if self.frozen[at] == 0 || self.tags[at] == 0 {
@@ -769,9 +791,10 @@ impl Finish {
     }
 
     /// Computes every label from the moves and tags (the labels of a path: an unclaimed
-    /// task 0, a claimed one without a tag unreached): a label that falls falls at every
-    /// robot at once with the labels along its path, where a Bellman–Ford passes it on one
-    /// owner a flood. Labels on a cycle of tags (a negative cycle: the alarm gives up) stay.
+    /// task 0, a claimed one without a tag unreached, or rooted 0): a label that falls
+    /// falls at every robot at once with the labels along its path, where a Bellman–Ford
+    /// passes it on one owner a flood. Labels on a cycle of tags stay (one that costs less
+    /// than `−ε` raises the alarm).
     fn derive(&mut self) {
         if !std::mem::take(&mut self.dirty) {
             return;
@@ -794,7 +817,7 @@ impl Finish {
                 at = self.tags[at] as usize - 1;
             }
             let cycle = self.keep[at] == WALKING;
-            self.cycle |= cycle;
+            self.cycle |= cycle && self.cycle_cost(at) < -self.epsilon;
             for k in (0..self.walk.len()).rev() {
                 let x = self.walk[k];
                 self.keep[x] = KNOWN;
@@ -985,11 +1008,13 @@ impl Finish {
         rounded
     }
 
-    /// After a move that left tasks unclaimed (or claims frozen anew, [`Finish::freeze`]):
-    /// keeps every label whose path (its tags) still leads to an unclaimed task over tasks
-    /// no kept path touched, marked `used` (its owners and their costs are the same, so it
+    /// After a move that left tasks unclaimed (or claims frozen anew, [`Finish::freeze`], or
+    /// cycles cancelled): keeps every label whose path (its tags) still leads to an
+    /// unclaimed task (rooted: to a task without a tag) over tasks no kept path or cycle
+    /// touched, marked `used` (its owners and their costs are the same, so it
     /// is at least the cost of a path there is: an upper bound, from which the relaxations
-    /// fall to the new labels as from unreached), and makes the others unreached. After a
+    /// fall to the new labels as from unreached), and makes the others unreached (rooted:
+    /// 0, a root again). After a
     /// move every robot held the same settled tags and traced the same paths, so all keep
     /// the same labels; the labels computed anew are those the move changed. A `used`
     /// task is never an end: claims frozen anew may claim a task `frozen` has unclaimed.
@@ -1093,7 +1118,8 @@ impl Finish {
     }
 
     /// The settled labels when the robots moved along them this step to a full assignment
-    /// (every task reached): prices under which every robot's new claim is its cheapest
+    /// (every task reached), or rooted labels settled this step on claims of every task:
+    /// prices under which every robot's new claim is its cheapest
     /// task within `ε` (module docs), so the certificate starts from them instead of
     /// finding its potentials again.
     pub fn prices(&self) -> Option<&[f64]> {
@@ -1112,8 +1138,9 @@ impl Finish {
     /// After the snapshot advanced at `step`: gives up what ran out of its budget, and
     /// freezes the claims of a settling snapshot that has unclaimed tasks (idle: no fewer
     /// than the last snapshot's; while labelling: fewer than the frozen claims; after a
-    /// move to a full assignment: a snapshot started after it). Every robot does the same
-    /// at the same step.
+    /// move to a full assignment: a snapshot started after it), or, idle, the claims of
+    /// every task that [`FULL_PERIODS`] settling snapshots in a row held. Every robot does
+    /// the same at the same step.
     pub fn observe(&mut self, step: u64, snapshot: &Snapshot) {
         if self.diameter.is_none() {
             return;
@@ -1156,7 +1183,8 @@ impl Finish {
     }
 
     /// Freezes `claims` (per task its smallest claimer's code, 0: none) at `step`, the
-    /// robot claiming `task` in them: labels 0 at unclaimed tasks, unreached elsewhere.
+    /// robot claiming `task` in them: labels 0 at unclaimed tasks, unreached elsewhere (claims
+    /// of every task: rooted, every label 0).
     /// Claims frozen in place of claims still labelling keep every label whose tags lead,
     /// over tasks whose owner is the same in both, to a task unclaimed in both: each hop
     /// costs what it cost, so the label is at least the cost of a path there is (an upper
@@ -1182,6 +1210,7 @@ impl Finish {
             }
         }
         self.frozen.copy_from_slice(claims);
+        self.cancels = 0;
         self.owner = task.is_some_and(|s| claims[s] == self.index as u64 + 1);
         self.phase = Phase::Labelling {
             since: step,
@@ -1192,7 +1221,7 @@ impl Finish {
 
     /// Writes its section of the message (zeros unless labelling) and, while labelling, the
     /// potentials' place (`labels`): the moves, or once the labels settled the entries
-    /// (codes `e·m + t + 1`, 0: none).
+    /// (codes `e·m + t + 1`, 0: none); while cancelling, the offered cycles' codes.
     pub fn write(&self, labels: &mut [f64], out: &mut [f64]) {
         let settled = match self.phase {
             Phase::Labelling { settled, .. } => settled,

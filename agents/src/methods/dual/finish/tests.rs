@@ -107,6 +107,11 @@ fn run_refrozen(
         if let Some((_, then)) = refreeze.filter(|&(at, _)| at == step) {
             tasks = then;
         }
+        // Every robot is in the same phase with the same frozen claims after every step.
+        for robot in &robots[1..] {
+            assert_eq!(robot.labelling(), robots[0].labelling(), "step {step}");
+            assert_eq!(robot.frozen, robots[0].frozen, "step {step}");
+        }
         trace.push(round);
         paths.push(robots[0].paths());
         crowded += usize::from(two_excess_on_one_task(&robots, step));
@@ -521,6 +526,13 @@ fn any_frozen_claims_reach_the_optimum() {
         }
         let (trace, robots) = run(&costs, &tasks, 800);
         moved_to_the_optimum(&trace, &costs, trial);
+        // They claim what the finish moved them to (rooted: what its labels priced).
+        assert!(
+            robots
+                .iter()
+                .all(|r| matches!(r.phase, Phase::Claiming { .. })),
+            "trial {trial}"
+        );
         let cycles = robots[0].cycles();
         assert!(robots.iter().all(|r| r.cycles() == cycles), "trial {trial}");
         trials[full] += 1;
@@ -535,7 +547,7 @@ fn any_frozen_claims_reach_the_optimum() {
 /// Labels that fall with no robot noticing are given up at the budget; the robots claim
 /// their rounded tasks again.
 #[test]
-fn labels_that_never_settle_are_given_up_at_the_budget() {
+fn a_freeze_is_given_up_at_its_budget() {
     let costs = [[0.0, 5.0, 9.0], [5.0, 0.0, 9.0], [9.0, 9.0, 9.0]];
     let snapshot = Snapshot::new(0, 3, 3, AssignmentCase::One, 2, 1e-12);
     let claims = [2, 1, 0];
@@ -759,4 +771,74 @@ fn moves_beyond_an_f64_reach_nothing() {
     );
     assert_eq!(robot.labels[1], -f64::MAX);
     assert_eq!(robot.labels[2..], [UNREACHED, UNREACHED]);
+}
+
+/// A faulty neighbour that raises the alarm at every step and offers a made-up cycle each
+/// time has owners moved round it at most `m` times a freeze; then the finish gives up
+/// (the certificate's potentials are not lent for ever).
+#[test]
+fn a_faulty_neighbour_has_at_most_m_cycles_cancelled_a_freeze() {
+    let m = 3;
+    let mut robot = Finish::new(0, m, m, AssignmentCase::One, 2, 1e-12);
+    let (costs, allowed) = ([0.0, 1.0, 2.0], [true; 3]);
+    // Claims of every task: rooted labels, no negative cycle.
+    robot.freeze(0, &[1, 2, 3], Some(0));
+    let mut section = vec![0.0; words(m, m)];
+    let last = section.len() - 1;
+    (section[last - 1], section[last]) = (((1u64 << WINDOW_BITS) - 1) as f64, UNREACHED);
+    // Tasks 1 and 2 swapped, offered by robot 0: codes 0·(m + 1) + tag.
+    let offer = [0.0, 3.0, 2.0];
+    let given_up = (1..200).find(|&step| {
+        robot.begin();
+        let cancelling = matches!(robot.phase, Phase::Cancelling { .. });
+        robot.merge(if cancelling { &offer } else { &[0.0; 3] }, &section);
+        robot.claim(step, Some(0), &costs, &allowed);
+        !robot.labelling()
+    });
+    assert!(given_up.is_some(), "the finish never gave up");
+    assert_eq!(robot.cycles(), m as u64);
+    assert_eq!(robot.frozen, [1, 3, 2], "swapped three times");
+}
+
+/// Offered codes that name no finder's tag are skipped: fractions, multiples of `m + 1`
+/// (tag 0), codes from `robots · (m + 1)` on, negative and non-finite values.
+#[test]
+fn codes_that_name_no_tag_are_not_offered_cycles() {
+    let m = 3;
+    let mut robot = Finish::new(0, m, m, AssignmentCase::One, 2, 1e-12);
+    robot.phase = Phase::Cancelling { at: 0, task: None };
+    for bad in [
+        2.5,
+        4.0,
+        12.0,
+        13.0,
+        -1.0,
+        f64::MAX,
+        f64::NAN,
+        f64::INFINITY,
+    ] {
+        robot.merge_cycles(&[bad, 0.0, 0.0]);
+        assert_eq!(robot.entries[0], 0, "{bad}");
+    }
+    // The smallest valid code stays: finder 2's tag 3, then finder 0's tag 2.
+    robot.merge_cycles(&[11.0, 0.0, 0.0]);
+    robot.merge_cycles(&[2.0, 0.0, 0.0]);
+    robot.merge_cycles(&[7.0, 0.0, 0.0]);
+    assert_eq!(robot.entries[0], 2);
+}
+
+/// A cycle of tags whose moves cost about nothing in all raises no alarm (nothing to
+/// cancel: its labels stay); one that costs less than `−ε` does.
+#[test]
+fn only_a_negative_cycle_of_tags_raises_the_alarm() {
+    let m = 3;
+    let mut robot = Finish::new(0, m, m, AssignmentCase::One, 2, 1e-12);
+    robot.freeze(0, &[1, 2, 3], Some(0));
+    for (moves, negative) in [([-1.0, 1.0, 0.0], false), ([-1.0, 0.5, 0.0], true)] {
+        robot.tags = vec![2, 1, 0];
+        robot.moves = moves.to_vec();
+        (robot.cycle, robot.dirty) = (false, true);
+        robot.derive();
+        assert_eq!(robot.cycle, negative, "{moves:?}");
+    }
 }
