@@ -131,14 +131,13 @@
 //! Claims of every task are frozen too, once [`FULL_PERIODS`] settled snapshots in a
 //! row claimed every task (the certificate proves an optimal one, mostly within that
 //! time and sooner than labels found anew; a negative cycle keeps its potentials falling
-//! for ever). No task
-//! is unclaimed, so the labels are *rooted*: every label starts at 0 (a path from a
-//! virtual task one move of cost 0 from every task) and only falls. Negative cycles are
-//! cancelled as above, and labels that settle price the claims: every owner's claim is
-//! its cheapest under them within `ε`, so the robots claim their frozen tasks and the
-//! certificate starts from the labels ([`Finish::prices`]). A standing team's warm
-//! episodes run the finish so (50 robots, `random:0.1`, drifting distances: median 341 →
-//! 66 rounds; a cold episode 226 → 136, bench/README.md).
+//! for ever). No task is unclaimed, so the labels are *rooted*: every label starts at 0
+//! (a path from a virtual task one move of cost 0 from every task) and only falls.
+//! Negative cycles are cancelled as above, and labels that settle price the claims:
+//! every owner's claim is its cheapest under them within `ε`, so the robots claim their
+//! frozen tasks and the certificate starts from the labels ([`Finish::prices`]). A
+//! standing team's warm episodes run the finish so (50 robots, `random:0.1`, drifting
+//! distances: median 341 → 66 rounds; a cold episode 226 → 136, bench/README.md).
 //!
 //! # Layout of the payload
 //! The moves of the tasks `0 … m−1` (0: none) travel in the certificate's potentials'
