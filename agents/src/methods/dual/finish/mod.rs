@@ -572,13 +572,13 @@ impl Finish {
                     }
                     return rounded;
                 }
-                if step > since && heard >> (diameter - 1) & 1 == 1 && self.rooted {
-                    // No negative cycle is left: the labels price the frozen claims.
-                    self.phase = Phase::Claiming { at: step, task };
-                    self.moved = true;
-                    return task;
-                }
                 if step > since && heard >> (diameter - 1) & 1 == 1 {
+                    if self.rooted {
+                        // No negative cycle is left: the labels price the frozen claims.
+                        self.phase = Phase::Claiming { at: step, task };
+                        self.moved = true;
+                        return task;
+                    }
                     self.cap();
                     if let Some(s) = task.filter(|_| !self.owner) {
                         self.enter(s, costs, allowed);
