@@ -151,9 +151,16 @@ fn every_injected_fault_is_reported_with_the_failed_agent() {
             ],
         ),
     ];
+    // Zenoh's messages are coded against the sender's last one: a bad value, round or length
+    // is still refused by name, never decoded into a wrong payload.
+    let zenoh = cases[3..]
+        .iter()
+        .map(|case| (case, "zenoh"))
+        .filter(|_| cfg!(feature = "zenoh"));
     for ((kind, needles), transport) in cases
         .iter()
         .flat_map(|case| ["ipc", "shm"].map(|t| (case, t)))
+        .chain(zenoh)
     {
         let args = "--robots 8 --tasks 8 --topology ring --stop max-iters --max-iters 1000 --round-timeout 1";
         let mut launcher = solve_on(transport, args, Some(&format!("3:10:{kind}")));

@@ -9,7 +9,8 @@
 //! Two threads, each with its own iceoryx2 node (ports stay in the thread that made them):
 //! * **out**: sleeps on the bridge's wake-up service, which local agents with remote
 //!   neighbours notify after every publish; reads their samples in place and puts each once
-//!   on the agent's Zenoh key (`<run>/round/<i>`), header words + payload;
+//!   on the agent's Zenoh key (`<run>/round/<i>`), coded against the agent's last message
+//!   as the `zenoh` transport's agents code theirs (`admm_ta_transport::zenoh_net::wire`);
 //! * **in**: receives the remote agents' messages from Zenoh (through a channel fed by
 //!   Zenoh's callbacks) and publishes each into the remote agent's local service, once all
 //!   of the agent's local neighbours subscribe (so round 0 is not lost to a late starter).
@@ -31,7 +32,7 @@ use crate::process::scenario::Scenario;
 use crate::team::membership::{Membership, member_scenario};
 use crate::team::team_file::{HostEntry, Team};
 use admm_ta_transport::board::{Board, arrivals_target};
-use admm_ta_transport::exchange::header::{RoundHeader, words_as_bytes};
+use admm_ta_transport::exchange::header::RoundHeader;
 use admm_ta_transport::ipc::nodes::run_config;
 use admm_ta_transport::ipc::services::{
     RoundService, ServiceError, Svc, open_bridge_wake_service, open_round_service,
@@ -39,6 +40,7 @@ use admm_ta_transport::ipc::services::{
 use admm_ta_transport::zenoh_net::links::ZenohLinks;
 use admm_ta_transport::zenoh_net::router::HostRouter;
 use admm_ta_transport::zenoh_net::session::{announce_failure, missing_hosts, watch_failures};
+use admm_ta_transport::zenoh_net::wire::{self, WireCoder, WireError};
 use crossbeam::channel::{Receiver, RecvTimeoutError, unbounded};
 use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
@@ -83,11 +85,11 @@ pub enum BridgeError {
         "bridge: the local neighbours {local:?} of agent {agent} did not all start within the start-up deadline"
     )]
     LocalNeighbours { agent: usize, local: Vec<usize> },
-    #[error("bridge: agent {agent} sent a message of {got} bytes, expected {expected}")]
-    WrongBytes {
+    #[error("bridge: agent {agent}'s message did not decode")]
+    Undecodable {
         agent: usize,
-        got: usize,
-        expected: usize,
+        #[source]
+        what: WireError,
     },
 }
 
@@ -371,15 +373,23 @@ fn board(scenario: &Scenario) -> Result<Board, BridgeError> {
 /// An iceoryx2 subscriber to a local agent's round messages.
 type RoundSubscriber = iceoryx2::port::subscriber::Subscriber<Svc, [f64], RoundHeader>;
 
-/// A local agent's subscribers (one per remote neighbour) and its Zenoh publisher.
-type Sender = (Vec<RoundSubscriber>, zenoh::pubsub::Publisher<'static>);
+/// A local agent's subscribers (one per remote neighbour), its Zenoh publisher and the
+/// coder of its messages.
+type Sender = (
+    Vec<RoundSubscriber>,
+    zenoh::pubsub::Publisher<'static>,
+    WireCoder,
+);
 
 /// A remote agent's round service, the publisher standing in for it, its local neighbours.
-type StandIn = (
-    RoundService<Svc>,
-    iceoryx2::port::publisher::Publisher<Svc, [f64], RoundHeader>,
-    Vec<usize>,
-);
+type StandIn = (RoundService<Svc>, StandInPublisher, Vec<usize>);
+
+/// The publisher that stands in for a remote agent on its local service.
+type StandInPublisher = iceoryx2::port::publisher::Publisher<Svc, [f64], RoundHeader>;
+
+/// A remote agent's last message (header words and payload) and its round, to decode the
+/// next one against.
+type Held = (Vec<f64>, Option<u64>);
 
 /// What the two forwarding threads own.
 #[derive(Clone)]
@@ -422,12 +432,12 @@ impl Forwarder {
             .listener_builder()
             .create()
             .map_err(|e| call("cannot create its listener".into(), format!("{e:?}")))?;
-        let senders = self.senders(&node)?;
+        let mut senders = self.senders(&node)?;
         let mut announced_local = false;
         loop {
             let stopping = self.shared.stop.load(Ordering::Acquire);
-            for (subscribers, publisher) in &senders {
-                self.forward_agent(subscribers, publisher)?;
+            for (subscribers, publisher, coder) in &mut senders {
+                self.forward_agent(subscribers, publisher, coder)?;
             }
             if !announced_local && let Some(failed) = board.failed() {
                 // A local failure (or one we marked from an announcement: harmless echo).
@@ -507,7 +517,8 @@ impl Forwarder {
                         e.to_string(),
                     )
                 })?;
-            senders.push((subscribers, publisher));
+            let words = RoundHeader::WORDS + self.layout.payload_len;
+            senders.push((subscribers, publisher, WireCoder::new(words, true)));
         }
         Ok(senders)
     }
@@ -520,6 +531,7 @@ impl Forwarder {
         &self,
         subscribers: &[RoundSubscriber],
         publisher: &zenoh::pubsub::Publisher<'_>,
+        coder: &mut WireCoder,
     ) -> Result<(), BridgeError> {
         let (first, spares) = subscribers.split_first().expect("one per remote neighbour");
         for spare in spares {
@@ -529,7 +541,7 @@ impl Forwarder {
                 .is_some()
             {}
         }
-        let mut header_words = [0.0; RoundHeader::WORDS];
+        let mut message = vec![0.0; RoundHeader::WORDS + self.layout.payload_len];
         while let Some(sample) = first
             .receive()
             .map_err(|e| call("receive failed".into(), format!("{e:?}")))?
@@ -542,14 +554,12 @@ impl Forwarder {
                     expected: self.layout.payload_len,
                 });
             }
-            // Straight from the shared-memory sample into the buffer Zenoh owns.
-            sample.user_header().write_words(&mut header_words);
-            let message_bytes = 8 * (RoundHeader::WORDS + self.layout.payload_len);
-            let mut message = Vec::with_capacity(message_bytes);
-            message.extend_from_slice(words_as_bytes(&header_words));
-            message.extend_from_slice(words_as_bytes(payload));
+            // From the shared-memory sample, coded into the buffer Zenoh owns.
+            let (header, rest) = message.split_at_mut(RoundHeader::WORDS);
+            sample.user_header().write_words(header);
+            rest.copy_from_slice(payload);
             publisher
-                .put(message)
+                .put(coder.encode(&message))
                 .wait()
                 .map_err(|e| call("forwarding failed".into(), e.to_string()))?;
             self.shared.forwarded_out.fetch_add(1, Ordering::Relaxed);
@@ -566,6 +576,11 @@ impl Forwarder {
         let node = node(&self.scenario, "bridge-in")?;
         let board = board(&self.scenario)?;
         let publishers = self.stand_ins(&node)?;
+        let words = RoundHeader::WORDS + self.layout.payload_len;
+        let mut held: HashMap<usize, Held> = publishers
+            .keys()
+            .map(|&r| (r, (vec![0.0; words], None)))
+            .collect();
         let mut pending: VecDeque<(usize, ZBytes)> = VecDeque::new();
         let mut tokens: HashMap<usize, zenoh::liveliness::LivelinessToken> = HashMap::new();
         let mut marked = false;
@@ -597,7 +612,8 @@ impl Forwarder {
                     kept.push_back((r, message));
                     continue;
                 }
-                self.publish_remote(&board, r, &message, publisher, local)?;
+                let held = held.get_mut(&r).expect("one per stand-in");
+                self.publish_remote(&board, r, &message, held, (publisher, local))?;
             }
             pending = kept;
             self.tell_presence(&board, &mut tokens)?;
@@ -631,37 +647,27 @@ impl Forwarder {
         Ok(publishers)
     }
 
-    /// Publishes remote agent `r`'s `message` on its local service, counts its arrival for
+    /// Publishes remote agent `r`'s `message`, decoded against its last one (`held`), on its
+    /// local service (through the `publisher` standing in for it), counts its arrival for
     /// its `local` neighbours on the board and wakes them, as a local neighbour would.
     fn publish_remote(
         &self,
         board: &Board,
         r: usize,
         message: &ZBytes,
-        publisher: &iceoryx2::port::publisher::Publisher<Svc, [f64], RoundHeader>,
-        local: &[usize],
+        held: &mut Held,
+        (publisher, local): (&StandInPublisher, &[usize]),
     ) -> Result<(), BridgeError> {
         let layout = &self.layout;
-        let words = RoundHeader::WORDS + layout.payload_len;
-        let bytes = message.to_bytes();
-        if bytes.len() != words * 8 {
-            return Err(BridgeError::WrongBytes {
-                agent: r,
-                got: bytes.len(),
-                expected: words * 8,
-            });
-        }
-        let word =
-            |k: usize| f64::from_ne_bytes(bytes[8 * k..8 * k + 8].try_into().expect("8 bytes"));
-        let mut header_words = [0.0; RoundHeader::WORDS];
-        for (k, w) in header_words.iter_mut().enumerate() {
-            *w = word(k);
-        }
-        let header = RoundHeader::from_words(&header_words);
+        let (last, last_round) = held;
+        let header = wire::decode(&message.to_bytes(), last, *last_round)
+            .map_err(|what| BridgeError::Undecodable { agent: r, what })?;
+        *last_round = Some(header.round);
+        let payload = &last[RoundHeader::WORDS..];
         let mut sample = publisher
             .loan_slice_uninit(layout.payload_len)
             .map_err(|e| call("cannot loan a sample".into(), format!("{e:?}")))?
-            .write_from_fn(|k| word(RoundHeader::WORDS + k));
+            .write_from_slice(payload);
         *sample.user_header_mut() = header;
         sample
             .send()

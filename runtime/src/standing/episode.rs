@@ -358,10 +358,15 @@ impl Episodes {
         joiners: &[usize],
     ) -> Result<Outcome, EpisodeError> {
         let first = self.rounds.as_ref().map(RoundLoop::round);
+        let coded_before = exchange.sent_bytes();
         let mut outcome = self.agree_and_solve(exchange, row, part, joiners)?;
-        // One message a round (the roster's first round, if it was this episode's, too).
+        // One message a round (the roster's first round, if it was this episode's, too), as
+        // the transport coded them, or as they are.
         let rounds = self.round() + 1 - first.map_or(0, |r| r + 1);
-        outcome.sent_bytes = rounds * (self.message.len() * size_of::<f64>()) as u64;
+        outcome.sent_bytes = match (coded_before, exchange.sent_bytes()) {
+            (Some(before), Some(after)) => after - before,
+            _ => rounds * (self.message.len() * size_of::<f64>()) as u64,
+        };
         Ok(outcome)
     }
 

@@ -88,6 +88,52 @@ fn stacked_rows_optimal(method: &str, n: usize, m: usize) {
     assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
 }
 
+/// Across two hosts (Zenoh between every robot, or between the hosts' bridges) a robot's
+/// messages are coded against its last: every episode is optimal as on one machine, and
+/// the bytes a robot sent, counted as they went, are a fraction of its messages' values
+/// (what `sent_bytes` counts over ipc), the round headers included.
+#[cfg(feature = "zenoh")]
+#[test]
+fn a_dual_team_across_two_hosts_sends_its_messages_coded() {
+    for transport in ["zenoh", "mixed"] {
+        let (n, m) = (8, 8);
+        let dir = tempfile::tempdir().unwrap();
+        let run = format!("pdc{}-{}", &transport[..2], std::process::id());
+        let hosts = super::elastic::two_hosts(transport, n);
+        let extra = format!("topology = \"ring\"\nseed = 5\nmethod = \"dual\"\n{hosts}");
+        let team = team_file(dir.path(), &run, n, m, &extra);
+        let mut hosts = super::elastic::start_hosts(&team);
+        let mut team_of = start_team(&team, n);
+        let mut rng = SeededRng::new(7);
+        let message = 8 * (2 * m + 1 + 4).max(2 * n) as u64;
+        let mut rows = distances(&mut rng, n, m);
+        for k in 0..4 {
+            let what = format!("{transport} episode {k}");
+            let answers = episode(&mut team_of, &rows);
+            assert_optimal(&answers, &rows, false, &what);
+            let rounds = answers[0]["rounds"].as_u64().unwrap();
+            let agreement = answers[0]["agreement_rounds"].as_u64().unwrap();
+            let raw = (rounds + agreement) * message;
+            let sent = answers[0]["sent_bytes"].as_u64().unwrap();
+            if transport == "zenoh" {
+                assert!(sent > 0 && 2 * sent < raw, "{what}: {sent} of {raw} bytes");
+            } else {
+                // Mixed: the robots' own messages go through shared memory, as they are.
+                assert_eq!(sent, raw, "{what}");
+            }
+            for v in rows.iter_mut().flatten().flatten() {
+                *v += 0.3 * rng.uniform();
+            }
+        }
+        finish_all(team_of);
+        for host in &mut hosts {
+            let status = common::wait_with_deadline(host, Duration::from_secs(60));
+            assert!(status.success(), "{transport} host: {status}");
+        }
+        assert!(shm_of(&run).is_empty(), "{:?}", shm_of(&run));
+    }
+}
+
 /// Drifting distance costs for `episodes` episodes (a small move each, redrawn every tenth:
 /// those start cold): every episode certified optimal; returns the rounds of the cold and of
 /// the warm episodes.

@@ -187,7 +187,7 @@ fn assert_optimal_among(e: &Episode, what: &str) -> Value {
 }
 
 /// The hosts of a team across two hosts on loopback, and the team file's text for them.
-fn two_hosts(transport: &str, n: usize) -> String {
+pub(super) fn two_hosts(transport: &str, n: usize) -> String {
     let mut text = format!("transport = \"{transport}\"\n");
     let half = n / 2;
     for (name, agents) in [
@@ -202,7 +202,7 @@ fn two_hosts(transport: &str, n: usize) -> String {
     text
 }
 
-fn start_hosts(team: &Path) -> Vec<Child> {
+pub(super) fn start_hosts(team: &Path) -> Vec<Child> {
     ["alpha", "beta"]
         .iter()
         .map(|name| {

@@ -18,6 +18,7 @@
 //! holding all neighbours' round `k`, so a neighbour is never more than one round ahead and
 //! the message of round `k−1` is no longer read by anybody when round `k+1` replaces it.
 
+pub mod codec;
 pub mod header;
 pub mod round_loop;
 
@@ -88,6 +89,16 @@ pub enum ExchangeError {
         round: u64,
         what: admm_ta_agents::agent::PayloadError,
     },
+    /// A neighbour's coded message did not decode ([`codec`]): refused, never used.
+    #[error(
+        "agent {agent}: the round-{round} message of neighbour {neighbour} did not decode: {what}"
+    )]
+    Undecodable {
+        agent: usize,
+        neighbour: usize,
+        round: u64,
+        what: codec::CodecError,
+    },
     /// The team was asked to stop by a termination signal (to this process, to the launcher
     /// or host, or to another agent of the team): nobody failed.
     #[error("agent {agent}: stopped by {}", crate::signals::name(*signal))]
@@ -119,6 +130,7 @@ impl ExchangeError {
             | Self::Aborted { agent }
             | Self::Stopped { agent, .. }
             | Self::BadPayload { agent, .. }
+            | Self::Undecodable { agent, .. }
             | Self::PeerFailed { agent, .. }
             | Self::OtherTeam { agent, .. } => *agent,
         }
@@ -167,4 +179,9 @@ pub trait Exchange {
     ) -> Result<(), ExchangeError>;
     /// Global barrier: returns once every agent of the team has called it for `round`.
     fn global_barrier(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError>;
+    /// Bytes of round messages this end sent so far, where the transport codes them
+    /// ([`codec`]: Zenoh); `None` where every message is its header and payload as they are.
+    fn sent_bytes(&self) -> Option<u64> {
+        None
+    }
 }

@@ -1,15 +1,18 @@
 //! One agent's end of the Zenoh transport.
 //!
 //! Agent `i` publishes each round message on `<run>/round/<i>` and subscribes to its
-//! neighbours' keys. A message is the round header as [`RoundHeader::WORDS`] words followed
-//! by the payload (the layout of the `uds` transport). Zenoh delivers it on one of its
-//! threads into a per-neighbour slot chosen by the round's parity — a neighbour is never
-//! more than one round ahead, so two slots suffice and a late duplicate cannot displace a
-//! message not yet read — and wakes the agent through a condition variable. Gathering swaps
-//! the slot's buffer with the agent's own (no copy); the step then reads the neighbours'
-//! payloads from the swapped buffers exactly as over iceoryx2, and writes its own payload in
-//! place. Publishing copies the message once into the buffer Zenoh takes ownership of.
-//!
+//! neighbours' keys. A message is the round header and the payload, coded against the
+//! agent's last message in a team of hosts ([`crate::zenoh_net::wire`]: a word unchanged
+//! since the last round costs a bit), as they are on one machine. Zenoh delivers it on one
+//! of its threads into a per-neighbour slot chosen by the round's parity — a neighbour is
+//! never more than one round ahead, so two slots suffice and a late duplicate cannot
+//! displace a message not yet read — and wakes the agent through a condition variable.
+//! Gathering takes the slot's bytes and, with the lock released, decodes them into the
+//! agent's copy of the neighbour's last message, in round order (a message that does not
+//! decode against it is refused, never used); the step then reads the neighbours' payloads
+//! there exactly as over iceoryx2, and writes its own payload in place. Publishing codes
+//! the message once into the buffer Zenoh takes ownership of.
+
 //! Presence and failures, with no shared memory between hosts:
 //! * every agent holds a liveliness token `<run>/alive/<i>`, declared once every host of a
 //!   multi-host team is up (so every host sees the whole run) and after the agent's
@@ -28,7 +31,7 @@
 //! split, they would have to expose them to each other.
 
 use crate::endpoint::ConnectRequest;
-use crate::exchange::header::{RoundHeader, words_as_bytes, words_as_bytes_mut};
+use crate::exchange::header::{RoundHeader, words_as_bytes_mut};
 use crate::exchange::{Exchange, ExchangeError};
 use crate::fault::Fault;
 use crate::wait::WaitPolicy;
@@ -39,6 +42,7 @@ use crate::zenoh_net::session::{
     self, Role, alive_agents, alive_keys, announce_failure, missing_hosts, watch_failures,
     watch_stops,
 };
+use crate::zenoh_net::wire::{self, WireCoder, WireError};
 use admm_ta_agents::agent::Inbox;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
@@ -98,9 +102,13 @@ const VERDICT_WITHIN: Duration = Duration::from_secs(11);
 /// How often start-up asks which neighbours are present.
 const PRESENCE_POLL: Duration = Duration::from_millis(50);
 
-/// A received message in its parity slot.
+/// A received message in its parity slot: a raw one as its words (header and payload,
+/// swapped into place when gathered, as before coding), a delta as it came.
 struct Slot {
     words: Vec<f64>,
+    bytes: Vec<u8>,
+    /// Whether the message is a delta (in `bytes`), not raw (in `words`).
+    delta: bool,
     round: Option<u64>,
 }
 
@@ -119,6 +127,11 @@ struct Inbound {
     fault: Option<ExchangeError>,
     /// Bumped on every delivery, so that a waiter never sleeps past one.
     generation: u64,
+    /// Values of a payload (to name a message's wrong length).
+    payload_len: usize,
+    /// The last round this agent published: a neighbour is never past the next one (it
+    /// sends round `k + 1` only after it holds this agent's round `k`).
+    published: u64,
 }
 
 struct Shared {
@@ -147,8 +160,12 @@ pub struct ZenohExchange {
     neighbours: Vec<usize>,
     policy: WaitPolicy,
     shared: Arc<Shared>,
-    /// The gathered messages (header words + payload), swapped out of the slots.
+    /// The gathered messages (header words + payload), decoded from the slots.
     held: Vec<Vec<f64>>,
+    /// Per neighbour, its message of the round being gathered as it came (swapped out of
+    /// its slot), and which neighbours' came in the last look.
+    coded: Vec<Vec<u8>>,
+    taken: Vec<usize>,
     held_round: Vec<Option<u64>>,
     headers: Vec<RoundHeader>,
     /// Header words + payload of the own message.
@@ -156,6 +173,9 @@ pub struct ZenohExchange {
     /// The own last two messages as sent, by round parity, to send again (a `ZBytes` clone
     /// shares the buffer: putting it again copies nothing).
     sent: [(Option<u64>, ZBytes); 2],
+    coder: WireCoder,
+    /// Bytes of round messages put on Zenoh, resends included.
+    sent_bytes: u64,
     /// Messages sent again, and how long a gather of the first rounds waits before it
     /// sends again ([`resend_after`]).
     resent: u64,
@@ -181,43 +201,68 @@ fn transport(agent: usize, what: impl Into<String>) -> ExchangeError {
     }
 }
 
-/// Puts a received round message of neighbour `k` (agent `neighbour`) into its slot.
-fn receive(
-    inbound: &mut Inbound,
-    agent: usize,
-    k: usize,
-    neighbour: usize,
-    message_words: usize,
-    bytes: &[u8],
-) {
-    if bytes.len() != message_words * 8 || bytes.len() < RoundHeader::WORDS * 8 {
-        inbound.fault.get_or_insert(ExchangeError::WrongLength {
-            agent,
-            neighbour,
-            expected: message_words.saturating_sub(RoundHeader::WORDS),
-            got: (bytes.len() / 8).saturating_sub(RoundHeader::WORDS),
-        });
-        return;
-    }
-    let mut header_words = [0.0; RoundHeader::WORDS];
-    words_as_bytes_mut(&mut header_words).copy_from_slice(&bytes[..RoundHeader::WORDS * 8]);
-    let header = RoundHeader::from_words(&header_words);
-    if header.sender as usize != neighbour {
+/// Puts a received round message of neighbour `k` (agent `neighbour`) into its slot, as it
+/// came: it is decoded when gathered, in round order.
+fn receive(inbound: &mut Inbound, agent: usize, k: usize, neighbour: usize, bytes: &[u8]) {
+    let (round, sender) = match wire::plain(bytes) {
+        Ok(plain) => plain,
+        Err(_) => {
+            inbound.fault.get_or_insert(ExchangeError::WrongLength {
+                agent,
+                neighbour,
+                expected: inbound.payload_len,
+                got: 0,
+            });
+            return;
+        }
+    };
+    if sender as usize != neighbour {
         inbound.fault.get_or_insert(ExchangeError::WrongSender {
             agent,
             neighbour,
-            got: header.sender,
+            got: sender,
         });
         return;
     }
-    let slot = &mut inbound.slots[k][(header.round % 2) as usize];
-    // A copy sent again two rounds ago can arrive after the neighbour's newer message of the
-    // same parity (it queued behind large messages on another link): it must not replace it.
-    if slot.round.is_some_and(|r| r > header.round) {
+    if round > inbound.published.saturating_add(1) {
+        inbound.fault.get_or_insert(ExchangeError::OutOfOrder {
+            agent,
+            neighbour,
+            expected: inbound.published,
+            got: round,
+        });
         return;
     }
-    words_as_bytes_mut(&mut slot.words).copy_from_slice(bytes);
-    slot.round = Some(header.round);
+    let slot = &mut inbound.slots[k][(round % 2) as usize];
+    // A copy sent again two rounds ago can arrive after the neighbour's newer message of the
+    // same parity (it queued behind large messages on another link): it must not replace it.
+    if slot.round.is_some_and(|r| r > round) {
+        return;
+    }
+    match wire::raw_words(bytes) {
+        Some(words) if words.len() == 8 * slot.words.len() - wire::PLAIN_BYTES => {
+            let into = words_as_bytes_mut(&mut slot.words);
+            into[..wire::PLAIN_BYTES].copy_from_slice(&bytes[..wire::PLAIN_BYTES]);
+            into[wire::PLAIN_BYTES..].copy_from_slice(words);
+            slot.delta = false;
+        }
+        Some(words) => {
+            let got = (words.len() + wire::PLAIN_BYTES) / 8;
+            inbound.fault.get_or_insert(ExchangeError::WrongLength {
+                agent,
+                neighbour,
+                expected: inbound.payload_len,
+                got: got.saturating_sub(RoundHeader::WORDS),
+            });
+            return;
+        }
+        None => {
+            slot.bytes.clear();
+            slot.bytes.extend_from_slice(bytes);
+            slot.delta = true;
+        }
+    }
+    slot.round = Some(round);
 }
 
 /// Subscribes agent `i` to its neighbour `j` (its `k`-th): every message lands in `shared`.
@@ -228,14 +273,13 @@ fn subscribe_round(
     i: usize,
     k: usize,
     j: usize,
-    message_words: usize,
 ) -> zenoh::Result<Subscriber<()>> {
     let shared = Arc::clone(shared);
     session
         .declare_subscriber(links.round_key(j))
         .callback(move |sample: Sample| {
             let bytes = sample.payload().to_bytes();
-            shared.deliver(|inbound| receive(inbound, i, k, j, message_words, &bytes));
+            shared.deliver(|inbound| receive(inbound, i, k, j, &bytes));
         })
         .wait()
 }
@@ -258,14 +302,13 @@ fn subscribe(
     links: &ZenohLinks,
     shared: &Arc<Shared>,
     endpoint: &ConnectRequest,
-    message_words: usize,
 ) -> Result<Vec<Subscriber<()>>, ExchangeError> {
     let i = endpoint.index;
     let err = |what: String| transport(i, what);
     let mut subscribers = Vec::with_capacity(endpoint.neighbours.len() + 3);
     for (k, &j) in endpoint.neighbours.iter().enumerate() {
         subscribers.push(
-            subscribe_round(session, links, shared, i, k, j, message_words)
+            subscribe_round(session, links, shared, i, k, j)
                 .map_err(|e| err(format!("cannot subscribe to agent {j}: {e}")))?,
         );
     }
@@ -383,8 +426,11 @@ impl ZenohExchange {
         .map_err(|e| err(e.to_string()))?;
         let degree = endpoint.neighbours.len();
         let message_words = RoundHeader::WORDS + endpoint.payload_len;
+        let coded_bytes = wire::PLAIN_BYTES + 1 + 8 * message_words;
         let slot = || Slot {
             words: vec![0.0; message_words],
+            bytes: Vec::with_capacity(coded_bytes),
+            delta: false,
             round: None,
         };
         let shared = Arc::new(Shared {
@@ -396,10 +442,12 @@ impl ZenohExchange {
                 stopped: None,
                 fault: None,
                 generation: 0,
+                payload_len: endpoint.payload_len,
+                published: 0,
             }),
             wake: Condvar::new(),
         });
-        let subscribers = subscribe(&session, links, &shared, endpoint, message_words)?;
+        let subscribers = subscribe(&session, links, &shared, endpoint)?;
         let publisher = session
             .declare_publisher(links.round_key(i))
             .congestion_control(CongestionControl::Block)
@@ -424,10 +472,17 @@ impl ZenohExchange {
             policy: endpoint.policy,
             shared,
             held: (0..degree).map(|_| vec![0.0; message_words]).collect(),
+            coded: (0..degree)
+                .map(|_| Vec::with_capacity(coded_bytes))
+                .collect(),
+            taken: Vec::with_capacity(degree),
             held_round: vec![None; degree],
             headers: vec![RoundHeader::default(); degree],
             outbox: vec![0.0; message_words],
             sent: [(None, ZBytes::new()), (None, ZBytes::new())],
+            // Coded where the messages cross a network: a team of hosts.
+            coder: WireCoder::new(message_words, !links.hosts.is_empty()),
+            sent_bytes: 0,
             resent: 0,
             resend_after: resend_after(&endpoint.degrees, message_words),
             gathered: 0,
@@ -577,6 +632,7 @@ impl ZenohExchange {
     /// all are held. Fails on a malformed message, an announced failure, or a neighbour that
     /// left while its message is awaited.
     fn take_arrived(&mut self, round: u64) -> Result<bool, ExchangeError> {
+        self.taken.clear();
         let mut inbound = self.shared.lock();
         self.seen = inbound.generation;
         if let Some(fault) = inbound.fault.take() {
@@ -608,10 +664,16 @@ impl ZenohExchange {
             }
             let slot = &mut inbound.slots[k][parity];
             if slot.round == Some(round) {
-                std::mem::swap(&mut slot.words, &mut self.held[k]);
                 slot.round = None;
-                self.held_round[k] = Some(round);
-                self.headers[k] = RoundHeader::from_words(&self.held[k][..RoundHeader::WORDS]);
+                if slot.delta {
+                    // Decoded once the lock is released: Zenoh's threads deliver meanwhile.
+                    std::mem::swap(&mut slot.bytes, &mut self.coded[k]);
+                    self.taken.push(k);
+                } else {
+                    std::mem::swap(&mut slot.words, &mut self.held[k]);
+                    self.headers[k] = RoundHeader::from_words(&self.held[k]);
+                    self.held_round[k] = Some(round);
+                }
                 continue;
             }
             if let Some(slot_round) = slot.round
@@ -634,7 +696,45 @@ impl ZenohExchange {
             }
             all = false;
         }
+        drop(inbound);
+        for t in 0..self.taken.len() {
+            let k = self.taken[t];
+            self.headers[k] = wire::decode(&self.coded[k], &mut self.held[k], self.held_round[k])
+                .map_err(|e| self.undecodable(k, round, e))?;
+            self.held_round[k] = Some(round);
+        }
         Ok(all)
+    }
+
+    /// The error of neighbour `k`'s round-`round` message that did not decode.
+    fn undecodable(&self, k: usize, round: u64, error: WireError) -> ExchangeError {
+        let (agent, neighbour) = (self.index, self.neighbours[k]);
+        match error {
+            WireError::Short { .. } => ExchangeError::WrongLength {
+                agent,
+                neighbour,
+                expected: self.outbox.len() - RoundHeader::WORDS,
+                got: 0,
+            },
+            WireError::WrongLength { got } => ExchangeError::WrongLength {
+                agent,
+                neighbour,
+                expected: self.outbox.len() - RoundHeader::WORDS,
+                got,
+            },
+            WireError::NotHeld { .. } => ExchangeError::OutOfOrder {
+                agent,
+                neighbour,
+                expected: self.held_round[k].map_or(0, |r| r + 1),
+                got: round,
+            },
+            WireError::Codec(what) => ExchangeError::Undecodable {
+                agent,
+                neighbour,
+                round,
+                what,
+            },
+        }
     }
 
     /// Sleeps until a delivery, `until`, or a failure-check slice.
@@ -681,9 +781,14 @@ impl ZenohExchange {
     /// Sends the header and the first `payload_len` values of the outbox.
     fn send(&mut self, header: RoundHeader, payload_len: usize) -> Result<(), ExchangeError> {
         header.write_words(&mut self.outbox[..RoundHeader::WORDS]);
-        // Zenoh takes ownership of what it sends: the one copy of the message.
-        let bytes = words_as_bytes(&self.outbox[..RoundHeader::WORDS + payload_len]).to_vec();
+        // Zenoh takes ownership of what it sends: the one copy of the message, coded.
+        let bytes = self
+            .coder
+            .encode(&self.outbox[..RoundHeader::WORDS + payload_len]);
+        self.sent_bytes += bytes.len() as u64;
         self.sent[(header.round % 2) as usize] = (Some(header.round), ZBytes::from(bytes));
+        // Before the put: a neighbour's answer to it may come at once.
+        self.shared.lock().published = header.round;
         self.put(header.round)
     }
 
@@ -702,6 +807,7 @@ impl ZenohExchange {
             if self.sent[(r % 2) as usize].0 == Some(r) {
                 self.put(r)?;
                 self.resent += 1;
+                self.sent_bytes += self.sent[(r % 2) as usize].1.len() as u64;
             }
         }
         Ok(())
@@ -722,7 +828,7 @@ impl Drop for ZenohExchange {
     }
 }
 
-/// Neighbours' payloads of the gathered round, in the swapped-out buffers.
+/// Neighbours' payloads of the gathered round, as decoded.
 struct HeldInbox<'a> {
     held: &'a [Vec<f64>],
 }
@@ -818,6 +924,10 @@ impl Exchange for ZenohExchange {
             len = fault.payload_len(len);
         }
         self.send(header, len)
+    }
+
+    fn sent_bytes(&self) -> Option<u64> {
+        Some(self.sent_bytes)
     }
 
     fn global_barrier(&mut self, _round: u64, _deadline: Instant) -> Result<(), ExchangeError> {

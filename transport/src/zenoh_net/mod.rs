@@ -14,6 +14,7 @@
 //! * [`process`] (always built): how the process orchestration runs it (the launcher's
 //!   loopback router, the agents' connection and blame, failures announced on Zenoh).
 //! * [`relay`] (always built): the rate a router relays, which bounds a team's round.
+//! * [`wire`] (always built): a round message on Zenoh, coded against the sender's last.
 //!
 //! The hosts of a multi-host team and the mixed mode's bridge (iceoryx2 within a host, Zenoh
 //! between hosts) use both transports, so they live above them, in the runtime (`admm_ta_runtime::host`).
@@ -25,6 +26,7 @@ pub mod error;
 pub mod links;
 pub mod process;
 pub mod relay;
+pub mod wire;
 
 #[cfg(feature = "zenoh")]
 pub mod exchange;
