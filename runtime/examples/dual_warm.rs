@@ -10,7 +10,9 @@
 //! takes a standing team's instead (its robots see no other row: spread 1, no structure
 //! factor; for uniform costs about `RHO_SCALE=0.333`). `HEDGE=K`: a warm episode not
 //! certified within `K` times the first (cold) episode's rounds starts again from zero
-//! (its rounds count both). `bench/dual_warm_stats.py` sums runs up over seeds.
+//! (its rounds count both). `bench/dual_warm_stats.py` sums runs up over seeds. Each
+//! episode also prints the bytes a robot sent, as Zenoh codes the messages (against the
+//! robot's last, `admm_ta_transport::exchange::codec`) and as they are.
 //! `cargo run --release -p admm-ta-runtime --example dual_warm -- ROBOTS TASKS TOPOLOGY uniform|distance EPISODES SEED [ROUNDS]`.
 mod common;
 
@@ -22,13 +24,54 @@ use admm_ta_agents::methods::Method;
 use admm_ta_agents::problem::{CaseChoice, CostMatrix, TaskAssignmentProblem};
 use admm_ta_topologies::Graph;
 use admm_ta_topologies::rng::SeededRng;
+use admm_ta_transport::exchange::codec::Coder;
 use admm_ta_transport::sim::process::LockstepSim;
 use common::Problems;
+
+/// Every robot's messages as Zenoh codes them: the coders, and the bytes sent coded and as
+/// they are since the last [`Wire::reset`].
+struct Wire {
+    coders: Vec<Coder>,
+    out: Vec<u8>,
+    coded: u64,
+    raw: u64,
+}
+
+impl Wire {
+    fn new(robots: usize, words: usize) -> Self {
+        let coders = (0..robots).map(|_| Coder::new(words)).collect();
+        Self {
+            coders,
+            out: Vec::new(),
+            coded: 0,
+            raw: 0,
+        }
+    }
+
+    /// Every robot sends its current payload.
+    fn send(&mut self, sim: &LockstepSim<MethodAgent>) {
+        for (i, coder) in self.coders.iter_mut().enumerate() {
+            self.out.clear();
+            coder.encode(sim.payload(i), &mut self.out);
+            self.coded += self.out.len() as u64;
+            self.raw += 8 * sim.payload(i).len() as u64;
+        }
+    }
+
+    /// The kB a robot sent, coded and as they are, since the last reset.
+    fn reset(&mut self) -> (f64, f64) {
+        let n = self.coders.len() as f64;
+        let sent = (self.coded as f64 / n / 1e3, self.raw as f64 / n / 1e3);
+        (self.coded, self.raw) = (0, 0);
+        sent
+    }
+}
 
 /// Runs the team to every robot's certificate; the rounds it took (None: not within
 /// `max_rounds`). Panics if the certified assignment costs more than `optimum`.
 fn episode(
     agents: Vec<MethodAgent>,
+    wire: &mut Wire,
     graph: &Graph,
     problem: &TaskAssignmentProblem,
     optimum: f64,
@@ -36,8 +79,10 @@ fn episode(
     max_rounds: usize,
 ) -> (Vec<MethodAgent>, Option<usize>) {
     let mut sim = LockstepSim::new(agents, graph);
+    wire.send(&sim);
     for round in 1..=max_rounds {
         sim.step_round();
+        wire.send(&sim);
         if sim.agents().iter().all(|a| a.certificate_slack() <= tol) {
             let decisions: Vec<usize> = sim.agents().iter().map(|a| a.decide()).collect();
             assert!(
@@ -121,7 +166,10 @@ fn main() {
     let hedge: Option<f64> = std::env::var("HEDGE").ok().map(|v| v.parse().unwrap());
     for warm in [true, false] {
         let agents = common::agents(setup.as_ref(), first, &graph, params);
-        let (mut agents, rounds) = episode(agents, &graph, first, optima[0].cost, tol, max_rounds);
+        let mut wire = Wire::new(agents.len(), agents[0].payload_len());
+        let w = &mut wire;
+        let (mut agents, rounds) =
+            episode(agents, w, &graph, first, optima[0].cost, tol, max_rounds);
         let first_rounds = rounds;
         println!(
             "{}: first episode {}",
@@ -129,6 +177,8 @@ fn main() {
             rounds.map_or("none".to_string(), |r| r.to_string())
         );
         let mut all = Vec::new();
+        let mut coded = Vec::new();
+        wire.reset();
         for (k, problem) in problems.iter().enumerate().skip(1) {
             set_costs(&mut agents, problem, warm);
             let optimum = optima[k].cost;
@@ -136,23 +186,29 @@ fn main() {
                 (true, Some(h), Some(r)) => ((h * r as f64) as usize).max(1),
                 _ => max_rounds,
             };
-            let (next, mut rounds) = episode(agents, &graph, problem, optimum, tol, cap);
+            let (next, mut rounds) = episode(agents, &mut wire, &graph, problem, optimum, tol, cap);
             agents = next;
             if rounds.is_none() && cap < max_rounds {
                 set_costs(&mut agents, problem, false);
-                let (next, more) = episode(agents, &graph, problem, optimum, tol, max_rounds);
+                let w = &mut wire;
+                let (next, more) = episode(agents, w, &graph, problem, optimum, tol, max_rounds);
                 agents = next;
                 rounds = more.map(|r| r + cap);
             }
             let (now, before) = (&optima[k].assignment, &optima[k - 1].assignment);
             let moved = now.iter().zip(before).filter(|(a, b)| a != b).count();
             let shown = rounds.map_or("none".to_string(), |r| r.to_string());
-            println!("  episode {k}: rounds {shown}, optimal tasks moved {moved}");
+            let (sent, raw) = wire.reset();
+            println!(
+                "  episode {k}: rounds {shown}, optimal tasks moved {moved}, sent {sent:.1} kB coded ({raw:.1} kB as they are)"
+            );
+            coded.push(sent);
             all.push(rounds.unwrap_or(max_rounds) as f64);
         }
         all.sort_by(f64::total_cmp);
-        if let Some(median) = all.get(all.len() / 2) {
-            println!("  median {median}");
+        coded.sort_by(f64::total_cmp);
+        if let (Some(median), Some(sent)) = (all.get(all.len() / 2), coded.get(coded.len() / 2)) {
+            println!("  median {median}, sent {sent:.1} kB coded");
         }
     }
 }
