@@ -303,7 +303,8 @@ pub fn culprit(error: &ExchangeError) -> Option<usize> {
         ExchangeError::BadPayload { neighbour, .. }
         | ExchangeError::WrongLength { neighbour, .. }
         | ExchangeError::OutOfOrder { neighbour, .. }
-        | ExchangeError::WrongSender { neighbour, .. } => Some(*neighbour),
+        | ExchangeError::WrongSender { neighbour, .. }
+        | ExchangeError::Undecodable { neighbour, .. } => Some(*neighbour),
         _ => None,
     }
 }

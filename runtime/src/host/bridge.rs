@@ -660,8 +660,15 @@ impl Forwarder {
     ) -> Result<(), BridgeError> {
         let layout = &self.layout;
         let (last, last_round) = held;
-        let header = wire::decode(&message.to_bytes(), last, *last_round)
-            .map_err(|what| BridgeError::Undecodable { agent: r, what })?;
+        let header = match wire::decode(&message.to_bytes(), last, *last_round) {
+            Ok(header) => header,
+            Err(what) => {
+                // The sender is at fault: every host's agents stop naming it.
+                let _ = board.mark_failed(r);
+                announce_failure(&self.session, &self.links, r);
+                return Err(BridgeError::Undecodable { agent: r, what });
+            }
+        };
         *last_round = Some(header.round);
         let payload = &last[RoundHeader::WORDS..];
         let mut sample = publisher

@@ -20,10 +20,10 @@ pub struct Answer {
     pub rounds: u64,
     /// Rounds the team spent agreeing on its scale before, and on its total after.
     pub agreement_rounds: u64,
-    /// Bytes of round messages this robot sent in the episode (one message a round, the
-    /// agreements' included; what a network carries from it, before Zenoh's own headers).
-    /// On Zenoh the messages as coded against the robot's last one, with their round
-    /// header; elsewhere the payloads as they are (one message of the team's size a round).
+    /// Bytes of round messages this robot sent in the episode (the agreements' included;
+    /// what a network carries from it, before Zenoh's own headers). On Zenoh the messages
+    /// as they went (coded against the robot's last one, with their round and sender, and
+    /// any sent again); elsewhere one payload of the team's size a round.
     pub sent_bytes: u64,
     /// This robot's cost of its task (its own number).
     pub cost: Option<f64>,

@@ -13,7 +13,8 @@
 //! raw:   0x00, the words (8 bytes each, little-endian)
 //! delta: 0x01, a bitmap of the changed words (⌈L/8⌉ bytes, word w in bit w % 8 of byte
 //!        w / 8), then for each changed word in order: (leading << 4) | length, and the
-//!        `length` bytes of its XOR from byte `leading` on (byte 0 the most significant)
+//!        `length` bytes of its XOR without its `leading` high and `8 − leading − length`
+//!        low zero bytes, least significant first
 //! ```
 //!
 //! The coding is lossless, and safe only because the exchange is in lockstep: a receiver
@@ -102,6 +103,12 @@ pub fn write_raw(message: &[f64], out: &mut Vec<u8>) {
     }
 }
 
+/// Room [`Coder::encode`] needs in its output for a message of `words` values (it writes
+/// up to a word past what it keeps).
+pub const fn capacity(words: usize) -> usize {
+    raw_len(words) + 9
+}
+
 /// Bytes of a raw message of `words` values.
 pub const fn raw_len(words: usize) -> usize {
     1 + 8 * words
@@ -116,7 +123,7 @@ fn delta(last: &[f64], message: &[f64], out: &mut Vec<u8>) -> bool {
     let limit = raw_len(message.len());
     let map_len = message.len().div_ceil(8);
     // Room for one more word's control and 8 bytes past the limit.
-    out.resize(start + limit + 9, 0);
+    out.resize(start + capacity(message.len()), 0);
     let buf = &mut out[start..];
     buf[0] = DELTA;
     let mut at = 1 + map_len;

@@ -179,8 +179,9 @@ pub trait Exchange {
     ) -> Result<(), ExchangeError>;
     /// Global barrier: returns once every agent of the team has called it for `round`.
     fn global_barrier(&mut self, round: u64, deadline: Instant) -> Result<(), ExchangeError>;
-    /// Bytes of round messages this end sent so far, where the transport codes them
-    /// ([`codec`]: Zenoh); `None` where every message is its header and payload as they are.
+    /// Bytes of round messages this end put on its transport so far, resends included, where
+    /// the transport counts them (Zenoh, whose messages may be coded, [`codec`]); `None`
+    /// where every message is one payload of the run's size a round.
     fn sent_bytes(&self) -> Option<u64> {
         None
     }

@@ -12,7 +12,7 @@
 //! decode against it is refused, never used); the step then reads the neighbours' payloads
 //! there exactly as over iceoryx2, and writes its own payload in place. Publishing codes
 //! the message once into the buffer Zenoh takes ownership of.
-
+//!
 //! Presence and failures, with no shared memory between hosts:
 //! * every agent holds a liveliness token `<run>/alive/<i>`, declared once every host of a
 //!   multi-host team is up (so every host sees the whole run) and after the agent's
@@ -123,7 +123,7 @@ struct Inbound {
     failed: Option<usize>,
     /// A stop request (termination signal) announced on the run's failure key.
     stopped: Option<i32>,
-    /// A malformed message (wrong length or sender): the first one.
+    /// A message refused at receipt (wrong length, sender or round): the first one.
     fault: Option<ExchangeError>,
     /// Bumped on every delivery, so that a waiter never sleeps past one.
     generation: u64,
@@ -228,7 +228,7 @@ fn receive(inbound: &mut Inbound, agent: usize, k: usize, neighbour: usize, byte
         inbound.fault.get_or_insert(ExchangeError::OutOfOrder {
             agent,
             neighbour,
-            expected: inbound.published,
+            expected: inbound.published.saturating_add(1),
             got: round,
         });
         return;

@@ -56,7 +56,7 @@ impl WireCoder {
     /// the last message as it was.
     pub fn encode(&mut self, message: &[f64]) -> Vec<u8> {
         let (plain, rest) = message.split_at(PLAIN_WORDS);
-        let mut bytes = Vec::with_capacity(PLAIN_BYTES + codec::raw_len(rest.len()));
+        let mut bytes = Vec::with_capacity(PLAIN_BYTES + codec::capacity(rest.len()));
         for w in plain {
             bytes.extend_from_slice(&w.to_bits().to_le_bytes());
         }

@@ -104,13 +104,15 @@ pub const fn payload_len(robots: usize, tasks: usize) -> usize {
 pub const MULTIPLIER_BITS: u32 = 12;
 
 /// `value` rounded to [`MULTIPLIER_BITS`] fraction bits (to nearest, halves away from 0);
-/// an infinite or NaN value as it is.
+/// an infinite or NaN value as it is, and a value that would round past `f64::MAX`.
 pub fn round_multiplier(value: f64) -> f64 {
     const DROPPED: u32 = 52 - MULTIPLIER_BITS;
     if !value.is_finite() {
         return value;
     }
-    f64::from_bits((value.to_bits() + (1 << (DROPPED - 1))) & (u64::MAX << DROPPED))
+    // Finite: the sign bit is not carried into, so the addition cannot overflow.
+    let rounded = f64::from_bits((value.to_bits() + (1 << (DROPPED - 1))) & (u64::MAX << DROPPED));
+    if rounded.is_finite() { rounded } else { value }
 }
 
 /// Robot `index`'s state of the fast dual variant.
@@ -592,6 +594,8 @@ mod tests {
         }
         assert_eq!(round_multiplier(1.0 - 1e-9), 1.0);
         assert!(round_multiplier(f64::NAN).is_nan());
+        assert!(round_multiplier(f64::from_bits(u64::MAX)).is_nan());
+        assert_eq!(round_multiplier(-f64::MAX), -f64::MAX);
         assert_eq!(round_multiplier(f64::INFINITY), f64::INFINITY);
     }
     use admm_ta_topologies::rng::SeededRng;
