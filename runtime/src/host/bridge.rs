@@ -373,12 +373,13 @@ fn board(scenario: &Scenario) -> Result<Board, BridgeError> {
 /// An iceoryx2 subscriber to a local agent's round messages.
 type RoundSubscriber = iceoryx2::port::subscriber::Subscriber<Svc, [f64], RoundHeader>;
 
-/// A local agent's subscribers (one per remote neighbour), its Zenoh publisher and the
-/// coder of its messages.
+/// A local agent's subscribers (one per remote neighbour), its Zenoh publisher, the coder
+/// of its messages and room for one (header words and payload, allocated once).
 type Sender = (
     Vec<RoundSubscriber>,
     zenoh::pubsub::Publisher<'static>,
     WireCoder,
+    Vec<f64>,
 );
 
 /// A remote agent's round service, the publisher standing in for it, its local neighbours.
@@ -436,8 +437,8 @@ impl Forwarder {
         let mut announced_local = false;
         loop {
             let stopping = self.shared.stop.load(Ordering::Acquire);
-            for (subscribers, publisher, coder) in &mut senders {
-                self.forward_agent(subscribers, publisher, coder)?;
+            for (subscribers, publisher, coder, message) in &mut senders {
+                self.forward_agent(subscribers, publisher, (coder, message))?;
             }
             if !announced_local && let Some(failed) = board.failed() {
                 // A local failure (or one we marked from an announcement: harmless echo).
@@ -518,7 +519,8 @@ impl Forwarder {
                     )
                 })?;
             let words = RoundHeader::WORDS + self.layout.payload_len;
-            senders.push((subscribers, publisher, WireCoder::new(words, true)));
+            let coder = WireCoder::new(words, true);
+            senders.push((subscribers, publisher, coder, vec![0.0; words]));
         }
         Ok(senders)
     }
@@ -531,7 +533,7 @@ impl Forwarder {
         &self,
         subscribers: &[RoundSubscriber],
         publisher: &zenoh::pubsub::Publisher<'_>,
-        coder: &mut WireCoder,
+        (coder, message): (&mut WireCoder, &mut [f64]),
     ) -> Result<(), BridgeError> {
         let (first, spares) = subscribers.split_first().expect("one per remote neighbour");
         for spare in spares {
@@ -541,7 +543,6 @@ impl Forwarder {
                 .is_some()
             {}
         }
-        let mut message = vec![0.0; RoundHeader::WORDS + self.layout.payload_len];
         while let Some(sample) = first
             .receive()
             .map_err(|e| call("receive failed".into(), format!("{e:?}")))?
@@ -559,7 +560,7 @@ impl Forwarder {
             sample.user_header().write_words(header);
             rest.copy_from_slice(payload);
             publisher
-                .put(coder.encode(&message))
+                .put(coder.encode(message))
                 .wait()
                 .map_err(|e| call("forwarding failed".into(), e.to_string()))?;
             self.shared.forwarded_out.fetch_add(1, Ordering::Relaxed);

@@ -503,14 +503,11 @@ impl ConsensusAgent for FastDualAgent {
         let (two_d, rho, case) = (self.two_d(), self.rho, self.case);
         for ((o, &x), &kappa) in out[..m].iter_mut().zip(&self.x).zip(&self.kappa) {
             let value = theta(case, rho, kappa, x) / two_d;
-            *o = if case == AssignmentCase::Two {
+            *o = round_multiplier(if case == AssignmentCase::Two {
                 value.max(0.0)
             } else {
                 value
-            };
-        }
-        for o in out[..m].iter_mut() {
-            *o = round_multiplier(*o);
+            });
         }
         let rounded = (!self.relay).then(|| column::round(&self.x, &self.allowed));
         let (costs, allowed) = (&self.costs, &self.allowed);
